@@ -1,0 +1,18 @@
+//! Solvers shared by the simulators: a projected (Gauss-)Newton method for
+//! box-constrained problems with a dense Hessian, and L-BFGS-B (Byrd et al. 1995), the
+//! baseline the ribbon paper uses.
+
+pub mod lbfgsb;
+pub mod projected_newton;
+
+pub use lbfgsb::{Lbfgsb, LbfgsbOptions, LbfgsbResult, LbfgsbStop};
+pub use projected_newton::{BoxProblem, NewtonOptions, NewtonResult, ProjectedNewton};
+
+/// Infinity norm of the projected gradient P(x - g) - x on the box [lower, upper].
+pub fn projected_gradient_inf(x: &[f64], g: &[f64], lower: &[f64], upper: &[f64]) -> f64 {
+    x.iter()
+        .zip(g)
+        .zip(lower.iter().zip(upper))
+        .map(|((&xi, &gi), (&lo, &hi))| ((xi - gi).clamp(lo, hi) - xi).abs())
+        .fold(0.0, f64::max)
+}

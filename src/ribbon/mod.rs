@@ -1,0 +1,20 @@
+//! The ribbon simulator of Pan, Huang, Bao: "Modelling Developable Ribbons Using Ruling
+//! Bending Coordinates".
+//!
+//! - [`reconstruct`]: eqs. (2), (3), element frames, rims, normals.
+//! - [`mass`]: the crease-dependent consistent mass of a trapezoid (appendix B).
+//! - [`objective`]: the implicit-Euler objective (sec. 4), its adjoint gradient
+//!   (appendix C), the chain-rule baseline (appendix A) and a Gauss-Newton Hessian.
+//! - [`step`]: one time step (algorithm 2): box constraints after the variable
+//!   substitution, augmented Lagrangian, and the two inner solvers.
+
+pub mod mass;
+pub mod objective;
+pub mod params;
+pub mod reconstruct;
+mod sim;
+pub mod step;
+
+pub use params::{BaseMode, KineticModel, LoopKind, RibbonParams, SolverKind, SolverSettings};
+pub use reconstruct::{Coordinates, Frames, Strip};
+pub use sim::{Imperfection, RibbonForce, RibbonInitialShape, RibbonSim};

@@ -1,0 +1,121 @@
+//! Ribbon parameters (Pan et al. sec. 3-5). SI units throughout.
+
+use crate::geometry::Pose;
+
+/// Kinetic term of the implicit-Euler objective.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KineticModel {
+    /// Consistent FEM mass of each trapezoid element with material-space resampling R
+    /// (paper sec. 4, eq. 4, appendix B). The default.
+    Full,
+    /// All mass lumped on the centerline (paper sec. 6): cheaper, misses the rotation
+    /// about the centerline (fig. 11).
+    Lumped,
+    /// No kinetic term: each step finds the static equilibrium (rest shapes).
+    QuasiStatic,
+}
+
+/// Which optimizer solves one implicit-Euler step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SolverKind {
+    /// Ours: projected Gauss-Newton on the exact least-squares structure of the
+    /// objective, with the O(n) twist-suffix assembly and a dense Cholesky (faer).
+    GaussNewton,
+    /// The paper's: L-BFGS-B inside the augmented Lagrangian (algorithm 2).
+    Lbfgsb,
+}
+
+/// How the first element (E_0) is placed.
+#[derive(Clone, Debug, PartialEq)]
+pub enum BaseMode {
+    /// T_0 is prescribed: `world_from_base` at every step. `driven_by` names a handle
+    /// index whose target is T_0 (a gripper holding the first element), or `None` for
+    /// a fixed end at `pose`.
+    Prescribed {
+        pose: Pose,
+        driven_by: Option<usize>,
+    },
+    /// T_0 is free: rotation vector w (rad) and translation t (m) are unknowns, starting
+    /// at `initial`.
+    Floating { initial: Pose },
+}
+
+/// Loop closure (paper sec. 5.1).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LoopKind {
+    /// x_0 = x_n, y_0 = y_n, n_0 = n_{n-1}.
+    Orientable,
+    /// Moebius: x_0 = y_n, y_0 = x_n, n_0 = -n_{n-1}.
+    NonOrientable,
+}
+
+/// Solver settings of one ribbon.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SolverSettings {
+    pub kind: SolverKind,
+    /// Inner convergence: projected-gradient infinity norm relative to its value at the
+    /// start of the step (dimensionless). Default 1e-6.
+    pub tolerance: f64,
+    /// Inner iteration limit per augmented-Lagrangian round.
+    pub max_iterations: u32,
+    /// Augmented-Lagrangian penalty mu (paper: 1e3), in J/m^2 for position constraints.
+    pub penalty: f64,
+    /// Outer stop: ||q_k - q_{k-1}||_inf below this (paper: 1e-4).
+    pub outer_tolerance: f64,
+    /// Outer round limit.
+    pub max_outer_iterations: u32,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            kind: SolverKind::GaussNewton,
+            tolerance: 1e-6,
+            max_iterations: 200,
+            penalty: 1e3,
+            outer_tolerance: 1e-4,
+            max_outer_iterations: 20,
+        }
+    }
+}
+
+/// Physical and numerical parameters of one ribbon.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RibbonParams {
+    /// Length l along the centerline, m.
+    pub length: f64,
+    /// Width w, m (must be < length).
+    pub width: f64,
+    /// Number of elements n (>= 2).
+    pub segments: usize,
+    /// Areal density rho, kg/m^2.
+    pub density: f64,
+    /// Bending stiffness alpha, J (energy alpha * n w (1+c^2) psi^2 / l per crease).
+    pub bending_stiffness: f64,
+    /// Crease-direction regularizer beta, J (energy beta * c^2 per crease; paper 0.1).
+    pub crease_regularizer: f64,
+    /// Gravity, m/s^2.
+    pub gravity: [f64; 3],
+    pub kinetic: KineticModel,
+    pub base: BaseMode,
+    pub loop_closure: Option<LoopKind>,
+    /// Safety factor on the crease non-intersection bound: Delta c_max = factor * 2l/(wn)
+    /// (paper: 0.95).
+    pub crease_bound_factor: f64,
+    pub solver: SolverSettings,
+}
+
+impl RibbonParams {
+    /// Delta c_max of eq. (1): the largest difference of neighbouring crease directions.
+    pub fn crease_bound(&self) -> f64 {
+        self.crease_bound_factor * 2.0 * self.length / (self.width * self.segments as f64)
+    }
+    /// Element length l/n, m.
+    pub fn element_length(&self) -> f64 {
+        self.length / self.segments as f64
+    }
+    /// Total mass rho l w, kg.
+    pub fn mass(&self) -> f64 {
+        self.density * self.length * self.width
+    }
+}

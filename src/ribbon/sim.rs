@@ -1,0 +1,554 @@
+//! A ribbon as a simulated object: state, handles, one step, mesh and singular points.
+
+use super::mass::element_mass;
+use super::objective::{Equality, Layout, NormalGuide, PointForce, RimHistory, StepTerms};
+use super::params::{BaseMode, KineticModel, RibbonParams};
+use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
+use super::step::{SolveOutcome, StepSolver};
+use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3, VertexRegion};
+use crate::sim::{Energies, HandleSpec, ObjectStepReport, OrientationMode, SingularPoint};
+
+/// A seeded random perturbation of every crease: c_k and psi_k (rad) each get a
+/// uniform offset in [-amplitude, amplitude]. A perfectly flat strip twisted or spun
+/// about its own axis sits on a bifurcation (the first-order response of every
+/// coordinate is zero by symmetry); a real ribbon is never perfectly flat.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Imperfection {
+    pub amplitude: f64,
+    pub seed: u64,
+}
+
+/// The initial shape of a ribbon (in the base frame).
+#[derive(Clone, Debug, PartialEq)]
+pub enum RibbonInitialShape {
+    /// Flat, square creases.
+    Flat,
+    /// Every crease with the same direction c and bending angle psi (rad): a helix.
+    Helix {
+        crease_direction: f64,
+        bending_angle: f64,
+    },
+    /// Explicit per-crease values (length n-1 each, creases 1..n-1).
+    Explicit {
+        crease_direction: Vec<f64>,
+        bending_angle: Vec<f64>,
+    },
+}
+
+/// A point force on the ribbon, N, at a material point, m.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RibbonForce {
+    pub material_point: Point2,
+    pub force: Vector3,
+}
+
+/// One simulated ribbon.
+#[derive(Clone, Debug)]
+pub struct RibbonSim {
+    pub params: RibbonParams,
+    strip: Strip,
+    layout: Layout,
+    coords: Coordinates,
+    frames: Frames,
+    history: RimHistory,
+    terms: StepTerms,
+    /// Which world handle drives each equality / normal guide (same order as built).
+    equality_handles: Vec<Option<usize>>,
+    guide_handles: Vec<usize>,
+    solver: StepSolver,
+    q: Vec<f64>,
+    mesh: SurfaceMesh,
+    singular: Vec<SingularPoint>,
+    last_targets: Vec<Option<Pose>>,
+    last_outcome: SolveOutcome,
+}
+
+impl RibbonSim {
+    /// A ribbon at rest in `initial` shape. `handles` are the world's handles; those
+    /// with `object == index` act on this ribbon.
+    pub fn new(
+        params: RibbonParams,
+        initial: &RibbonInitialShape,
+        imperfection: Imperfection,
+        forces: &[RibbonForce],
+        index: usize,
+        handles: &[HandleSpec],
+    ) -> RibbonSim {
+        let n = params.segments;
+        let strip = Strip {
+            length: params.length,
+            width: params.width,
+            segments: n,
+        };
+        let base_pose = match &params.base {
+            BaseMode::Prescribed { pose, .. } => *pose,
+            BaseMode::Floating { initial } => *initial,
+        };
+        let mut coords = Coordinates::flat(n, base_pose);
+        match initial {
+            RibbonInitialShape::Flat => {}
+            RibbonInitialShape::Helix {
+                crease_direction,
+                bending_angle,
+            } => {
+                for k in 1..n {
+                    coords.crease_direction[k] = *crease_direction;
+                    coords.bending_angle[k] = *bending_angle;
+                }
+            }
+            RibbonInitialShape::Explicit {
+                crease_direction,
+                bending_angle,
+            } => {
+                for k in 1..n {
+                    coords.crease_direction[k] = crease_direction[k - 1];
+                    coords.bending_angle[k] = bending_angle[k - 1];
+                }
+            }
+        }
+        if imperfection.amplitude > 0.0 {
+            use rand::{Rng, SeedableRng};
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(imperfection.seed);
+            let a = imperfection.amplitude;
+            for k in 1..n {
+                coords.crease_direction[k] += rng.random_range(-a..=a);
+                coords.bending_angle[k] += rng.random_range(-a..=a);
+            }
+        }
+        let mut frames = Frames::default();
+        reconstruct(&strip, &coords, &mut frames);
+        let history = RimHistory::at_rest(&strip, &coords.crease_direction, &frames);
+        let floating = matches!(params.base, BaseMode::Floating { .. });
+        let layout = Layout {
+            segments: n,
+            floating,
+        };
+
+        let mut equalities = Vec::new();
+        let mut equality_handles = Vec::new();
+        let mut normal_guides = Vec::new();
+        let mut guide_handles = Vec::new();
+        let driven_by = match &params.base {
+            BaseMode::Prescribed { driven_by, .. } => *driven_by,
+            _ => None,
+        };
+        for (h, spec) in handles.iter().enumerate() {
+            if spec.object != index || Some(h) == driven_by {
+                continue;
+            }
+            if spec.position_axes.iter().any(|&a| a) {
+                equalities.push(Equality::Position {
+                    material_point: spec.material_point,
+                    target: Point3::origin(),
+                    axes: spec.position_axes,
+                });
+                equality_handles.push(Some(h));
+            }
+            match spec.orientation {
+                OrientationMode::Free => {}
+                OrientationMode::Normal { stiffness } => {
+                    normal_guides.push(NormalGuide {
+                        material_point: spec.material_point,
+                        target: Vector3::z(),
+                        stiffness,
+                    });
+                    guide_handles.push(h);
+                }
+                OrientationMode::Full => {
+                    equalities.push(Equality::Orientation {
+                        material_point: spec.material_point,
+                        target: nalgebra::Matrix3::identity(),
+                    });
+                    equality_handles.push(Some(h));
+                }
+            }
+        }
+        if let Some(kind) = params.loop_closure {
+            equalities.push(Equality::Loop(kind));
+            equality_handles.push(None);
+        }
+        let multipliers = equalities.iter().map(|e| vec![0.0; e.rows()]).collect();
+        let terms = StepTerms {
+            h: 0.01,
+            kinetic: params.kinetic,
+            density: params.density,
+            bending_stiffness: params.bending_stiffness,
+            crease_regularizer: params.crease_regularizer,
+            gravity: Vector3::from(params.gravity),
+            normal_guides,
+            forces: forces
+                .iter()
+                .map(|f| PointForce {
+                    material_point: f.material_point,
+                    force: f.force,
+                })
+                .collect(),
+            equalities,
+            multipliers,
+            end_crease_multipliers: [0.0, 0.0],
+            penalty: params.solver.penalty,
+            crease_bound: params.crease_bound(),
+        };
+        let mut q = vec![0.0; layout.len()];
+        layout.pack(&coords, &mut q);
+        let mut sim = RibbonSim {
+            params,
+            strip,
+            layout,
+            coords,
+            frames,
+            history,
+            terms,
+            equality_handles,
+            guide_handles,
+            solver: StepSolver::default(),
+            q,
+            mesh: SurfaceMesh::default(),
+            singular: Vec::new(),
+            last_targets: vec![None; handles.len()],
+            last_outcome: SolveOutcome::default(),
+        };
+        sim.rebuild_outputs();
+        sim
+    }
+
+    pub fn coordinates(&self) -> &Coordinates {
+        &self.coords
+    }
+    pub fn frames(&self) -> &Frames {
+        &self.frames
+    }
+    pub fn strip(&self) -> &Strip {
+        &self.strip
+    }
+    pub fn history(&self) -> &RimHistory {
+        &self.history
+    }
+    pub fn mesh(&self) -> &SurfaceMesh {
+        &self.mesh
+    }
+    pub fn singular_points(&self) -> &[SingularPoint] {
+        &self.singular
+    }
+    pub fn last_outcome(&self) -> &SolveOutcome {
+        &self.last_outcome
+    }
+
+    /// Overwrite the previous-step velocities (m/s) with a rigid motion: angular
+    /// velocity `omega` (rad/s) about the point `center` (m), plus `linear` (m/s).
+    pub fn set_rigid_velocity(&mut self, omega: Vector3, center: Point3, linear: Vector3) {
+        for (x, v) in self
+            .history
+            .x_bottom
+            .iter()
+            .zip(self.history.v_bottom.iter_mut())
+        {
+            *v = omega.cross(&(x - center.coords)) + linear;
+        }
+        for (x, v) in self.history.x_top.iter().zip(self.history.v_top.iter_mut()) {
+            *v = omega.cross(&(x - center.coords)) + linear;
+        }
+    }
+
+    /// One implicit-Euler step of `dt` s to time `time`; `targets[h]` is the target of
+    /// world handle h (`world_from_gripper`).
+    pub fn step(
+        &mut self,
+        dt: f64,
+        _time: f64,
+        _index: usize,
+        handles: &[HandleSpec],
+        targets: &[Pose],
+    ) -> ObjectStepReport {
+        // A non-finite target is ignored: the handle keeps its last valid target.
+        let mut valid: Vec<Option<Pose>> = Vec::with_capacity(targets.len());
+        for (h, t) in targets.iter().enumerate() {
+            let finite = t.translation.vector.iter().all(|x| x.is_finite())
+                && t.rotation.coords.iter().all(|x| x.is_finite());
+            let v = if finite {
+                Some(*t)
+            } else {
+                self.last_targets.get(h).copied().flatten()
+            };
+            valid.push(v);
+        }
+        self.last_targets = valid.clone();
+        self.terms.h = dt;
+        if let BaseMode::Prescribed {
+            pose,
+            driven_by: Some(h),
+        } = &mut self.params.base
+        {
+            if let Some(target) = valid.get(*h).copied().flatten() {
+                let grasp = handles[*h].material_point;
+                // world_from_base = world_from_gripper * gripper_from_base; the gripper
+                // sits at the grasp point with axes along the material axes.
+                *pose = target * Pose::translation(-grasp.x, -grasp.y, 0.0);
+            }
+        }
+        let base = match &self.params.base {
+            BaseMode::Prescribed { pose, .. } => *pose,
+            BaseMode::Floating { initial } => *initial,
+        };
+        for (eq, h) in self.terms.equalities.iter_mut().zip(&self.equality_handles) {
+            let Some(h) = h else { continue };
+            let Some(target) = valid.get(*h).copied().flatten() else {
+                continue;
+            };
+            match eq {
+                Equality::Position { target: t, .. } => {
+                    *t = Point3::from(target.translation.vector)
+                }
+                Equality::Orientation { target: r, .. } => {
+                    *r = *target.rotation.to_rotation_matrix().matrix()
+                }
+                Equality::Loop(_) => {}
+            }
+        }
+        for (guide, h) in self.terms.normal_guides.iter_mut().zip(&self.guide_handles) {
+            if let Some(target) = valid.get(*h).copied().flatten() {
+                guide.target = target.rotation * Vector3::z();
+            }
+        }
+
+        let mut q = self.q.clone();
+        if !self.layout.floating {
+            self.coords.base = base;
+        }
+        let saved_terms = self.terms.clone();
+        let outcome = self.solver.solve(
+            self.strip,
+            self.layout.floating,
+            &self.history,
+            base,
+            &mut self.terms,
+            &self.params.solver,
+            &mut q,
+        );
+        let finite = q.iter().all(|x| x.is_finite()) && outcome.objective.is_finite();
+        let mut report = ObjectStepReport {
+            iterations: outcome.iterations,
+            outer_iterations: outcome.outer_iterations,
+            converged: outcome.converged && finite,
+            kept_previous_state: !finite,
+            constraint_violation: outcome.constraint_violation,
+            ..Default::default()
+        };
+        if finite {
+            self.q = q;
+            self.layout.unpack(&self.q, &mut self.coords);
+            reconstruct(&self.strip, &self.coords, &mut self.frames);
+            self.update_history(dt);
+        } else {
+            // Keep the last valid state and its multipliers; say so in the report.
+            self.terms = saved_terms;
+            report.constraint_violation = f64::NAN;
+        }
+        self.last_outcome = outcome;
+        self.rebuild_outputs();
+        report.energies = self.energies();
+        report.isometry_error = self.mesh.isometry_error();
+        report.singular_points = self.singular.len();
+        if !report.constraint_violation.is_finite() {
+            report.constraint_violation = 0.0;
+        }
+        report
+    }
+
+    /// New velocities at the new material points: V = (X^{n+1} - R(X̄^{n+1}, X^n)) / h
+    /// (the same difference the kinetic term used), then the new history.
+    fn update_history(&mut self, h: f64) {
+        let n = self.strip.segments;
+        let c = &self.coords.crease_direction;
+        let old = &self.history;
+        let mut new = RimHistory::at_rest(&self.strip, c, &self.frames);
+        for j in 0..=n {
+            let (xb, _) =
+                super::objective::interpolate(&old.u_bottom, &old.x_bottom, new.u_bottom[j]);
+            let (xt, _) = super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j]);
+            new.v_bottom[j] = (new.x_bottom[j] - xb) / h;
+            new.v_top[j] = (new.x_top[j] - xt) / h;
+        }
+        if self.params.kinetic == KineticModel::QuasiStatic {
+            // no inertia: velocities are reported, not carried
+            for v in new.v_bottom.iter_mut().chain(new.v_top.iter_mut()) {
+                *v = Vector3::zeros();
+            }
+        }
+        self.history = new;
+    }
+
+    /// Energies of the current state, J.
+    pub fn energies(&self) -> Energies {
+        let n = self.strip.segments;
+        let c = &self.coords.crease_direction;
+        let psi = &self.coords.bending_angle;
+        let rho = self.params.density;
+        let g = Vector3::from(self.params.gravity);
+        let mut e = Energies::default();
+        for el in 0..n {
+            let m = element_mass(self.strip.length, self.strip.width, n, c[el + 1] - c[el]);
+            let v = [
+                self.history.v_bottom[el],
+                self.history.v_top[el],
+                self.history.v_bottom[el + 1],
+                self.history.v_top[el + 1],
+            ];
+            let x = [
+                self.history.x_bottom[el],
+                self.history.x_top[el],
+                self.history.x_bottom[el + 1],
+                self.history.x_top[el + 1],
+            ];
+            for a in 0..4 {
+                for b in 0..4 {
+                    e.kinetic += 0.5 * rho * m.k[a][b] * v[a].dot(&v[b]);
+                }
+                e.gravity -= rho * m.k[a].iter().sum::<f64>() * g.dot(&x[a]);
+            }
+        }
+        let bend_k =
+            self.params.bending_stiffness * n as f64 * self.strip.width / self.strip.length;
+        for k in 1..n {
+            e.elastic += bend_k * (1.0 + c[k] * c[k]) * psi[k] * psi[k]
+                + self.params.crease_regularizer * c[k] * c[k];
+        }
+        e
+    }
+
+    /// Mesh, rulings, regions and singular points from the current frames.
+    fn rebuild_outputs(&mut self) {
+        let n = self.strip.segments;
+        let c = &self.coords.crease_direction;
+        let psi = &self.coords.bending_angle;
+        let mesh = &mut self.mesh;
+        mesh.vertices.clear();
+        mesh.material.clear();
+        mesh.regions.clear();
+        mesh.triangles.clear();
+        mesh.rulings.clear();
+        for j in 0..=n {
+            mesh.vertices.push(self.frames.rim_bottom[j]);
+            mesh.vertices.push(self.frames.rim_top[j]);
+            let (b, t) = (
+                self.strip.material_bottom(j, c[j]),
+                self.strip.material_top(j, c[j]),
+            );
+            mesh.material.push(Point2::new(b.x, b.y));
+            mesh.material.push(Point2::new(t.x, t.y));
+            let bent = (1..n).contains(&j) && psi[j].abs() > 1e-6;
+            let region = if bent {
+                VertexRegion::Curved
+            } else {
+                VertexRegion::Flat
+            };
+            mesh.regions.push(region);
+            mesh.regions.push(region);
+        }
+        for e in 0..n as u32 {
+            let (xb, yb, xn, yn) = (2 * e, 2 * e + 1, 2 * e + 2, 2 * e + 3);
+            mesh.triangles.push([xb, xn, yn]);
+            mesh.triangles.push([xb, yn, yb]);
+        }
+        for k in 1..n as u32 {
+            mesh.rulings.push([2 * k, 2 * k + 1]);
+        }
+        // Singular points (eq. 1 active): creases k and k+1 meet at a rim when
+        // |c_{k+1} - c_k| reaches Δc_max: at the bottom rim when c_{k+1} > c_k.
+        self.singular.clear();
+        let bound = self.params.crease_bound();
+        for k in 0..n {
+            let d = c[k + 1] - c[k];
+            if d.abs() >= bound * (1.0 - 1e-6) {
+                let top = d < 0.0;
+                let (a, b) = if top {
+                    (self.frames.rim_top[k], self.frames.rim_top[k + 1])
+                } else {
+                    (self.frames.rim_bottom[k], self.frames.rim_bottom[k + 1])
+                };
+                let (ma, mb) = (
+                    mesh.material[2 * k + top as usize],
+                    mesh.material[2 * k + 2 + top as usize],
+                );
+                self.singular.push(SingularPoint {
+                    id: 2 * k as u64 + top as u64,
+                    position: Point3::from((a.coords + b.coords) * 0.5),
+                    material: Point2::from((ma.coords + mb.coords) * 0.5),
+                });
+                for v in [2 * k + top as usize, 2 * k + 2 + top as usize] {
+                    mesh.regions[v] = VertexRegion::Singular;
+                }
+            }
+        }
+    }
+}
+
+impl RibbonSim {
+    /// `world_from_material_point`: the frame of the element under material point
+    /// `m` (m), translated to the point.
+    pub fn material_pose(&self, m: &Point2) -> Pose {
+        let e = self.strip.element_of(&self.coords.crease_direction, m);
+        let p = self.frames.to_world(e, &Point3::new(m.x, m.y, 0.0));
+        let r = nalgebra::Rotation3::from_matrix_unchecked(self.frames.rotation[e]);
+        Pose::from_parts(
+            p.coords.into(),
+            nalgebra::UnitQuaternion::from_rotation_matrix(&r),
+        )
+    }
+}
+
+impl RibbonSim {
+    /// One evaluation of the current step objective and its gradient at the current
+    /// state (what one solver iteration costs); returns the objective, J. Used by the
+    /// `gradient_us` statistic and the gradient benchmarks.
+    pub fn evaluate_gradient(
+        &mut self,
+        mode: super::objective::GradientMode,
+        gradient: &mut Vec<f64>,
+    ) -> f64 {
+        let base = match &self.params.base {
+            BaseMode::Prescribed { pose, .. } => *pose,
+            BaseMode::Floating { initial } => *initial,
+        };
+        let objective = super::objective::Objective::new(
+            self.strip,
+            self.layout.floating,
+            &self.terms,
+            &self.history,
+            base,
+        );
+        gradient.resize(self.q.len(), 0.0);
+        objective.evaluate(
+            &self.q,
+            &mut self.solver.workspace,
+            Some((gradient, mode)),
+            None,
+        )
+    }
+}
+
+#[doc(hidden)]
+impl RibbonSim {
+    /// Benchmark hook: one evaluation with the Hessian at the current state.
+    pub fn evaluate_hessian(&mut self) -> f64 {
+        let base = match &self.params.base {
+            BaseMode::Prescribed { pose, .. } => *pose,
+            BaseMode::Floating { initial } => *initial,
+        };
+        let objective = super::objective::Objective::new(
+            self.strip,
+            self.layout.floating,
+            &self.terms,
+            &self.history,
+            base,
+        );
+        let mut g = vec![0.0; self.q.len()];
+        let mut h = nalgebra::DMatrix::zeros(self.q.len(), self.q.len());
+        objective.evaluate(
+            &self.q,
+            &mut self.solver.workspace,
+            Some((&mut g, super::objective::GradientMode::Adjoint)),
+            Some(&mut h),
+        )
+    }
+}

@@ -1,0 +1,380 @@
+//! One implicit-Euler step of a ribbon (Pan et al. algorithm 2).
+//!
+//! The crease non-intersection constraints (eq. 1) become box constraints after the
+//! substitution z_1 = c_1, z_i = c_i - c_{i-1} (sec. 5.1): |z_i| <= Δc_max. The one
+//! left, |c_{n-1}| <= Δc_max, and every equality (handles, loops) go to the augmented
+//! Lagrangian with penalty μ (1e3 in the paper). The inner problem is solved by
+//! L-BFGS-B (the paper) or by our projected Gauss-Newton.
+//!
+//! Difference from the paper, noted: multipliers are warm-started from the previous
+//! step instead of reset to 0. The fixed point is the same; it saves outer rounds.
+
+use nalgebra::DMatrix;
+
+use super::objective::{
+    Equality, GradientMode, Layout, Objective, RimHistory, StepTerms, Workspace,
+};
+use super::params::{SolverKind, SolverSettings};
+use super::reconstruct::Strip;
+use crate::geometry::Pose;
+use crate::optim::{BoxProblem, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton};
+
+/// Relative objective decrease that ends an inner solve, (f_k - f_k+1)/max(|f|, 1):
+/// the resampling operator R is piecewise linear in c (eq. 4), so the gradient jumps
+/// where a new vertex crosses an old one and the projected gradient alone can stall
+/// above its tolerance near such a kink while f no longer changes. Both solvers share
+/// it, so they stop on the same criterion.
+pub const FTOL: f64 = 1e-12;
+
+/// What one step's solve did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SolveOutcome {
+    pub iterations: u32,
+    pub outer_iterations: u32,
+    pub converged: bool,
+    /// Largest position-constraint residual after the solve, m.
+    pub constraint_violation: f64,
+    /// Largest rotation-constraint residual (Frobenius entries), dimensionless.
+    pub orientation_violation: f64,
+    /// Final objective value, J.
+    pub objective: f64,
+}
+
+/// Buffers of the step solver (reused across steps).
+#[derive(Default)]
+pub struct StepSolver {
+    pub workspace: Workspace,
+    newton: ProjectedNewton,
+    /// L-BFGS-B workspace and the dimension it was built for.
+    lbfgsb: Option<(usize, Lbfgsb)>,
+    z: Vec<f64>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    q_prev: Vec<f64>,
+}
+
+impl Clone for StepSolver {
+    fn clone(&self) -> Self {
+        // Buffers only: a fresh solver behaves identically.
+        StepSolver::default()
+    }
+}
+
+impl std::fmt::Debug for StepSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("StepSolver")
+    }
+}
+
+/// q -> z: crease directions to crease differences.
+pub fn q_to_z(layout: &Layout, q: &[f64], z: &mut [f64]) {
+    z.copy_from_slice(q);
+    let n = layout.segments;
+    for k in (2..n).rev() {
+        z[layout.c(k)] = q[layout.c(k)] - q[layout.c(k - 1)];
+    }
+}
+
+/// z -> q: cumulative sums of crease differences.
+pub fn z_to_q(layout: &Layout, z: &[f64], q: &mut [f64]) {
+    q.copy_from_slice(z);
+    let n = layout.segments;
+    for k in 2..n {
+        q[layout.c(k)] = q[layout.c(k - 1)] + z[layout.c(k)];
+    }
+}
+
+/// The inner problem in z: f(q(z)) with gradient A^T g and Hessian A^T H A, where A is
+/// the cumulative-sum map on the crease block.
+struct ZProblem<'o, 'w> {
+    objective: &'o Objective<'o>,
+    workspace: &'w mut Workspace,
+    q: Vec<f64>,
+    gq: Vec<f64>,
+    mode: GradientMode,
+}
+
+impl ZProblem<'_, '_> {
+    fn gradient_to_z(&self, g: &mut [f64]) {
+        let lay = &self.objective.layout;
+        g.copy_from_slice(&self.gq);
+        let n = lay.segments;
+        // suffix sums over the crease block
+        for k in (1..n - 1).rev() {
+            g[lay.c(k)] += g[lay.c(k + 1)];
+        }
+    }
+}
+
+impl BoxProblem for ZProblem<'_, '_> {
+    fn dimension(&self) -> usize {
+        self.q.len()
+    }
+    fn evaluate(
+        &mut self,
+        z: &[f64],
+        gradient: Option<&mut [f64]>,
+        hessian: Option<&mut DMatrix<f64>>,
+    ) -> f64 {
+        let lay = self.objective.layout;
+        z_to_q(&lay, z, &mut self.q);
+        let want_g = gradient.is_some();
+        let f = if want_g {
+            self.objective.evaluate(
+                &self.q,
+                self.workspace,
+                Some((&mut self.gq, self.mode)),
+                hessian,
+            )
+        } else {
+            self.objective
+                .evaluate(&self.q, self.workspace, None, hessian)
+        };
+        if let Some(g) = gradient {
+            self.gradient_to_z(g);
+        }
+        f
+    }
+}
+
+/// Transform a q-space Hessian into z-space in place: H_z = A^T H A.
+fn hessian_to_z(layout: &Layout, h: &mut DMatrix<f64>) {
+    let n = layout.segments;
+    for k in (1..n - 1).rev() {
+        let (a, b) = (layout.c(k), layout.c(k + 1));
+        for r in 0..h.nrows() {
+            h[(r, a)] += h[(r, b)];
+        }
+    }
+    for k in (1..n - 1).rev() {
+        let (a, b) = (layout.c(k), layout.c(k + 1));
+        for col in 0..h.ncols() {
+            h[(a, col)] += h[(b, col)];
+        }
+    }
+}
+
+struct ZNewton<'p, 'o, 'w>(&'p mut ZProblem<'o, 'w>);
+impl BoxProblem for ZNewton<'_, '_, '_> {
+    fn dimension(&self) -> usize {
+        self.0.dimension()
+    }
+    fn evaluate(
+        &mut self,
+        z: &[f64],
+        gradient: Option<&mut [f64]>,
+        hessian: Option<&mut DMatrix<f64>>,
+    ) -> f64 {
+        let lay = self.0.objective.layout;
+        match hessian {
+            Some(h) => {
+                let f = self.0.evaluate(z, gradient, Some(h));
+                hessian_to_z(&lay, h);
+                f
+            }
+            None => self.0.evaluate(z, gradient, None),
+        }
+    }
+    fn fallback_hessian(&mut self, h: &mut DMatrix<f64>) -> bool {
+        h.clone_from(&self.0.workspace.gauss_newton);
+        hessian_to_z(&self.0.objective.layout, h);
+        true
+    }
+}
+
+impl StepSolver {
+    /// Solve one step starting from (and writing to) `q`. `terms` multipliers are
+    /// updated in place (augmented Lagrangian).
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve(
+        &mut self,
+        strip: Strip,
+        floating: bool,
+        history: &RimHistory,
+        base: Pose,
+        objective_terms: &mut StepTerms,
+        settings: &SolverSettings,
+        q: &mut [f64],
+    ) -> SolveOutcome {
+        let nq = q.len();
+        let mut outcome = SolveOutcome {
+            converged: true,
+            ..Default::default()
+        };
+        let has_equalities = !objective_terms.equalities.is_empty();
+        let mut pg0: Option<f64> = None;
+        for outer in 0..settings.max_outer_iterations.max(1) {
+            self.q_prev.clear();
+            self.q_prev.extend_from_slice(q);
+            let objective = Objective::new(strip, floating, objective_terms, history, base);
+            let layout = objective.layout;
+            self.z.resize(nq, 0.0);
+            q_to_z(&layout, q, &mut self.z);
+            let bound = objective_terms.crease_bound;
+            self.lower.clear();
+            self.upper.clear();
+            self.lower.resize(nq, f64::NEG_INFINITY);
+            self.upper.resize(nq, f64::INFINITY);
+            for k in 1..layout.segments {
+                self.lower[layout.c(k)] = -bound;
+                self.upper[layout.c(k)] = bound;
+            }
+            // keep the start feasible
+            for i in 0..nq {
+                self.z[i] = self.z[i].clamp(self.lower[i], self.upper[i]);
+            }
+            let mut problem = ZProblem {
+                objective: &objective,
+                workspace: &mut self.workspace,
+                q: vec![0.0; nq],
+                gq: vec![0.0; nq],
+                mode: GradientMode::Adjoint,
+            };
+            // relative gradient tolerance against the first round's start
+            let scale = *pg0.get_or_insert_with(|| {
+                let mut g = vec![0.0; nq];
+                problem.evaluate(&self.z, Some(&mut g), None);
+                crate::optim::projected_gradient_inf(&self.z, &g, &self.lower, &self.upper)
+                    .max(1e-300)
+            });
+            let pgtol = settings.tolerance * scale;
+            let (iterations, converged, f) = match settings.kind {
+                SolverKind::GaussNewton => {
+                    let opts = NewtonOptions {
+                        max_iterations: settings.max_iterations,
+                        pgtol,
+                        ftol: FTOL,
+                    };
+                    let r = self.newton.minimize(
+                        &mut ZNewton(&mut problem),
+                        &mut self.z,
+                        &self.lower,
+                        &self.upper,
+                        &opts,
+                    );
+                    (r.iterations, r.converged, r.f)
+                }
+                SolverKind::Lbfgsb => {
+                    let options = LbfgsbOptions {
+                        max_iterations: settings.max_iterations as usize,
+                        pgtol,
+                        ftol: FTOL,
+                        ..LbfgsbOptions::default()
+                    };
+                    if self.lbfgsb.as_ref().map(|(n, _)| *n) != Some(nq) {
+                        self.lbfgsb = Some((nq, Lbfgsb::new(nq, options)));
+                    }
+                    let (_, solver) = self.lbfgsb.as_mut().expect("created above");
+                    *solver.options_mut() = options;
+                    let r = solver.minimize(&mut self.z, &self.lower, &self.upper, |z, g| {
+                        problem.evaluate(z, Some(g), None)
+                    });
+                    (r.iterations as u32, r.converged(), r.f)
+                }
+            };
+            outcome.iterations += iterations;
+            outcome.outer_iterations = outer + 1;
+            outcome.converged &= converged;
+            outcome.objective = f;
+            z_to_q(&layout, &self.z, q);
+            // residuals at the new q and the multiplier update (algorithm 2)
+            objective.prepare(q, &mut self.workspace);
+            let mut residual = [0.0; 9];
+            let mut max_pos: f64 = 0.0;
+            let mut max_rot: f64 = 0.0;
+            let mut updates: Vec<Vec<f64>> = Vec::with_capacity(objective_terms.equalities.len());
+            for (eq, lambda) in objective_terms
+                .equalities
+                .iter()
+                .zip(&objective_terms.multipliers)
+            {
+                let rows = eq.rows();
+                objective.equality_residual(&self.workspace, eq, &mut residual[..rows]);
+                let is_rotation_row = |i: usize| match eq {
+                    Equality::Position { .. } => false,
+                    Equality::Orientation { .. } => true,
+                    Equality::Loop(_) => i >= 6,
+                };
+                for (i, r) in residual[..rows].iter().enumerate() {
+                    if is_rotation_row(i) {
+                        max_rot = max_rot.max(r.abs());
+                    } else {
+                        max_pos = max_pos.max(r.abs());
+                    }
+                }
+                updates.push(
+                    lambda
+                        .iter()
+                        .zip(&residual[..rows])
+                        .map(|(l, c)| l - objective_terms.penalty * c)
+                        .collect(),
+                );
+            }
+            let c_last = q[layout.c(layout.segments - 1)];
+            let mu = objective_terms.penalty;
+            let end = [
+                (objective_terms.end_crease_multipliers[0] + mu * (bound - c_last)).min(0.0),
+                (objective_terms.end_crease_multipliers[1] + mu * (bound + c_last)).min(0.0),
+            ];
+            let end_active = end.iter().any(|&l| l < 0.0)
+                || objective_terms
+                    .end_crease_multipliers
+                    .iter()
+                    .any(|&l| l < 0.0);
+            drop(objective);
+            objective_terms.multipliers = updates;
+            objective_terms.end_crease_multipliers = end;
+            outcome.constraint_violation = max_pos;
+            outcome.orientation_violation = max_rot;
+            let change = q
+                .iter()
+                .zip(&self.q_prev)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if !(has_equalities || end_active) || change < settings.outer_tolerance {
+                break;
+            }
+            if outer + 1 == settings.max_outer_iterations {
+                outcome.converged = false;
+            }
+        }
+        outcome
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn substitution_round_trips_and_hessian_transform_is_a_congruence() {
+        let lay = Layout {
+            segments: 6,
+            floating: true,
+        };
+        let q: Vec<f64> = (0..lay.len()).map(|i| (i as f64 * 0.37).sin()).collect();
+        let mut z = vec![0.0; q.len()];
+        let mut back = vec![0.0; q.len()];
+        q_to_z(&lay, &q, &mut z);
+        z_to_q(&lay, &z, &mut back);
+        for (a, b) in q.iter().zip(&back) {
+            assert!((a - b).abs() < 1e-15);
+        }
+        // A^T H A with A = dq/dz built explicitly
+        let n = lay.len();
+        let h = DMatrix::from_fn(n, n, |i, j| {
+            ((i * 7 + j * 3) % 5) as f64 + if i == j { 10.0 } else { 0.0 }
+        });
+        let h = &h + h.transpose();
+        let mut a = DMatrix::<f64>::identity(n, n);
+        for k in 1..6 {
+            for j in 1..k {
+                a[(lay.c(k), lay.c(j))] = 1.0;
+            }
+        }
+        let expected = a.transpose() * &h * &a;
+        let mut got = h.clone();
+        hessian_to_z(&lay, &mut got);
+        assert!((expected - got).amax() < 1e-12);
+    }
+}

@@ -1,0 +1,13 @@
+//! The simulated world: objects, handles, one time step for all of them.
+//!
+//! This is the API every edge (CLI, ROS node, recorder, report) drives:
+//! build a [`World`] from a scene, call [`World::step`] with the newest handle targets,
+//! read meshes, singular points and the [`StepReport`]. Pure: no I/O, no ROS, no serde.
+
+pub mod handle;
+mod world;
+
+pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
+pub use world::{
+    Energies, ObjectKind, ObjectStepReport, SimObject, SingularPoint, StepReport, World,
+};

@@ -1,0 +1,212 @@
+//! Whole-run statistics (`run --stats OUT.json`): the contract other tools and checks
+//! read. Medians and percentiles over steps; SI units with the unit in the key name.
+
+use serde::Serialize;
+
+use crate::sim::{SimObject, StepReport, World};
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Percentiles {
+    pub median: f64,
+    pub p95: f64,
+    pub max: f64,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct MedianOnly {
+    pub median: f64,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct SolverStats {
+    pub kind: String,
+    pub iterations_median: f64,
+    pub outer_iterations_median: f64,
+    pub unconverged_steps: usize,
+    /// Steps whose result was not finite and the previous state was kept.
+    pub rejected_steps: usize,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ObjectFinal {
+    pub name: String,
+    pub vertices: Vec<[f64; 3]>,
+    pub triangles: Vec<[u32; 3]>,
+    pub material_vertices: Vec<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crease_direction: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bending_angle: Option<Vec<f64>>,
+    pub singular_points: Vec<[f64; 3]>,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FinalState {
+    /// Simulation time of the final state, s.
+    pub time: f64,
+    pub objects: Vec<ObjectFinal>,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct EnergyStats {
+    /// Total energy (kinetic + elastic + gravity + external) at the start and the
+    /// end, and its maximum over the run, J.
+    pub initial: f64,
+    pub last: f64,
+    pub max: f64,
+}
+
+/// The `--stats` JSON.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct RunStats {
+    pub scene: String,
+    /// s
+    pub dt: f64,
+    pub steps: usize,
+    /// Simulated time, s.
+    pub duration: f64,
+    /// Every state finite.
+    pub finite: bool,
+    pub step_ms: Percentiles,
+    pub solver: SolverStats,
+    /// One objective + gradient evaluation (adjoint), microseconds.
+    pub gradient_us: MedianOnly,
+    pub isometry_error_max: f64,
+    /// m
+    pub constraint_violation_max: f64,
+    pub singular_points_max: usize,
+    pub energy: EnergyStats,
+    /// Wall time of the whole run, s.
+    pub wall_s: f64,
+    #[serde(rename = "final")]
+    pub final_state: FinalState,
+}
+
+/// Median, 95th percentile and max of a sample (0 for an empty one).
+pub fn percentiles(values: &[f64]) -> Percentiles {
+    if values.is_empty() {
+        return Percentiles::default();
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let at = |p: f64| v[((p * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)];
+    Percentiles {
+        median: at(0.5),
+        p95: at(0.95),
+        max: v[v.len() - 1],
+    }
+}
+
+/// Accumulates step reports into [`RunStats`].
+#[derive(Clone, Debug, Default)]
+pub struct StatsCollector {
+    step_ms: Vec<f64>,
+    iterations: Vec<f64>,
+    outer: Vec<f64>,
+    pub stats: RunStats,
+}
+
+impl StatsCollector {
+    pub fn new(scene: &str, world: &World, solver_kind: &str) -> Self {
+        let mut c = StatsCollector::default();
+        c.stats.scene = scene.to_string();
+        c.stats.dt = world.dt();
+        c.stats.finite = true;
+        c.stats.solver.kind = solver_kind.to_string();
+        let e = total_energy(world);
+        c.stats.energy = EnergyStats {
+            initial: e,
+            last: e,
+            max: e,
+        };
+        c
+    }
+
+    pub fn record(&mut self, world: &World, report: &StepReport, step_ms: f64) {
+        let s = &mut self.stats;
+        s.steps += 1;
+        self.step_ms.push(step_ms);
+        let its: u32 = report.objects.iter().map(|o| o.iterations).sum();
+        let outer: u32 = report
+            .objects
+            .iter()
+            .map(|o| o.outer_iterations)
+            .max()
+            .unwrap_or(0);
+        self.iterations.push(its as f64);
+        self.outer.push(outer as f64);
+        for (i, o) in report.objects.iter().enumerate() {
+            if !o.converged {
+                s.solver.unconverged_steps += 1;
+            }
+            if o.kept_previous_state {
+                s.solver.rejected_steps += 1;
+            }
+            s.isometry_error_max = s.isometry_error_max.max(o.isometry_error);
+            s.constraint_violation_max = s.constraint_violation_max.max(o.constraint_violation);
+            s.singular_points_max = s.singular_points_max.max(o.singular_points);
+            s.finite &= world.mesh(i).is_finite() && o.energies.total().is_finite();
+        }
+        let e: f64 = report.objects.iter().map(|o| o.energies.total()).sum();
+        s.energy.last = e;
+        s.energy.max = s.energy.max.max(e);
+        s.duration = world.time();
+    }
+
+    pub fn finish(mut self, world: &World, gradient_us: f64, wall_s: f64) -> RunStats {
+        self.stats.step_ms = percentiles(&self.step_ms);
+        self.stats.solver.iterations_median = percentiles(&self.iterations).median;
+        self.stats.solver.outer_iterations_median = percentiles(&self.outer).median;
+        self.stats.gradient_us = MedianOnly {
+            median: gradient_us,
+        };
+        self.stats.wall_s = wall_s;
+        self.stats.final_state = final_state(world);
+        self.stats
+    }
+}
+
+fn total_energy(world: &World) -> f64 {
+    world
+        .objects()
+        .iter()
+        .map(|o| match o {
+            SimObject::Ribbon(r) => r.energies().total(),
+        })
+        .sum()
+}
+
+/// The final meshes and coordinates.
+pub fn final_state(world: &World) -> FinalState {
+    let objects = world
+        .object_names()
+        .iter()
+        .enumerate()
+        .map(|(i, name)| {
+            let mesh = world.mesh(i);
+            let (c, psi) = match &world.objects()[i] {
+                SimObject::Ribbon(r) => (
+                    Some(r.coordinates().crease_direction.clone()),
+                    Some(r.coordinates().bending_angle.clone()),
+                ),
+            };
+            ObjectFinal {
+                name: name.clone(),
+                vertices: mesh.vertices.iter().map(|p| [p.x, p.y, p.z]).collect(),
+                triangles: mesh.triangles.clone(),
+                material_vertices: mesh.material.iter().map(|p| [p.x, p.y]).collect(),
+                crease_direction: c,
+                bending_angle: psi,
+                singular_points: world
+                    .singular_points(i)
+                    .iter()
+                    .map(|s| [s.position.x, s.position.y, s.position.z])
+                    .collect(),
+            }
+        })
+        .collect();
+    FinalState {
+        time: world.time(),
+        objects,
+    }
+}
