@@ -1,12 +1,13 @@
 //! developable_sim: developable ribbons (Pan et al.) and paper (Schreck et al.) for robots.
 //!
-//! The simulation core (`geometry`, `ribbon`, `optim`, `sim`, `metrics`) is pure: no I/O,
+//! The simulation core (`geometry`, `ribbon`, `paper`, `optim`, `sim`, `metrics`) is pure: no I/O,
 //! no ROS, no serde. `scene` (configs), the CLI and (later) `ros` and `record` are the
 //! edges around it. See ARCHITECTURE.md.
 
 pub mod geometry;
 pub mod metrics;
 pub mod optim;
+pub mod paper;
 pub mod ribbon;
 pub mod runner;
 pub mod scene;

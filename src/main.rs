@@ -89,6 +89,26 @@ fn real_main(cli: Cli) -> anyhow::Result<()> {
                 run_stats.singular_points_max,
                 run_stats.finite
             );
+            if let (Some(c), Some(n), Some(t), Some(sv)) = (
+                run_stats.compression_mean_pct,
+                run_stats.compressed_edges_pct,
+                run_stats.triangles_mean,
+                run_stats.singular_vertices,
+            ) {
+                let phases = run_stats
+                    .phase_ms
+                    .as_ref()
+                    .map(|p| {
+                        format!(
+                            ", phases (median ms) simulation {:.3} remesh {:.3} isometry {:.3}",
+                            p.simulation, p.remesh, p.isometry
+                        )
+                    })
+                    .unwrap_or_default();
+                println!(
+                    "paper: compression mean {c:.3} %, edges compressed > 1 %: {n:.2} %, triangles mean {t:.1}, singular vertices {sv}{phases}"
+                );
+            }
             if let Some(path) = stats {
                 let json = serde_json::to_string_pretty(&run_stats)?;
                 std::fs::write(&path, json)

@@ -78,8 +78,50 @@ pub struct RunStats {
     pub energy: EnergyStats,
     /// Wall time of the whole run, s.
     pub wall_s: f64,
+    /// Paper objects (Schreck et al. table IV): mean over frames of the mean over S_P
+    /// edges of max(0, rest - length)/rest, %.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compression_mean_pct: Option<f64>,
+    /// Paper objects: mean over frames of the share of S_P edges compressed by more
+    /// than 1 %, %.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compressed_edges_pct: Option<f64>,
+    /// Paper objects (table V, N_t): mean over frames of the S_P triangle count.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub triangles_mean: Option<f64>,
+    /// Paper objects: singular vertices at the end (they persist).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub singular_vertices: Option<usize>,
+    /// Paper objects: the first singular vertex created (fig. 17).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub first_singular_point: Option<FirstSingular>,
+    /// Paper objects (table V): median wall time of each phase of a frame, ms.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub phase_ms: Option<PhaseMs>,
     #[serde(rename = "final")]
     pub final_state: FinalState,
+}
+
+/// Median wall time of the phases of a paper frame, ms.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct PhaseMs {
+    /// Step 1: the FEM step on S_P.
+    pub simulation: f64,
+    /// Step 2: compression analysis, rulings, singular vertices.
+    pub remesh: f64,
+    /// Step 3: junctions, cones, S_P rebuild, length restoration.
+    pub isometry: f64,
+}
+
+/// Where and when the first singular vertex appeared.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FirstSingular {
+    /// Simulation time, s.
+    pub time: f64,
+    /// Pattern position, m.
+    pub material: [f64; 2],
+    /// World position, m.
+    pub position: [f64; 3],
 }
 
 /// Median, 95th percentile and max of a sample (0 for an empty one).
@@ -103,6 +145,10 @@ pub struct StatsCollector {
     step_ms: Vec<f64>,
     iterations: Vec<f64>,
     outer: Vec<f64>,
+    paper_compression: Vec<f64>,
+    paper_compressed: Vec<f64>,
+    paper_triangles: Vec<f64>,
+    phase_ms: [Vec<f64>; 3],
     pub stats: RunStats,
 }
 
@@ -147,13 +193,62 @@ impl StatsCollector {
             s.singular_points_max = s.singular_points_max.max(o.singular_points);
             s.finite &= world.mesh(i).is_finite() && o.energies.total().is_finite();
         }
+        // paper objects: per-frame measurements averaged over the sheets
+        let papers: Vec<&crate::paper::PaperSim> = world
+            .objects()
+            .iter()
+            .filter_map(|o| match o {
+                SimObject::Paper(p) => Some(p.as_ref()),
+                _ => None,
+            })
+            .collect();
+        if !papers.is_empty() {
+            let n = papers.len() as f64;
+            let f = |g: &dyn Fn(&crate::paper::PaperFrameStats) -> f64| {
+                papers.iter().map(|p| g(p.frame_stats())).sum::<f64>() / n
+            };
+            self.paper_compression.push(f(&|x| x.compression_mean_pct));
+            self.paper_compressed.push(f(&|x| x.compressed_edges_pct));
+            self.paper_triangles.push(f(&|x| x.triangles as f64));
+            if s.first_singular_point.is_none() {
+                if let Some(sp) = papers.iter().find_map(|p| p.singular_points().first()) {
+                    s.first_singular_point = Some(FirstSingular {
+                        time: world.time(),
+                        material: [sp.material.x, sp.material.y],
+                        position: [sp.position.x, sp.position.y, sp.position.z],
+                    });
+                }
+            }
+            s.singular_vertices = Some(papers.iter().map(|p| p.singular_points().len()).sum());
+        }
         let e: f64 = report.objects.iter().map(|o| o.energies.total()).sum();
         s.energy.last = e;
         s.energy.max = s.energy.max.max(e);
         s.duration = world.time();
     }
 
+    /// Wall time of the phases of the last step (simulation, remesh, isometry), ms,
+    /// summed over the paper objects.
+    pub fn record_phases(&mut self, phase_ms: [f64; 3]) {
+        for (v, t) in self.phase_ms.iter_mut().zip(phase_ms) {
+            v.push(t);
+        }
+    }
+
     pub fn finish(mut self, world: &World, gradient_us: f64, wall_s: f64) -> RunStats {
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+        if !self.paper_compression.is_empty() {
+            self.stats.compression_mean_pct = Some(mean(&self.paper_compression));
+            self.stats.compressed_edges_pct = Some(mean(&self.paper_compressed));
+            self.stats.triangles_mean = Some(mean(&self.paper_triangles));
+            if !self.phase_ms[0].is_empty() {
+                self.stats.phase_ms = Some(PhaseMs {
+                    simulation: percentiles(&self.phase_ms[0]).median,
+                    remesh: percentiles(&self.phase_ms[1]).median,
+                    isometry: percentiles(&self.phase_ms[2]).median,
+                });
+            }
+        }
         self.stats.step_ms = percentiles(&self.step_ms);
         self.stats.solver.iterations_median = percentiles(&self.iterations).median;
         self.stats.solver.outer_iterations_median = percentiles(&self.outer).median;
@@ -172,6 +267,7 @@ fn total_energy(world: &World) -> f64 {
         .iter()
         .map(|o| match o {
             SimObject::Ribbon(r) => r.energies().total(),
+            SimObject::Paper(p) => p.energies().total(),
         })
         .sum()
 }
@@ -189,6 +285,7 @@ pub fn final_state(world: &World) -> FinalState {
                     Some(r.coordinates().crease_direction.clone()),
                     Some(r.coordinates().bending_angle.clone()),
                 ),
+                SimObject::Paper(_) => (None, None),
             };
             ObjectFinal {
                 name: name.clone(),

@@ -49,6 +49,10 @@ pub struct SceneFile {
     /// The ribbon of a single-ribbon scene (object name `ribbon`).
     #[serde(default)]
     pub ribbon: Option<RibbonFile>,
+    /// The sheet of a single-paper scene (object name `paper`, Schreck et al.); see
+    /// [`super::paper_file::PaperFile`].
+    #[serde(default)]
+    pub paper: Option<super::paper_file::PaperFile>,
     /// Handles (grippers).
     #[serde(default)]
     pub handles: Vec<HandleFile>,
@@ -269,6 +273,10 @@ pub struct HandleFile {
     /// Scripted target when nobody publishes.
     #[serde(default)]
     pub trajectory: TrajectoryFile,
+    /// Time from which the handle lets go, s (paper objects only: unloading, fig. 18).
+    /// Default: never.
+    #[serde(default)]
+    pub release_at: Option<f64>,
 }
 fn d_axes() -> Vec<String> {
     vec!["x".into(), "y".into(), "z".into()]
@@ -362,26 +370,26 @@ impl Default for OutputsFile {
 }
 
 /// Collects validation errors with their key paths.
-struct Check<'a> {
-    file: &'a Path,
+pub(super) struct Check<'a> {
+    pub(super) file: &'a Path,
 }
 
 impl Check<'_> {
-    fn fail(&self, key: &str, message: impl Into<String>) -> SceneError {
+    pub(super) fn fail(&self, key: &str, message: impl Into<String>) -> SceneError {
         SceneError::Invalid {
             file: self.file.to_path_buf(),
             key: key.to_string(),
             message: message.into(),
         }
     }
-    fn finite(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+    pub(super) fn finite(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         if v.is_finite() {
             Ok(v)
         } else {
             Err(self.fail(key, format!("must be a finite number, got {v}")))
         }
     }
-    fn positive(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+    pub(super) fn positive(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         self.finite(key, v)?;
         if v > 0.0 {
             Ok(v)
@@ -389,7 +397,7 @@ impl Check<'_> {
             Err(self.fail(key, format!("must be > 0, got {v}")))
         }
     }
-    fn non_negative(&self, key: &str, v: f64) -> Result<f64, SceneError> {
+    pub(super) fn non_negative(&self, key: &str, v: f64) -> Result<f64, SceneError> {
         self.finite(key, v)?;
         if v >= 0.0 {
             Ok(v)
@@ -397,13 +405,13 @@ impl Check<'_> {
             Err(self.fail(key, format!("must be >= 0, got {v}")))
         }
     }
-    fn vec3(&self, key: &str, v: [f64; 3]) -> Result<Vector3, SceneError> {
+    pub(super) fn vec3(&self, key: &str, v: [f64; 3]) -> Result<Vector3, SceneError> {
         for (i, x) in v.iter().enumerate() {
             self.finite(&format!("{key}.{i}"), *x)?;
         }
         Ok(Vector3::from(v))
     }
-    fn choice<'s>(&self, key: &str, v: &'s str, allowed: &[&str]) -> Result<&'s str, SceneError> {
+    pub(super) fn choice<'s>(&self, key: &str, v: &'s str, allowed: &[&str]) -> Result<&'s str, SceneError> {
         if allowed.contains(&v) {
             Ok(v)
         } else {
@@ -418,8 +426,124 @@ impl Check<'_> {
     }
 }
 
-fn pose_from(position: Vector3, rotation: Vector3) -> Pose {
+pub(super) fn pose_from(position: Vector3, rotation: Vector3) -> Pose {
     Pose::new(position, rotation)
+}
+
+
+/// One handle's keys except its grasp point's range (checked per object kind): name,
+/// axes, orientation, trajectory, topic. Returns the spec (trajectory initial pose
+/// still to be defaulted), the explicit initial pose if any, and the ROS topic.
+pub(super) fn parse_handle(
+    ck: &Check,
+    key: &str,
+    h: &HandleFile,
+    object: usize,
+    names: &mut std::collections::BTreeSet<String>,
+) -> Result<(HandleSpec, Option<Pose>, String), SceneError> {
+    if h.name.is_empty()
+        || !h
+            .name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_')
+    {
+        return Err(ck.fail(
+            &format!("{key}.name"),
+            format!("`{}` must be non-empty [A-Za-z0-9_]", h.name),
+        ));
+    }
+    if !names.insert(h.name.clone()) {
+        return Err(ck.fail(
+            &format!("{key}.name"),
+            format!("duplicate handle name `{}`", h.name),
+        ));
+    }
+    let point = Point2::new(
+        ck.finite(&format!("{key}.point.0"), h.point[0])?,
+        ck.finite(&format!("{key}.point.1"), h.point[1])?,
+    );
+    let mut axes = [false; 3];
+    for a in &h.position_axes {
+        match a.as_str() {
+            "x" => axes[0] = true,
+            "y" => axes[1] = true,
+            "z" => axes[2] = true,
+            other => {
+                return Err(ck.fail(
+                    &format!("{key}.position_axes"),
+                    format!("unknown axis `{other}`, expected x, y or z"),
+                ))
+            }
+        }
+    }
+    let orientation = match ck.choice(
+        &format!("{key}.orientation"),
+        &h.orientation,
+        &["free", "normal", "full"],
+    )? {
+        "free" => OrientationMode::Free,
+        "normal" => OrientationMode::Normal {
+            stiffness: ck
+                .non_negative(&format!("{key}.normal_stiffness"), h.normal_stiffness)?,
+        },
+        _ => OrientationMode::Full,
+    };
+    let mut motions = Vec::new();
+    for (m_i, m) in h.trajectory.motions.iter().enumerate() {
+        let mk = format!("{key}.trajectory.motions.{m_i}");
+        let start = ck.non_negative(&format!("{mk}.start"), m.start)?;
+        let end = ck.finite(&format!("{mk}.end"), m.end)?;
+        if end <= start {
+            return Err(ck.fail(
+                &format!("{mk}.end"),
+                format!("must be after start ({end} <= {start})"),
+            ));
+        }
+        let axis = ck.vec3(&format!("{mk}.axis"), m.axis)?;
+        let angle = ck.finite(&format!("{mk}.angle"), m.angle)?;
+        if angle != 0.0 && axis.norm() == 0.0 {
+            return Err(ck.fail(&format!("{mk}.axis"), "must be non-zero when angle is"));
+        }
+        motions.push(Motion {
+            start,
+            end,
+            translation: ck.vec3(&format!("{mk}.translation"), m.translation)?,
+            axis,
+            angle,
+        });
+    }
+    let initial = match &h.trajectory.initial {
+        Some(p) => Some(pose_from(
+            ck.vec3(&format!("{key}.trajectory.initial.position"), p.position)?,
+            ck.vec3(&format!("{key}.trajectory.initial.rotation"), p.rotation)?,
+        )),
+        None => None,
+    };
+    let topic = h
+        .topic
+        .clone()
+        .unwrap_or_else(|| format!("/handles/{}", h.name));
+    if !topic.starts_with('/') || topic.contains("//") || topic.ends_with('/') {
+        return Err(ck.fail(
+            &format!("{key}.topic"),
+            format!("`{topic}` is not an absolute ROS topic name"),
+        ));
+    }
+    Ok((
+        HandleSpec {
+            name: h.name.clone(),
+            object,
+            material_point: point,
+            position_axes: axes,
+            orientation,
+            trajectory: Trajectory {
+                initial: Pose::identity(),
+                motions,
+            },
+        },
+        initial,
+        topic,
+    ))
 }
 
 impl SceneFile {
@@ -439,10 +563,19 @@ impl SceneFile {
             return Err(ck.fail("frame_id", "must not be empty"));
         }
         let solver = self.solver_settings(&ck)?;
+        if self.paper.is_some() {
+            if self.ribbon.is_some() {
+                return Err(ck.fail(
+                    "paper",
+                    "a scene holds one object: either a `ribbon:` or a `paper:` section",
+                ));
+            }
+            return self.build_paper(file, &ck, duration, dt, gravity);
+        }
         let Some(ribbon) = &self.ribbon else {
             return Err(ck.fail(
                 "ribbon",
-                "the scene declares no object (add a `ribbon:` section)",
+                "the scene declares no object (add a `ribbon:` or a `paper:` section)",
             ));
         };
         let object_names = ["ribbon".to_string()];
@@ -467,28 +600,9 @@ impl SceneFile {
         let mut topics = Vec::new();
         for (i, h) in self.handles.iter().enumerate() {
             let key = format!("handles.{i}");
-            if h.name.is_empty()
-                || !h
-                    .name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_')
-            {
-                return Err(ck.fail(
-                    &format!("{key}.name"),
-                    format!("`{}` must be non-empty [A-Za-z0-9_]", h.name),
-                ));
-            }
-            if !names.insert(h.name.clone()) {
-                return Err(ck.fail(
-                    &format!("{key}.name"),
-                    format!("duplicate handle name `{}`", h.name),
-                ));
-            }
             let object = object_of(&format!("{key}.object"), &h.object)?;
-            let point = Point2::new(
-                ck.finite(&format!("{key}.point.0"), h.point[0])?,
-                ck.finite(&format!("{key}.point.1"), h.point[1])?,
-            );
+            let (spec, initial, topic) = parse_handle(&ck, &key, h, object, &mut names)?;
+            let point = spec.material_point;
             if point.x < 0.0
                 || point.x > ribbon.length
                 || point.y.abs() > 0.5 * ribbon.width + 1e-12
@@ -505,88 +619,14 @@ impl SceneFile {
                     ),
                 ));
             }
-            let mut axes = [false; 3];
-            for a in &h.position_axes {
-                match a.as_str() {
-                    "x" => axes[0] = true,
-                    "y" => axes[1] = true,
-                    "z" => axes[2] = true,
-                    other => {
-                        return Err(ck.fail(
-                            &format!("{key}.position_axes"),
-                            format!("unknown axis `{other}`, expected x, y or z"),
-                        ))
-                    }
-                }
-            }
-            let orientation = match ck.choice(
-                &format!("{key}.orientation"),
-                &h.orientation,
-                &["free", "normal", "full"],
-            )? {
-                "free" => OrientationMode::Free,
-                "normal" => OrientationMode::Normal {
-                    stiffness: ck
-                        .non_negative(&format!("{key}.normal_stiffness"), h.normal_stiffness)?,
-                },
-                _ => OrientationMode::Full,
-            };
-            let mut motions = Vec::new();
-            for (m_i, m) in h.trajectory.motions.iter().enumerate() {
-                let mk = format!("{key}.trajectory.motions.{m_i}");
-                let start = ck.non_negative(&format!("{mk}.start"), m.start)?;
-                let end = ck.finite(&format!("{mk}.end"), m.end)?;
-                if end <= start {
-                    return Err(ck.fail(
-                        &format!("{mk}.end"),
-                        format!("must be after start ({end} <= {start})"),
-                    ));
-                }
-                let axis = ck.vec3(&format!("{mk}.axis"), m.axis)?;
-                let angle = ck.finite(&format!("{mk}.angle"), m.angle)?;
-                if angle != 0.0 && axis.norm() == 0.0 {
-                    return Err(ck.fail(&format!("{mk}.axis"), "must be non-zero when angle is"));
-                }
-                motions.push(Motion {
-                    start,
-                    end,
-                    translation: ck.vec3(&format!("{mk}.translation"), m.translation)?,
-                    axis,
-                    angle,
-                });
-            }
-            let initial = match &h.trajectory.initial {
-                Some(p) => Some(pose_from(
-                    ck.vec3(&format!("{key}.trajectory.initial.position"), p.position)?,
-                    ck.vec3(&format!("{key}.trajectory.initial.rotation"), p.rotation)?,
-                )),
-                None => None,
-            };
-            let topic = h
-                .topic
-                .clone()
-                .unwrap_or_else(|| format!("/handles/{}", h.name));
-            if !topic.starts_with('/') || topic.contains("//") || topic.ends_with('/') {
+            if h.release_at.is_some() {
                 return Err(ck.fail(
-                    &format!("{key}.topic"),
-                    format!("`{topic}` is not an absolute ROS topic name"),
+                    &format!("{key}.release_at"),
+                    "only paper objects support releasing a handle",
                 ));
             }
             topics.push(topic);
-            specs.push((
-                HandleSpec {
-                    name: h.name.clone(),
-                    object,
-                    material_point: point,
-                    position_axes: axes,
-                    orientation,
-                    trajectory: Trajectory {
-                        initial: Pose::identity(),
-                        motions,
-                    },
-                },
-                initial,
-            ));
+            specs.push((spec, initial));
         }
 
         // the ribbon

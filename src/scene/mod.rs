@@ -6,10 +6,12 @@
 
 mod file;
 mod overrides;
+mod paper_file;
 
 use std::path::{Path, PathBuf};
 
 pub use file::{OutputsFile, SceneFile};
+pub use paper_file::{ColliderFile, CreaseFile, PaperFile};
 pub use overrides::apply_override;
 
 use crate::sim::World;

@@ -1,4 +1,5 @@
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh};
+use crate::paper::PaperSim;
 use crate::ribbon::RibbonSim;
 
 use super::handle::HandleSpec;
@@ -66,19 +67,49 @@ pub struct StepReport {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ObjectKind {
     Ribbon,
+    Paper,
 }
 
 /// One simulated object.
 #[derive(Clone, Debug)]
 pub enum SimObject {
     Ribbon(Box<RibbonSim>),
+    /// A sheet of paper (Schreck et al.).
+    Paper(Box<PaperSim>),
 }
 
 impl SimObject {
     pub fn kind(&self) -> ObjectKind {
         match self {
             SimObject::Ribbon(_) => ObjectKind::Ribbon,
+            SimObject::Paper(_) => ObjectKind::Paper,
         }
+    }
+}
+
+/// The phases of one paper frame (Schreck et al. fig. 3, table V): the FEM step, the
+/// remeshing of S_G, the developable and isometric tracking.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Phase {
+    Simulation,
+    Remesh,
+    Isometry,
+}
+
+/// Runs each phase of a step; an edge that measures wall time implements it (the core
+/// never reads a clock).
+pub trait PhaseClock {
+    /// Run `work`, the phase `phase` of object `object`.
+    fn time(&mut self, object: usize, phase: Phase, work: &mut dyn FnMut());
+}
+
+/// A [`PhaseClock`] that only runs the work.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct NoClock;
+
+impl PhaseClock for NoClock {
+    fn time(&mut self, _object: usize, _phase: Phase, work: &mut dyn FnMut()) {
+        work()
     }
 }
 
@@ -145,6 +176,16 @@ impl World {
     /// target of handle `i` (`world_from_gripper` at the end of the step); missing entries
     /// follow the script.
     pub fn step(&mut self, targets: &[Option<Pose>]) -> StepReport {
+        self.step_with_clock(targets, &mut NoClock)
+    }
+
+    /// [`World::step`] with the phases of each object run inside `clock` (objects
+    /// without phases run as one [`Phase::Simulation`]).
+    pub fn step_with_clock(
+        &mut self,
+        targets: &[Option<Pose>],
+        clock: &mut dyn PhaseClock,
+    ) -> StepReport {
         let t_next = self.time + self.dt;
         let resolved: Vec<Pose> = (0..self.handles.len())
             .map(|i| {
@@ -162,7 +203,16 @@ impl World {
             .iter_mut()
             .enumerate()
             .map(|(index, object)| match object {
-                SimObject::Ribbon(r) => r.step(dt, t_next, index, handles, &resolved),
+                SimObject::Ribbon(r) => {
+                    let mut report = ObjectStepReport::default();
+                    clock.time(index, Phase::Simulation, &mut || {
+                        report = r.step(dt, t_next, index, handles, &resolved)
+                    });
+                    report
+                }
+                SimObject::Paper(p) => {
+                    p.step_with_clock(dt, t_next, index, handles, &resolved, clock)
+                }
             })
             .collect();
         self.time = t_next;
@@ -177,6 +227,7 @@ impl World {
     pub fn mesh(&self, object: usize) -> &SurfaceMesh {
         match &self.objects[object] {
             SimObject::Ribbon(r) => r.mesh(),
+            SimObject::Paper(p) => p.mesh(),
         }
     }
 
@@ -184,6 +235,7 @@ impl World {
     pub fn singular_points(&self, object: usize) -> &[SingularPoint] {
         match &self.objects[object] {
             SimObject::Ribbon(r) => r.singular_points(),
+            SimObject::Paper(p) => p.singular_points(),
         }
     }
 

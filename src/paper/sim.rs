@@ -1,0 +1,573 @@
+//! A sheet of paper as a simulated object: the three steps of each animation frame
+//! (Schreck et al. sec. 3.3, fig. 3, fig. 16), exposed one by one so that an edge can
+//! time them:
+//! 1. [`PaperSim::simulate`]: handles moved, implicit FEM step on S_P (arrows a, b);
+//! 2. [`PaperSim::remesh`]: S_G positions from S_P (c), compressed flat regions
+//!    remeshed with new rulings and singular vertices (d);
+//! 3. [`PaperSim::track`]: junction points (e), generalized cones (f), S_P rebuilt
+//!    from S_G (g), edge lengths restored (h).
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use super::compression::{flat_regions, triangle_strain};
+use super::crumpling::{crumple_flat_region, CrumpleContext, CrumpleEvent};
+use super::fem::{implicit_step, Dirichlet, FemReport, FemSystem, Spring};
+use super::geometric::{Crease, CreaseKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh};
+use super::isometry::{restore_lengths, IsometryReport};
+use super::params::{PaperError, PaperParams};
+use super::pattern::Pattern;
+use super::physical::{build_physical, Interpolator, PhysicalMesh};
+use super::tracking::{fit_cones, update_junctions, ConeReport, JunctionReport};
+use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3};
+use crate::sim::{Energies, HandleSpec, ObjectStepReport, OrientationMode, Phase, PhaseClock, SingularPoint};
+
+/// A handle holding this sheet.
+#[derive(Clone, Debug, PartialEq)]
+struct PaperHandle {
+    /// Index in the world's handle list.
+    world: usize,
+    material: Point2,
+    axes: [bool; 3],
+    orientation: OrientationMode,
+    release_at: Option<f64>,
+}
+
+/// Per-frame measurements (table IV, V of the paper).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PaperFrameStats {
+    /// Mean over S_P edges of max(0, rest - length)/rest, %.
+    pub compression_mean_pct: f64,
+    /// S_P edges compressed by more than 1 %, %.
+    pub compressed_edges_pct: f64,
+    /// Triangles of S_P (N_t).
+    pub triangles: usize,
+    /// Triangles and curved regions of S_G.
+    pub geometric_triangles: usize,
+    pub curved_regions: usize,
+    pub fem: FemReport,
+    pub crumple_events: Vec<CrumpleEvent>,
+    pub junctions: JunctionReport,
+    pub cones: ConeReport,
+    pub isometry: IsometryReport,
+}
+
+/// One sheet of paper.
+#[derive(Clone, Debug)]
+pub struct PaperSim {
+    pub params: PaperParams,
+    pattern: Pattern,
+    layer: GeometricLayer,
+    gmesh: GeometricMesh,
+    sp: PhysicalMesh,
+    fem: FemSystem,
+    rng: ChaCha8Rng,
+    handles: Vec<PaperHandle>,
+    last_targets: Vec<Option<Pose>>,
+    /// Hard constraints of the current frame: vertex material point -> world target.
+    held: Vec<(Point2, Point3)>,
+    time: f64,
+    mesh: SurfaceMesh,
+    singular: Vec<SingularPoint>,
+    frame: PaperFrameStats,
+}
+
+impl PaperSim {
+    /// A flat sheet at `params.placement`. `handles` are the world's handles; those
+    /// with `object == index` hold this sheet and must grasp it on its boundary.
+    pub fn new(params: PaperParams, handles: &[HandleSpec], index: usize) -> Result<PaperSim, PaperError> {
+        params.validate()?;
+        let pattern = Pattern::rectangle(params.width, params.height);
+        let mut layer = GeometricLayer::default();
+        let mut own = Vec::new();
+        for (h, spec) in handles.iter().enumerate() {
+            if spec.object != index {
+                continue;
+            }
+            let s = pattern.arc_of(&spec.material_point, 1e-9).ok_or_else(|| PaperError::Invalid {
+                key: "handles.point",
+                message: format!(
+                    "handle `{}` grasps [{}, {}], which is not on the sheet's boundary (the paper's handles are on ∂S, sec. 3.3)",
+                    spec.name, spec.material_point.x, spec.material_point.y
+                ),
+            })?;
+            layer.anchors.push(s);
+            own.push(PaperHandle {
+                world: h,
+                material: pattern.point_at(s),
+                axes: spec.position_axes,
+                orientation: spec.orientation,
+                release_at: params
+                    .handle_releases
+                    .iter()
+                    .find(|(i, _)| *i == h)
+                    .map(|(_, t)| *t),
+            });
+        }
+        for c in &params.preset_creases {
+            let (Some(a), Some(b)) = (pattern.arc_of(&c.from, 1e-9), pattern.arc_of(&c.to, 1e-9)) else {
+                return Err(PaperError::Invalid {
+                    key: "creases",
+                    message: "a preset crease must go from boundary to boundary".into(),
+                });
+            };
+            layer.creases.push(Crease {
+                a: Endpoint::Boundary(a),
+                b: Endpoint::Boundary(b),
+                kind: CreaseKind::Preset { rest_angle: c.rest_angle },
+            });
+        }
+        let placement = params.placement;
+        let flat = move |_: &GVertexKind, m: &Point2| placement * Point3::new(m.x, m.y, 0.0);
+        let gmesh = GeometricMesh::build(&layer, &pattern, &flat)
+            .map_err(|e| PaperError::Triangulation(e.to_string()))?;
+        let mut sp = build_physical(&gmesh, &layer, &pattern, &params, &|s| {
+            let m = pattern.point_at(s);
+            placement * Point3::new(m.x, m.y, 0.0)
+        })
+        .map_err(PaperError::Triangulation)?;
+        let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
+        if params.imperfection > 0.0 {
+            use rand::Rng;
+            let normal = placement.rotation * Vector3::z();
+            for p in sp.position.iter_mut() {
+                *p += normal * rng.random_range(-params.imperfection..=params.imperfection);
+            }
+        }
+        let fem = FemSystem::new(&sp);
+        let mut sim = PaperSim {
+            last_targets: vec![None; handles.len()],
+            params,
+            pattern,
+            layer,
+            gmesh,
+            sp,
+            fem,
+            rng,
+            handles: own,
+            held: Vec::new(),
+            time: 0.0,
+            mesh: SurfaceMesh::default(),
+            singular: Vec::new(),
+            frame: PaperFrameStats::default(),
+        };
+        sim.rebuild_outputs();
+        Ok(sim)
+    }
+
+    /// `world_from_material_point`: the pose of pattern point `m` on the flat sheet at
+    /// its placement (the default handle target).
+    pub fn material_pose(&self, m: &Point2) -> Pose {
+        self.params.placement * Pose::translation(m.x, m.y, 0.0)
+    }
+
+    /// The displayed mesh: S_P (sec. 4: "S_P ... as the visual representation"), its
+    /// S_G rulings and creases as index pairs, regions per vertex, pattern coordinates.
+    pub fn mesh(&self) -> &SurfaceMesh {
+        &self.mesh
+    }
+    pub fn singular_points(&self) -> &[SingularPoint] {
+        &self.singular
+    }
+    pub fn geometric_layer(&self) -> &GeometricLayer {
+        &self.layer
+    }
+    pub fn geometric_mesh(&self) -> &GeometricMesh {
+        &self.gmesh
+    }
+    pub fn physical_mesh(&self) -> &PhysicalMesh {
+        &self.sp
+    }
+    pub fn pattern(&self) -> &Pattern {
+        &self.pattern
+    }
+    /// Measurements of the last frame.
+    pub fn frame_stats(&self) -> &PaperFrameStats {
+        &self.frame
+    }
+    /// Energies of the current state, J.
+    pub fn energies(&self) -> Energies {
+        let e = &self.frame.fem.energies;
+        Energies {
+            kinetic: e.kinetic,
+            elastic: e.stretching + e.bending,
+            gravity: e.gravity,
+            external: e.collision + e.springs,
+        }
+    }
+
+    /// All three steps of one frame (see the module doc).
+    pub fn step(&mut self, dt: f64, time: f64, index: usize, handles: &[HandleSpec], targets: &[Pose]) -> ObjectStepReport {
+        self.step_with_clock(dt, time, index, handles, targets, &mut crate::sim::NoClock)
+    }
+
+    /// [`PaperSim::step`] with each phase run inside `clock` (the edge times them).
+    pub fn step_with_clock(
+        &mut self,
+        dt: f64,
+        time: f64,
+        index: usize,
+        handles: &[HandleSpec],
+        targets: &[Pose],
+        clock: &mut dyn PhaseClock,
+    ) -> ObjectStepReport {
+        let mut fem = FemReport::default();
+        clock.time(index, Phase::Simulation, &mut || fem = self.simulate(dt, time, handles, targets));
+        clock.time(index, Phase::Remesh, &mut || self.remesh());
+        clock.time(index, Phase::Isometry, &mut || self.track());
+        self.report(&fem)
+    }
+
+    fn report(&self, fem: &FemReport) -> ObjectStepReport {
+        let mut violation: f64 = 0.0;
+        for (m, target) in &self.held {
+            if let Some(v) = self.vertex_at(m) {
+                violation = violation.max((self.sp.position[v] - target).norm());
+            }
+        }
+        ObjectStepReport {
+            iterations: fem.iterations,
+            outer_iterations: 1,
+            converged: fem.converged,
+            kept_previous_state: fem.failed,
+            energies: self.energies(),
+            isometry_error: self.mesh.isometry_error(),
+            constraint_violation: violation,
+            singular_points: self.singular.len(),
+        }
+    }
+
+    fn vertex_at(&self, m: &Point2) -> Option<usize> {
+        self.sp
+            .material
+            .iter()
+            .position(|x| (x - m).norm() < 1e-9)
+    }
+
+    /// The hard constraints of the handles at time `time`: each active handle holds its
+    /// grasp vertex (the axes it holds) and, unless its orientation is free, the tangent
+    /// plane through two neighbouring vertices placed rigidly in the gripper frame
+    /// (sec. 4). Returns (dirichlet, springs, held points for the isometry step).
+    fn handle_constraints(&self, time: f64) -> (Vec<Dirichlet>, Vec<Spring>, Vec<(Point2, Point3)>) {
+        let mut dirichlet = Vec::new();
+        let mut springs = Vec::new();
+        let mut held = Vec::new();
+        for h in &self.handles {
+            if h.release_at.is_some_and(|t| time >= t) {
+                continue;
+            }
+            let Some(target) = self.last_targets.get(h.world).copied().flatten() else { continue };
+            let Some(v) = self.sp.material.iter().position(|x| (x - h.material).norm() < 1e-9) else { continue };
+            let p = Point3::from(target.translation.vector);
+            for axis in 0..3 {
+                if h.axes[axis] {
+                    dirichlet.push(Dirichlet { vertex: v as u32, axis, value: p[axis] });
+                }
+            }
+            if h.axes.iter().all(|&a| a) {
+                held.push((h.material, p));
+            }
+            if h.orientation == OrientationMode::Free {
+                continue;
+            }
+            for n in tangent_neighbours(&self.sp, v) {
+                let off = self.sp.material[n] - h.material;
+                let q = target * Point3::new(off.x, off.y, 0.0);
+                match h.orientation {
+                    OrientationMode::Full => {
+                        for axis in 0..3 {
+                            dirichlet.push(Dirichlet { vertex: n as u32, axis, value: q[axis] });
+                        }
+                        held.push((self.sp.material[n], q));
+                    }
+                    OrientationMode::Normal { stiffness } => springs.push(Spring {
+                        vertex: n as u32,
+                        target: q,
+                        stiffness: stiffness / off.norm_squared().max(1e-12),
+                    }),
+                    OrientationMode::Free => {}
+                }
+            }
+        }
+        (dirichlet, springs, held)
+    }
+
+    /// Step 1 (sec. 4): move the handles to `targets` (world handle order) and relax
+    /// S_P by one implicit step of `dt` s ending at `time` s.
+    pub fn simulate(&mut self, dt: f64, time: f64, _handles: &[HandleSpec], targets: &[Pose]) -> FemReport {
+        self.time = time;
+        // a non-finite target is ignored: the handle keeps its last valid target
+        for (h, t) in targets.iter().enumerate() {
+            let finite = t.translation.vector.iter().all(|x| x.is_finite()) && t.rotation.coords.iter().all(|x| x.is_finite());
+            if finite {
+                if let Some(slot) = self.last_targets.get_mut(h) {
+                    *slot = Some(*t);
+                }
+            }
+        }
+        let (dirichlet, springs, held) = self.handle_constraints(time);
+        self.held = held;
+        if !self.fem.matches(&self.sp) {
+            self.fem = FemSystem::new(&self.sp);
+        }
+        let report = implicit_step(&mut self.fem, &mut self.sp, &self.params, dt, &dirichlet, &springs);
+        self.frame = PaperFrameStats {
+            fem: report,
+            ..Default::default()
+        };
+        report
+    }
+
+    /// Step 2 (sec. 5): S_G follows S_P; each compressed flat region (a triangle
+    /// compressed by more than epsilon_c) is remeshed once with new rulings, creating
+    /// singular vertices where the rulings meet constrained borders.
+    pub fn remesh(&mut self) {
+        let params = self.params.clone();
+        let pattern = self.pattern.clone();
+        let sp = self.sp.clone();
+        let interp = Interpolator::new(&sp, &pattern);
+        let position = |k: &GVertexKind, m: &Point2| match k {
+            GVertexKind::Boundary { s } => match interp.vertex_at(m) {
+                Some(v) => sp.position[v as usize],
+                None => interp.boundary_position(*s),
+            },
+            GVertexKind::Singular { .. } => interp.position(m),
+        };
+        let ctx = CrumpleContext {
+            pattern: &pattern,
+            params: &params,
+            position: &position,
+        };
+        let Ok(mut gmesh) = GeometricMesh::build(&self.layer, &pattern, &position) else {
+            return;
+        };
+        // the flat regions of this frame, each remeshed at most once (sec. 5.1: "it is
+        // applied to each flat region F"); later meshes map back to them by position
+        let fold = params.split_flat_regions_at_folds.then_some(params.flat_angle);
+        let original = gmesh.clone();
+        let original_labels = flat_regions(&original, fold);
+        let mut processed: Vec<usize> = Vec::new();
+        for _ in 0..8 {
+            let labels = flat_regions(&gmesh, fold);
+            let n_labels = labels.iter().filter(|&&l| l != usize::MAX).max().map_or(0, |m| m + 1);
+            let mut worst: Vec<Option<super::compression::TriangleStrain>> = vec![None; n_labels];
+            for (f, &l) in labels.iter().enumerate() {
+                if l == usize::MAX {
+                    continue;
+                }
+                if let Some(s) = triangle_strain(&gmesh, f) {
+                    if worst[l].is_none_or(|w| s.compression > w.compression) {
+                        worst[l] = Some(s);
+                    }
+                }
+            }
+            let origin_of = |strain: &super::compression::TriangleStrain| {
+                let face = &gmesh.faces[strain.face];
+                let c = Point2::from(
+                    face.vertices
+                        .iter()
+                        .map(|&v| gmesh.vertices[v as usize].material.coords)
+                        .sum::<nalgebra::Vector2<f64>>()
+                        / face.vertices.len() as f64,
+                );
+                original.face_at(&c).map(|f| original_labels[f])
+            };
+            let candidate = worst
+                .iter()
+                .flatten()
+                .filter(|w| w.compression > params.compression_threshold)
+                .filter(|w| origin_of(w).is_some_and(|o| o != usize::MAX && !processed.contains(&o)))
+                .max_by(|a, b| a.compression.total_cmp(&b.compression))
+                .copied();
+            let Some(strain) = candidate else { break };
+            if let Some(o) = origin_of(&strain) {
+                processed.push(o);
+            }
+            let events = crumple_flat_region(&ctx, &mut self.layer, &gmesh, &labels, &strain, &mut self.rng);
+            if events.is_empty() {
+                continue;
+            }
+            self.frame.crumple_events.extend(events);
+            match GeometricMesh::build(&self.layer, &pattern, &position) {
+                Ok(g) => gmesh = g,
+                Err(_) => break,
+            }
+        }
+        self.gmesh = gmesh;
+    }
+
+    /// Step 3 (sec. 6): junction points, generalized cones, S_P from S_G, lengths.
+    pub fn track(&mut self) {
+        let params = self.params.clone();
+        let pattern = self.pattern.clone();
+        let old = self.sp.clone();
+        let interp = Interpolator::new(&old, &pattern);
+        let position = |k: &GVertexKind, m: &Point2| match k {
+            GVertexKind::Boundary { s } => match interp.vertex_at(m) {
+                Some(v) => old.position[v as usize],
+                None => interp.boundary_position(*s),
+            },
+            GVertexKind::Singular { .. } => interp.position(m),
+        };
+        let ctx = CrumpleContext {
+            pattern: &pattern,
+            params: &params,
+            position: &position,
+        };
+        if let Ok(g) = GeometricMesh::build(&self.layer, &pattern, &position) {
+            self.frame.junctions = update_junctions(&ctx, &mut self.layer, &g);
+        }
+        if let Ok(g) = GeometricMesh::build(&self.layer, &pattern, &position) {
+            self.frame.cones = fit_cones(&ctx, &mut self.layer, &g);
+        }
+        let Ok(gmesh) = GeometricMesh::build(&self.layer, &pattern, &position) else {
+            return;
+        };
+        let Ok(mut sp) = build_physical(&gmesh, &self.layer, &pattern, &params, &|s| interp.boundary_position(s)) else {
+            return;
+        };
+        for (v, m) in sp.velocity.iter_mut().zip(&sp.material) {
+            *v = interp.velocity(m);
+        }
+        // the held vertices (handles and their tangent-plane neighbours, found anew in
+        // the new S_P) sit at their targets and stay fixed
+        let mut fixed = vec![false; sp.material.len()];
+        let old_sp = std::mem::replace(&mut self.sp, sp);
+        let (_, _, held) = self.handle_constraints(self.time);
+        for (m, p) in &held {
+            if let Some(v) = self.vertex_at(m) {
+                self.sp.position[v] = *p;
+                fixed[v] = true;
+            }
+        }
+        self.held = held;
+        drop(old_sp);
+        self.frame.isometry = restore_lengths(&mut self.sp, &fixed, params.isometry_max_iterations);
+        self.gmesh = gmesh;
+        // S_G vertices are the first S_P vertices: their final positions
+        for (v, g) in self.gmesh.vertices.iter_mut().enumerate() {
+            g.position = self.sp.position[v];
+        }
+        self.rebuild_outputs();
+    }
+
+    /// Display mesh, singular points, frame statistics from S_P and S_G.
+    fn rebuild_outputs(&mut self) {
+        let sp = &self.sp;
+        self.mesh = SurfaceMesh {
+            vertices: sp.position.clone(),
+            triangles: sp.triangles.clone(),
+            material: sp.material.clone(),
+            rulings: sp.rulings.clone(),
+            regions: sp.region.clone(),
+        };
+        self.singular = self
+            .layer
+            .singular
+            .iter()
+            .filter_map(|s| {
+                let v = sp.material.iter().position(|m| (m - s.material).norm() < 1e-9)?;
+                Some(SingularPoint {
+                    id: s.id,
+                    position: sp.position[v],
+                    material: s.material,
+                })
+            })
+            .collect();
+        let (mean, count) = sp.compression_pct();
+        self.frame.compression_mean_pct = mean;
+        self.frame.compressed_edges_pct = count;
+        self.frame.triangles = sp.triangles.len();
+        self.frame.geometric_triangles = self.gmesh.faces.iter().filter(|f| f.kind == FaceKind::Flat).count();
+        self.frame.curved_regions = self.layer.regions.len();
+    }
+}
+
+/// Two neighbours of vertex `v` spanning the tangent plane best (most orthogonal
+/// pattern offsets).
+fn tangent_neighbours(sp: &PhysicalMesh, v: usize) -> Vec<usize> {
+    let mut nbrs: Vec<usize> = sp
+        .edges
+        .iter()
+        .filter_map(|[a, b]| {
+            if *a as usize == v {
+                Some(*b as usize)
+            } else if *b as usize == v {
+                Some(*a as usize)
+            } else {
+                None
+            }
+        })
+        .collect();
+    nbrs.sort_unstable();
+    let mut best: Option<(f64, usize, usize)> = None;
+    for (i, &a) in nbrs.iter().enumerate() {
+        for &b in &nbrs[i + 1..] {
+            let da = (sp.material[a] - sp.material[v]).normalize();
+            let db = (sp.material[b] - sp.material[v]).normalize();
+            let cross = (da.x * db.y - da.y * db.x).abs();
+            if best.is_none_or(|(c, _, _)| cross > c + 1e-12) {
+                best = Some((cross, a, b));
+            }
+        }
+    }
+    best.map(|(_, a, b)| vec![a, b]).unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{Motion, Trajectory};
+
+    /// Handles at the middle of the left and right sides of a 10 cm sheet, tangent
+    /// planes held; they move towards each other by `squeeze` (m) and turn by `tilt`
+    /// (rad) about the y axis over 1 s.
+    pub(crate) fn two_handles(squeeze: f64, tilt: f64) -> Vec<HandleSpec> {
+        let mk = |name: &str, u: f64, sign: f64| HandleSpec {
+            name: name.into(),
+            object: 0,
+            material_point: Point2::new(u, 0.05),
+            position_axes: [true; 3],
+            orientation: OrientationMode::Full,
+            trajectory: Trajectory {
+                initial: Pose::translation(u, 0.05, 0.0),
+                motions: vec![Motion {
+                    start: 0.0,
+                    end: 1.0,
+                    translation: Vector3::new(sign * squeeze / 2.0, 0.0, 0.0),
+                    axis: Vector3::y(),
+                    angle: -sign * tilt,
+                }],
+            },
+        };
+        vec![mk("left", 0.0, 1.0), mk("right", 0.1, -1.0)]
+    }
+
+    pub(crate) fn run(sim: &mut PaperSim, handles: &[HandleSpec], steps: usize, dt: f64) -> Vec<ObjectStepReport> {
+        (1..=steps)
+            .map(|k| {
+                let t = k as f64 * dt;
+                let targets: Vec<Pose> = handles.iter().map(|h| h.trajectory.pose_at(t)).collect();
+                sim.step(dt, t, 0, handles, &targets)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_compressed_flat_sheet_grows_a_curved_region() {
+        let handles = two_handles(0.01, 0.6);
+        let mut sim = PaperSim::new(PaperParams::default(), &handles, 0).unwrap();
+        assert!(sim.geometric_layer().regions.is_empty());
+        let reports = run(&mut sim, &handles, 15, 1.0 / 30.0);
+        assert!(reports.iter().all(|r| r.converged), "{reports:?}");
+        assert!(sim.mesh().is_finite());
+        let layer = sim.geometric_layer();
+        assert!(!layer.regions.is_empty(), "a curved region appears: {:?}", sim.frame_stats());
+        // the rulings of a sheet bent about y run along y (v_perp of the compression)
+        let r = &layer.regions[0].rulings[0];
+        let p = layer.endpoint_material(sim.pattern(), &r.a);
+        let q = layer.endpoint_material(sim.pattern(), &r.b);
+        let d = (q - p).normalize();
+        assert!(d.y.abs() > 0.95, "ruling direction {d:?}");
+    }
+}

@@ -1,0 +1,188 @@
+//! A symmetric positive definite sparse matrix with a fixed block pattern, assembled in
+//! place and factorized with faer's sparse Cholesky (the symbolic factorization is
+//! computed once per pattern and reused across Newton iterations).
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
+use faer::{MatMut, Side};
+
+/// Lower triangle of a symmetric matrix over `n` nodes with `bs` x `bs` blocks.
+#[derive(Clone, Debug)]
+pub struct BlockSpd {
+    bs: usize,
+    /// For each node j, its neighbours i > j, sorted.
+    upper_nbrs: Vec<Vec<u32>>,
+    symbolic: SymbolicSparseColMat<usize>,
+    values: Vec<f64>,
+    llt_symbolic: Option<SymbolicLlt<usize>>,
+}
+
+/// The factorization failed (the matrix is not numerically positive definite).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("sparse Cholesky factorization failed")]
+pub struct FactorError;
+
+impl BlockSpd {
+    /// The pattern of `n` nodes coupled by `couplings` (each a set of nodes coupled
+    /// pairwise), block size `bs`.
+    pub fn new(n: usize, bs: usize, couplings: &mut dyn Iterator<Item = Vec<u32>>) -> BlockSpd {
+        let mut nbrs: Vec<Vec<u32>> = vec![Vec::new(); n];
+        for group in couplings {
+            for &a in &group {
+                for &b in &group {
+                    if b > a {
+                        nbrs[a as usize].push(b);
+                    }
+                }
+            }
+        }
+        for l in nbrs.iter_mut() {
+            l.sort_unstable();
+            l.dedup();
+        }
+        let dim = n * bs;
+        let mut col_ptr = Vec::with_capacity(dim + 1);
+        let mut row_idx = Vec::new();
+        col_ptr.push(0);
+        for j in 0..n {
+            for b in 0..bs {
+                for a in b..bs {
+                    row_idx.push(j * bs + a);
+                }
+                for &i in &nbrs[j] {
+                    for a in 0..bs {
+                        row_idx.push(i as usize * bs + a);
+                    }
+                }
+                col_ptr.push(row_idx.len());
+            }
+        }
+        let nnz = row_idx.len();
+        let symbolic = SymbolicSparseColMat::new_checked(dim, dim, col_ptr, None, row_idx);
+        BlockSpd {
+            bs,
+            upper_nbrs: nbrs,
+            symbolic,
+            values: vec![0.0; nnz],
+            llt_symbolic: None,
+        }
+    }
+
+    pub fn dim(&self) -> usize {
+        self.upper_nbrs.len() * self.bs
+    }
+
+    pub fn clear(&mut self) {
+        self.values.iter_mut().for_each(|v| *v = 0.0);
+    }
+
+    fn slot(&self, row: usize, col: usize) -> usize {
+        // row >= col in the lower triangle
+        let bs = self.bs;
+        let (i, a) = (row / bs, row % bs);
+        let (j, b) = (col / bs, col % bs);
+        let start = self.symbolic.col_ptr()[col];
+        if i == j {
+            start + (a - b)
+        } else {
+            let rank = self.upper_nbrs[j]
+                .binary_search(&(i as u32))
+                .unwrap_or_else(|_| panic!("entry ({row}, {col}) outside the pattern"));
+            start + (bs - b) + rank * bs + a
+        }
+    }
+
+    /// Add `value` at (row, col) and, by symmetry, (col, row).
+    pub fn add(&mut self, row: usize, col: usize, value: f64) {
+        let (r, c) = if row >= col { (row, col) } else { (col, row) };
+        let s = self.slot(r, c);
+        self.values[s] += value;
+    }
+
+    /// Add the block `m` (bs x bs, row-major) at nodes (i, j) with i != j, or the
+    /// lower triangle of a symmetric block when i == j.
+    pub fn add_block(&mut self, i: usize, j: usize, m: &[f64]) {
+        let bs = self.bs;
+        if i == j {
+            for a in 0..bs {
+                for b in 0..=a {
+                    self.add(i * bs + a, j * bs + b, m[a * bs + b]);
+                }
+            }
+        } else if i > j {
+            for a in 0..bs {
+                for b in 0..bs {
+                    let s = self.slot(i * bs + a, j * bs + b);
+                    self.values[s] += m[a * bs + b];
+                }
+            }
+        } else {
+            // (i, j) block of the upper triangle = transpose of the (j, i) block
+            for a in 0..bs {
+                for b in 0..bs {
+                    let s = self.slot(j * bs + b, i * bs + a);
+                    self.values[s] += m[a * bs + b];
+                }
+            }
+        }
+    }
+
+    /// Make the rows/columns of the fixed dofs (`fixed[d]`) identity rows: off-diagonal
+    /// entries zeroed, diagonal 1.
+    pub fn fix_all(&mut self, fixed: &[bool]) {
+        let dim = self.dim();
+        let col_ptr = self.symbolic.col_ptr().to_vec();
+        let row_idx = self.symbolic.row_idx().to_vec();
+        for c in 0..dim {
+            for s in col_ptr[c]..col_ptr[c + 1] {
+                let r = row_idx[s];
+                if fixed[r] || fixed[c] {
+                    self.values[s] = if r == c { 1.0 } else { 0.0 };
+                }
+            }
+        }
+    }
+
+    /// Factorize and solve A x = rhs in place (one or more right-hand sides).
+    pub fn solve_in_place(&mut self, rhs: MatMut<'_, f64>) -> Result<(), FactorError> {
+        let mat = SparseColMatRef::new(self.symbolic.as_ref(), &self.values);
+        if self.llt_symbolic.is_none() {
+            self.llt_symbolic =
+                Some(SymbolicLlt::try_new(self.symbolic.as_ref(), Side::Lower).map_err(|_| FactorError)?);
+        }
+        let symbolic = self.llt_symbolic.clone().ok_or(FactorError)?;
+        let llt = Llt::try_new_with_symbolic(symbolic, mat, Side::Lower).map_err(|_| FactorError)?;
+        llt.solve_in_place(rhs);
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solves_a_block_tridiagonal_system() {
+        // 3 nodes in a chain, 2x2 blocks: A = L (x) I2 + 3 I with L the path Laplacian
+        let mut a = BlockSpd::new(3, 2, &mut [vec![0, 1], vec![1, 2]].into_iter());
+        for (i, d) in [1.0, 2.0, 1.0].iter().enumerate() {
+            a.add_block(i, i, &[d + 3.0, 0.0, 0.0, d + 3.0]);
+        }
+        a.add_block(0, 1, &[-1.0, 0.0, 0.0, -1.0]);
+        a.add_block(2, 1, &[-1.0, 0.0, 0.0, -1.0]);
+        let mut rhs = faer::Mat::<f64>::zeros(6, 1);
+        // x = (1, 2, 3, 4, 5, 6): A x
+        let x = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
+        let dense = [[4.0, -1.0, 0.0], [-1.0, 5.0, -1.0], [0.0, -1.0, 4.0]];
+        for i in 0..3 {
+            for c in 0..2 {
+                rhs[(2 * i + c, 0)] = (0..3).map(|j| dense[i][j] * x[2 * j + c]).sum();
+            }
+        }
+        a.solve_in_place(rhs.as_mut()).unwrap();
+        for k in 0..6 {
+            assert!((rhs[(k, 0)] - x[k]).abs() < 1e-12);
+        }
+    }
+}

@@ -1,0 +1,378 @@
+//! The `paper:` section of a scene (Schreck et al.): every key with its unit and
+//! default (table VI of the paper, converted to SI). Builds a [`PaperSim`].
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::file::{parse_handle, pose_from, Check, PoseFile, SceneFile};
+use super::{Outputs, Scene, SceneError};
+use crate::geometry::{Point2, Pose, Vector3};
+use crate::paper::{Collider, PaperParams, PaperSim, PresetCrease};
+use crate::sim::{SimObject, World};
+
+/// A sheet of paper. Every key is optional; defaults in parentheses.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct PaperFile {
+    /// Pattern rectangle [width, height], m ([0.1, 0.1]: L_paper = 10 cm, sec. 7.1).
+    #[serde(default = "d_size")]
+    pub size: [f64; 2],
+    /// `world_from_pattern` at t = 0: the pattern's (u, v, 0) maps to
+    /// position + R(rotation) (u, v, 0). (identity)
+    #[serde(default)]
+    pub placement: Option<PoseFile>,
+    /// Areal density, kg/m^2 (0.07: 70 g/m^2 paper).
+    #[serde(default = "d_density")]
+    pub density: f64,
+    /// Membrane stiffness Y t of the Green-strain stretching energy, N/m (1e3).
+    #[serde(default = "d_stretch")]
+    pub stretch_stiffness: f64,
+    /// Poisson ratio, in (-1, 0.5) (0.3).
+    #[serde(default = "d_poisson")]
+    pub poisson_ratio: f64,
+    /// Bending stiffness k_b of the dihedral energy, J (1e-4).
+    #[serde(default = "d_bending")]
+    pub bending_stiffness: f64,
+    /// Velocity damping, 1/s (20).
+    #[serde(default = "d_damping")]
+    pub damping: f64,
+    /// rho_bound: boundary samples and ruling density, samples/m (120 = 1.2 /cm).
+    #[serde(default = "d_rho_bound")]
+    pub boundary_density: f64,
+    /// rho_int: interior samples of flat regions, samples/m^2 (see the default in
+    /// `PaperParams::interior_density` and docs/paper_simulator.md).
+    #[serde(default)]
+    pub interior_density: Option<f64>,
+    /// theta_0: coplanarity threshold, rad (0.01).
+    #[serde(default = "d_theta0")]
+    pub flat_angle: f64,
+    /// Split flat regions at plain edges sharper than theta_0 (the literal sec. 5.1),
+    /// bool (false).
+    #[serde(default)]
+    pub split_flat_regions_at_folds: bool,
+    /// theta_low, rad (theta_0 / 10).
+    #[serde(default)]
+    pub junction_low_angle: Option<f64>,
+    /// theta_high, rad (theta_0).
+    #[serde(default)]
+    pub junction_high_angle: Option<f64>,
+    /// epsilon_c: compression threshold, dimensionless (0.001 = 0.1 %).
+    #[serde(default = "d_eps_c")]
+    pub compression_threshold: f64,
+    /// sigma of chi(s) = exp(-d^2/sigma^2), m (0.001 = 0.1 cm).
+    #[serde(default = "d_sigma")]
+    pub singularity_sigma: f64,
+    /// epsilon_Blaschke / L_paper, dimensionless (0.005).
+    #[serde(default = "d_blaschke")]
+    pub blaschke_tolerance: f64,
+    /// theta_i = plastic_angle / N_i around singular vertices (eq. 1), rad (pi/8).
+    #[serde(default = "d_plastic")]
+    pub plastic_angle: f64,
+    /// Newton iterations of step 1, at most (20).
+    #[serde(default = "d_newton_max")]
+    pub newton_max_iterations: u32,
+    /// Newton stop on the largest vertex update, m (1e-7).
+    #[serde(default = "d_newton_tol")]
+    pub newton_tolerance: f64,
+    /// Phase I iterations of the length restoration, at most (200).
+    #[serde(default = "d_iso_max")]
+    pub isometry_max_iterations: u32,
+    /// Collision repulsion stiffness, N/m (1e4).
+    #[serde(default = "d_kc")]
+    pub collision_stiffness: f64,
+    /// Distance kept from colliders, m (5e-4).
+    #[serde(default = "d_thick")]
+    pub collision_thickness: f64,
+    /// Seeded out-of-plane noise of the initial vertices, m (0).
+    #[serde(default)]
+    pub imperfection: f64,
+    /// Static colliders (step 1 collisions). ([])
+    #[serde(default)]
+    pub colliders: Vec<ColliderFile>,
+    /// Pre-set creases (fig. 22). ([])
+    #[serde(default)]
+    pub creases: Vec<CreaseFile>,
+}
+
+/// A static collider.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ColliderFile {
+    /// `plane` (the half-space above `point` along `normal`) or `sphere`.
+    pub kind: String,
+    /// Plane: a point on it, m. ([0, 0, 0])
+    #[serde(default)]
+    pub point: [f64; 3],
+    /// Plane: its normal (normalized here). ([0, 0, 1])
+    #[serde(default = "d_up")]
+    pub normal: [f64; 3],
+    /// Sphere: center, m. ([0, 0, 0])
+    #[serde(default)]
+    pub center: [f64; 3],
+    /// Sphere: radius, m (> 0). (0.01)
+    #[serde(default = "d_radius")]
+    pub radius: f64,
+}
+
+/// A pre-set crease from boundary to boundary.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct CreaseFile {
+    /// Ends on the pattern's boundary, [u, v] m.
+    pub from: [f64; 2],
+    pub to: [f64; 2],
+    /// Signed rest dihedral angle, rad.
+    pub rest_angle: f64,
+}
+
+fn d_size() -> [f64; 2] {
+    [0.1, 0.1]
+}
+fn d_density() -> f64 {
+    PaperParams::default().density
+}
+fn d_stretch() -> f64 {
+    PaperParams::default().stretch_stiffness
+}
+fn d_poisson() -> f64 {
+    PaperParams::default().poisson_ratio
+}
+fn d_bending() -> f64 {
+    PaperParams::default().bending_stiffness
+}
+fn d_damping() -> f64 {
+    PaperParams::default().damping
+}
+fn d_rho_bound() -> f64 {
+    PaperParams::default().boundary_density
+}
+fn d_theta0() -> f64 {
+    PaperParams::default().flat_angle
+}
+fn d_eps_c() -> f64 {
+    PaperParams::default().compression_threshold
+}
+fn d_sigma() -> f64 {
+    PaperParams::default().singularity_sigma
+}
+fn d_blaschke() -> f64 {
+    PaperParams::default().blaschke_tolerance
+}
+fn d_plastic() -> f64 {
+    PaperParams::default().plastic_angle
+}
+fn d_newton_max() -> u32 {
+    PaperParams::default().newton_max_iterations
+}
+fn d_newton_tol() -> f64 {
+    PaperParams::default().newton_tolerance
+}
+fn d_iso_max() -> u32 {
+    PaperParams::default().isometry_max_iterations
+}
+fn d_kc() -> f64 {
+    PaperParams::default().collision_stiffness
+}
+fn d_thick() -> f64 {
+    PaperParams::default().collision_thickness
+}
+fn d_up() -> [f64; 3] {
+    [0.0, 0.0, 1.0]
+}
+fn d_radius() -> f64 {
+    0.01
+}
+
+impl SceneFile {
+    /// Validate the `paper:` section and its handles and build the world.
+    pub(super) fn build_paper(
+        self,
+        file: &Path,
+        ck: &Check,
+        duration: f64,
+        dt: f64,
+        gravity: Vector3,
+    ) -> Result<Scene, SceneError> {
+        let Some(paper) = &self.paper else {
+            return Err(ck.fail("paper", "missing"));
+        };
+        let pk = "paper";
+        let key = |k: &str| format!("{pk}.{k}");
+        let width = ck.positive(&key("size.0"), paper.size[0])?;
+        let height = ck.positive(&key("size.1"), paper.size[1])?;
+        let placement = match &paper.placement {
+            Some(p) => pose_from(
+                ck.vec3(&key("placement.position"), p.position)?,
+                ck.vec3(&key("placement.rotation"), p.rotation)?,
+            ),
+            None => Pose::identity(),
+        };
+        let defaults = PaperParams::default();
+        let theta0 = ck.positive(&key("flat_angle"), paper.flat_angle)?;
+        let low = match paper.junction_low_angle {
+            Some(v) => ck.non_negative(&key("junction_low_angle"), v)?,
+            None => theta0 / 10.0,
+        };
+        let high = match paper.junction_high_angle {
+            Some(v) => ck.non_negative(&key("junction_high_angle"), v)?,
+            None => theta0,
+        };
+        if low > high {
+            return Err(ck.fail(
+                &key("junction_low_angle"),
+                format!("theta_low = {low} must not exceed theta_high = {high} (hysteresis)"),
+            ));
+        }
+        let poisson = ck.finite(&key("poisson_ratio"), paper.poisson_ratio)?;
+        if !(poisson > -1.0 && poisson < 0.5) {
+            return Err(ck.fail(&key("poisson_ratio"), format!("must be in (-1, 0.5), got {poisson}")));
+        }
+        let eps_c = ck.positive(&key("compression_threshold"), paper.compression_threshold)?;
+        if eps_c >= 1.0 {
+            return Err(ck.fail(
+                &key("compression_threshold"),
+                format!("is a fraction (0.001 = 0.1 %), got {eps_c}"),
+            ));
+        }
+        if paper.newton_max_iterations == 0 {
+            return Err(ck.fail(&key("newton_max_iterations"), "must be at least 1"));
+        }
+        let mut colliders = Vec::new();
+        for (i, c) in paper.colliders.iter().enumerate() {
+            let ckey = format!("{pk}.colliders.{i}");
+            colliders.push(match ck.choice(&format!("{ckey}.kind"), &c.kind, &["plane", "sphere"])? {
+                "plane" => {
+                    let n = ck.vec3(&format!("{ckey}.normal"), c.normal)?;
+                    if n.norm() < 1e-12 {
+                        return Err(ck.fail(&format!("{ckey}.normal"), "must be non-zero"));
+                    }
+                    Collider::Plane {
+                        point: ck.vec3(&format!("{ckey}.point"), c.point)?,
+                        normal: n.normalize(),
+                    }
+                }
+                _ => Collider::Sphere {
+                    center: ck.vec3(&format!("{ckey}.center"), c.center)?,
+                    radius: ck.positive(&format!("{ckey}.radius"), c.radius)?,
+                },
+            });
+        }
+        let on_boundary = |p: &Point2| {
+            let inside = p.x >= -1e-12 && p.x <= width + 1e-12 && p.y >= -1e-12 && p.y <= height + 1e-12;
+            let edge = p.x.abs() < 1e-9 || (p.x - width).abs() < 1e-9 || p.y.abs() < 1e-9 || (p.y - height).abs() < 1e-9;
+            inside && edge
+        };
+        let mut preset_creases = Vec::new();
+        for (i, c) in paper.creases.iter().enumerate() {
+            let ckey = format!("{pk}.creases.{i}");
+            let from = Point2::new(ck.finite(&format!("{ckey}.from.0"), c.from[0])?, ck.finite(&format!("{ckey}.from.1"), c.from[1])?);
+            let to = Point2::new(ck.finite(&format!("{ckey}.to.0"), c.to[0])?, ck.finite(&format!("{ckey}.to.1"), c.to[1])?);
+            for (k, p) in [("from", from), ("to", to)] {
+                if !on_boundary(&p) {
+                    return Err(ck.fail(
+                        &format!("{ckey}.{k}"),
+                        format!("[{}, {}] is not on the sheet's boundary [0, {width}] x [0, {height}] (m)", p.x, p.y),
+                    ));
+                }
+            }
+            preset_creases.push(PresetCrease {
+                from,
+                to,
+                rest_angle: ck.finite(&format!("{ckey}.rest_angle"), c.rest_angle)?,
+            });
+        }
+
+        // handles: the only object is `paper`
+        let mut names = std::collections::BTreeSet::new();
+        let mut handles = Vec::new();
+        let mut topics = Vec::new();
+        let mut releases = Vec::new();
+        for (i, h) in self.handles.iter().enumerate() {
+            let hkey = format!("handles.{i}");
+            if let Some(o) = &h.object {
+                if o != "paper" {
+                    return Err(ck.fail(&format!("{hkey}.object"), format!("no object named `{o}` (objects: paper)")));
+                }
+            }
+            let (mut spec, initial, topic) = parse_handle(ck, &hkey, h, 0, &mut names)?;
+            let p = spec.material_point;
+            if !on_boundary(&p) {
+                return Err(ck.fail(
+                    &format!("{hkey}.point"),
+                    format!(
+                        "[{}, {}] is not on the sheet's boundary [0, {width}] x [0, {height}] (m): the paper's handles hold the boundary (sec. 3.3)",
+                        p.x, p.y
+                    ),
+                ));
+            }
+            if let Some(t) = h.release_at {
+                releases.push((i, ck.non_negative(&format!("{hkey}.release_at"), t)?));
+            }
+            spec.trajectory.initial = initial.unwrap_or_else(|| placement * Pose::translation(p.x, p.y, 0.0));
+            topics.push(topic);
+            handles.push(spec);
+        }
+        if !self.forces.is_empty() {
+            return Err(ck.fail("forces", "point forces are not supported on paper objects"));
+        }
+
+        let params = PaperParams {
+            width,
+            height,
+            placement,
+            density: ck.positive(&key("density"), paper.density)?,
+            stretch_stiffness: ck.positive(&key("stretch_stiffness"), paper.stretch_stiffness)?,
+            poisson_ratio: poisson,
+            bending_stiffness: ck.non_negative(&key("bending_stiffness"), paper.bending_stiffness)?,
+            damping: ck.non_negative(&key("damping"), paper.damping)?,
+            gravity,
+            boundary_density: ck.positive(&key("boundary_density"), paper.boundary_density)?,
+            interior_density: match paper.interior_density {
+                Some(v) => ck.positive(&key("interior_density"), v)?,
+                None => defaults.interior_density,
+            },
+            flat_angle: theta0,
+            split_flat_regions_at_folds: paper.split_flat_regions_at_folds,
+            junction_low_angle: low,
+            junction_high_angle: high,
+            compression_threshold: eps_c,
+            singularity_sigma: ck.positive(&key("singularity_sigma"), paper.singularity_sigma)?,
+            blaschke_tolerance: ck.positive(&key("blaschke_tolerance"), paper.blaschke_tolerance)?,
+            plastic_angle: ck.non_negative(&key("plastic_angle"), paper.plastic_angle)?,
+            newton_max_iterations: paper.newton_max_iterations,
+            newton_tolerance: ck.positive(&key("newton_tolerance"), paper.newton_tolerance)?,
+            isometry_max_iterations: paper.isometry_max_iterations,
+            collision_stiffness: ck.non_negative(&key("collision_stiffness"), paper.collision_stiffness)?,
+            collision_thickness: ck.positive(&key("collision_thickness"), paper.collision_thickness)?,
+            colliders,
+            preset_creases,
+            imperfection: ck.non_negative(&key("imperfection"), paper.imperfection)?,
+            seed: self.seed,
+            handle_releases: releases,
+            initial_shape: crate::paper::PaperInitialShape::Flat,
+        };
+        let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(pk, e.to_string()))?;
+        let world = World::new(vec![("paper".to_string(), SimObject::Paper(Box::new(sim)))], handles, dt);
+        let name = self.name.clone().unwrap_or_else(|| {
+            file.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "scene".into())
+        });
+        Ok(Scene {
+            name,
+            file: file.to_path_buf(),
+            duration,
+            world,
+            frame_id: self.frame_id.clone(),
+            handle_topics: topics,
+            outputs: Outputs {
+                markers: self.outputs.markers,
+                singular_points: self.outputs.singular_points,
+                status: self.outputs.status,
+                clock: self.outputs.clock,
+            },
+            source: self,
+        })
+    }
+}
