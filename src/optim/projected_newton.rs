@@ -21,12 +21,6 @@ pub trait BoxProblem {
         gradient: Option<&mut [f64]>,
         hessian: Option<&mut DMatrix<f64>>,
     ) -> f64;
-    /// A positive semi-definite model (e.g. Gauss-Newton) at the last point evaluated
-    /// with a Hessian, used where the Hessian is indefinite. Returns false if there is
-    /// none (then damping alone makes the system definite).
-    fn fallback_hessian(&mut self, _h: &mut DMatrix<f64>) -> bool {
-        false
-    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -137,10 +131,6 @@ impl ProjectedNewton {
             let mut step_ok = self.solve_reduced(m);
             while !step_ok && self.damping < 1e2 {
                 self.damping = (self.damping * 10.0).max(1e-8);
-                step_ok = self.solve_reduced(m);
-            }
-            if !step_ok && problem.fallback_hessian(&mut self.h) {
-                self.damping = 1e-9;
                 step_ok = self.solve_reduced(m);
             }
             if !step_ok {

@@ -61,6 +61,8 @@ pub struct RibbonSim {
     singular: Vec<SingularPoint>,
     last_targets: Vec<Option<Pose>>,
     last_outcome: SolveOutcome,
+    /// q at the end minus q at the start of the last step (extrapolation).
+    q_delta: Vec<f64>,
 }
 
 impl RibbonSim {
@@ -190,7 +192,7 @@ impl RibbonSim {
             crease_bound: params.crease_bound(),
         };
         let mut q = vec![0.0; layout.len()];
-        layout.pack(&coords, &mut q);
+        layout.pack(&coords, &base_pose, &mut q);
         let mut sim = RibbonSim {
             params,
             strip,
@@ -207,6 +209,7 @@ impl RibbonSim {
             singular: Vec::new(),
             last_targets: vec![None; handles.len()],
             last_outcome: SolveOutcome::default(),
+            q_delta: Vec::new(),
         };
         sim.rebuild_outputs();
         sim
@@ -286,10 +289,14 @@ impl RibbonSim {
                 *pose = target * Pose::translation(-grasp.x, -grasp.y, 0.0);
             }
         }
+        // floating: the current base is the reference rotation, w restarts at 0
         let base = match &self.params.base {
             BaseMode::Prescribed { pose, .. } => *pose,
-            BaseMode::Floating { initial } => *initial,
+            BaseMode::Floating { .. } => self.coords.base,
         };
+        if self.layout.floating {
+            self.layout.pack(&self.coords, &base, &mut self.q);
+        }
         for (eq, h) in self.terms.equalities.iter_mut().zip(&self.equality_handles) {
             let Some(h) = h else { continue };
             let Some(target) = valid.get(*h).copied().flatten() else {
@@ -312,6 +319,14 @@ impl RibbonSim {
         }
 
         let mut q = self.q.clone();
+        if self.params.solver.extrapolate && self.q_delta.len() == q.len() {
+            // start from the linear extrapolation of the last step (the solver clamps
+            // it into the crease bounds)
+            for (qi, di) in q.iter_mut().zip(&self.q_delta) {
+                *qi += di;
+            }
+        }
+        let q_start = self.q.clone();
         if !self.layout.floating {
             self.coords.base = base;
         }
@@ -335,8 +350,11 @@ impl RibbonSim {
             ..Default::default()
         };
         if finite {
+            self.q_delta.clear();
+            self.q_delta
+                .extend(q.iter().zip(&q_start).map(|(a, b)| a - b));
             self.q = q;
-            self.layout.unpack(&self.q, &mut self.coords);
+            self.layout.unpack(&self.q, &base, &mut self.coords);
             reconstruct(&self.strip, &self.coords, &mut self.frames);
             self.update_history(dt);
         } else {
@@ -506,10 +524,9 @@ impl RibbonSim {
         mode: super::objective::GradientMode,
         gradient: &mut Vec<f64>,
     ) -> f64 {
-        let base = match &self.params.base {
-            BaseMode::Prescribed { pose, .. } => *pose,
-            BaseMode::Floating { initial } => *initial,
-        };
+        let base = self.coords.base;
+        let mut q = self.q.clone();
+        self.layout.pack(&self.coords, &base, &mut q);
         let objective = super::objective::Objective::new(
             self.strip,
             self.layout.floating,
@@ -517,13 +534,8 @@ impl RibbonSim {
             &self.history,
             base,
         );
-        gradient.resize(self.q.len(), 0.0);
-        objective.evaluate(
-            &self.q,
-            &mut self.solver.workspace,
-            Some((gradient, mode)),
-            None,
-        )
+        gradient.resize(q.len(), 0.0);
+        objective.evaluate(&q, &mut self.solver.workspace, Some((gradient, mode)), None)
     }
 }
 
@@ -531,10 +543,9 @@ impl RibbonSim {
 impl RibbonSim {
     /// Benchmark hook: one evaluation with the Hessian at the current state.
     pub fn evaluate_hessian(&mut self) -> f64 {
-        let base = match &self.params.base {
-            BaseMode::Prescribed { pose, .. } => *pose,
-            BaseMode::Floating { initial } => *initial,
-        };
+        let base = self.coords.base;
+        let mut q = self.q.clone();
+        self.layout.pack(&self.coords, &base, &mut q);
         let objective = super::objective::Objective::new(
             self.strip,
             self.layout.floating,
@@ -542,10 +553,10 @@ impl RibbonSim {
             &self.history,
             base,
         );
-        let mut g = vec![0.0; self.q.len()];
-        let mut h = nalgebra::DMatrix::zeros(self.q.len(), self.q.len());
+        let mut g = vec![0.0; q.len()];
+        let mut h = nalgebra::DMatrix::zeros(q.len(), q.len());
         objective.evaluate(
-            &self.q,
+            &q,
             &mut self.solver.workspace,
             Some((&mut g, super::objective::GradientMode::Adjoint)),
             Some(&mut h),

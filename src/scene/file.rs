@@ -81,6 +81,17 @@ pub struct SolverFile {
     /// Outer round limit. 20.
     #[serde(default = "d_outer_max")]
     pub max_outer_iterations: u32,
+    /// Outer stop when all constraints hold to this (m for positions). 1e-6.
+    #[serde(default = "d_constraint_tol")]
+    pub constraint_tolerance: f64,
+    /// Start each step from the linear extrapolation of the last two states. false
+    /// (it halves the median iteration count on smooth motion but lengthens the tail
+    /// on snap-through events).
+    #[serde(default)]
+    pub extrapolate: bool,
+}
+fn d_constraint_tol() -> f64 {
+    1e-6
 }
 fn d_solver_kind() -> String {
     "gauss_newton".into()
@@ -106,6 +117,8 @@ impl Default for SolverFile {
             penalty: d_penalty(),
             outer_tolerance: d_outer_tol(),
             max_outer_iterations: d_outer_max(),
+            constraint_tolerance: d_constraint_tol(),
+            extrapolate: false,
         }
     }
 }
@@ -829,6 +842,9 @@ impl SceneFile {
             penalty: ck.positive("solver.penalty", s.penalty)?,
             outer_tolerance: ck.positive("solver.outer_tolerance", s.outer_tolerance)?,
             max_outer_iterations: s.max_outer_iterations,
+            constraint_tolerance: ck
+                .positive("solver.constraint_tolerance", s.constraint_tolerance)?,
+            extrapolate: s.extrapolate,
         })
     }
 }
