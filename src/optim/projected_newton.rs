@@ -136,6 +136,18 @@ impl ProjectedNewton {
             if !step_ok {
                 break;
             }
+            // Stationary to round-off: the model predicts a decrease no larger than the
+            // rounding error of f itself, so no step can be verified. Converged.
+            let predicted: f64 = -self
+                .free
+                .iter()
+                .zip(&self.reduced)
+                .map(|(&i, d)| self.g[i] * d)
+                .sum::<f64>();
+            if predicted <= 1e-14 * f.abs() {
+                converged = true;
+                break;
+            }
             // projected Armijo line search along the Newton direction
             let mut alpha = 1.0;
             let mut accepted = false;

@@ -28,6 +28,9 @@ pub enum RibbonInitialShape {
         crease_direction: f64,
         bending_angle: f64,
     },
+    /// A closed ring: every crease square (c = 0) and bent by 2 pi / n, so the
+    /// polygon of elements closes on itself (the start guess of loops).
+    Ring,
     /// Explicit per-crease values (length n-1 each, creases 1..n-1).
     Explicit {
         crease_direction: Vec<f64>,
@@ -89,6 +92,11 @@ impl RibbonSim {
         let mut coords = Coordinates::flat(n, base_pose);
         match initial {
             RibbonInitialShape::Flat => {}
+            RibbonInitialShape::Ring => {
+                for k in 1..n {
+                    coords.bending_angle[k] = 2.0 * std::f64::consts::PI / n as f64;
+                }
+            }
             RibbonInitialShape::Helix {
                 crease_direction,
                 bending_angle,
@@ -235,6 +243,46 @@ impl RibbonSim {
     }
     pub fn last_outcome(&self) -> &SolveOutcome {
         &self.last_outcome
+    }
+
+    /// Find a static equilibrium before t = 0: quasi-static steps (no inertia, no
+    /// gravity, no point forces) from the current shape until the constraints hold and
+    /// the shape stops changing, then zero velocities. Used to close loops from a ring
+    /// guess. Returns the number of steps taken.
+    pub fn settle(&mut self, handles: &[HandleSpec], targets: &[Pose], max_steps: usize) -> usize {
+        let (kinetic, gravity) = (self.params.kinetic, self.params.gravity);
+        let forces = std::mem::take(&mut self.terms.forces);
+        self.params.kinetic = KineticModel::QuasiStatic;
+        self.terms.kinetic = KineticModel::QuasiStatic;
+        self.terms.gravity = Vector3::zeros();
+        let mut taken = 0;
+        for _ in 0..max_steps {
+            let before = self.q.clone();
+            let report = self.step(1.0, 0.0, 0, handles, targets);
+            taken += 1;
+            let change = before
+                .iter()
+                .zip(&self.q)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if report.kept_previous_state {
+                break;
+            }
+            if report.converged
+                && report.constraint_violation <= self.params.solver.constraint_tolerance
+                && change < 1e-9
+            {
+                break;
+            }
+        }
+        self.params.kinetic = kinetic;
+        self.terms.kinetic = kinetic;
+        self.terms.gravity = Vector3::from(gravity);
+        self.terms.forces = forces;
+        self.history =
+            RimHistory::at_rest(&self.strip, &self.coords.crease_direction, &self.frames);
+        self.q_delta.clear();
+        taken
     }
 
     /// Overwrite the previous-step velocities (m/s) with a rigid motion: angular
