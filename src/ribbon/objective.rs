@@ -142,19 +142,24 @@ impl RimHistory {
 
 /// Piecewise-linear interpolation on a rim: value and slope d/du at station `u`.
 #[inline]
-pub(crate) fn interpolate<T>(us: &[f64], values: &[T], u: f64) -> (T, T)
+pub(crate) fn interpolate<T>(us: &[f64], values: &[T], u: f64, hint: usize) -> (T, T)
 where
     T: Copy
         + std::ops::Sub<Output = T>
         + std::ops::Mul<f64, Output = T>
         + std::ops::Add<Output = T>,
 {
-    // segment k with us[k] <= u < us[k+1] (clamped to the ends)
+    // segment k with us[k] <= u < us[k+1] (clamped to the ends), walking from `hint`:
+    // a new rim vertex sits next to the old one of the same index (the crease bounds
+    // keep it within one element), so this is O(1) and the kinetic term stays O(n).
     let last = us.len() - 2;
-    let k = match us.binary_search_by(|x| x.partial_cmp(&u).unwrap_or(std::cmp::Ordering::Less)) {
-        Ok(i) => i.min(last),
-        Err(i) => i.saturating_sub(1).min(last),
-    };
+    let mut k = hint.min(last);
+    while k > 0 && u < us[k] {
+        k -= 1;
+    }
+    while k < last && u >= us[k + 1] {
+        k += 1;
+    }
     let span = us[k + 1] - us[k];
     let slope = (values[k + 1] - values[k]) * (1.0 / span);
     (values[k] + slope * (u - us[k]), slope)
@@ -704,8 +709,8 @@ impl<'a> Objective<'a> {
                 } else {
                     (&hist.u_bottom, &hist.x_bottom, &hist.v_bottom)
                 };
-                let (rx, drx) = interpolate(us, xs, m.x);
-                let (rv, drv) = interpolate(us, vs, m.x);
+                let (rx, drx) = interpolate(us, xs, m.x, j);
+                let (rv, drv) = interpolate(us, vs, m.x, j);
                 let x = if top {
                     acc.frames.rim_top[j]
                 } else {

@@ -430,8 +430,8 @@ impl RibbonSim {
         let mut new = RimHistory::at_rest(&self.strip, c, &self.frames);
         for j in 0..=n {
             let (xb, _) =
-                super::objective::interpolate(&old.u_bottom, &old.x_bottom, new.u_bottom[j]);
-            let (xt, _) = super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j]);
+                super::objective::interpolate(&old.u_bottom, &old.x_bottom, new.u_bottom[j], j);
+            let (xt, _) = super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j], j);
             new.v_bottom[j] = (new.x_bottom[j] - xb) / h;
             new.v_top[j] = (new.x_top[j] - xt) / h;
         }
