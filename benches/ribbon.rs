@@ -75,7 +75,9 @@ fn gradient_vs_n(c: &mut Criterion) {
             &[format!("ribbon.segments={n}"), "duration=0.05".into()],
             3,
         );
-        let SimObject::Ribbon(r) = &mut s.world.objects_mut()[0];
+        let SimObject::Ribbon(r) = &mut s.world.objects_mut()[0] else {
+            unreachable!("a ribbon scene")
+        };
         let mut g = Vec::new();
         group.bench_function(BenchmarkId::new("adjoint", n), |b| {
             b.iter(|| black_box(r.evaluate_gradient(GradientMode::Adjoint, &mut g)))

@@ -29,6 +29,7 @@ fn run(name: &str, sets: &[&str]) -> (Scene, RunStats) {
 fn ribbon(scene: &Scene) -> &RibbonSim {
     match &scene.world.objects()[0] {
         SimObject::Ribbon(r) => r,
+        _ => panic!("not a ribbon scene"),
     }
 }
 
