@@ -187,8 +187,9 @@ pub enum CrumpleEvent {
     ConicalRulings { region: u64, apex: u64, rulings: usize },
     /// Fig. 24(c): a degenerate curved region (one crease between two singular points).
     Crease { from: u64, to: u64 },
-    /// Sec. 5.2: a new singular vertex.
-    NewSingular { id: u64, material: Point2 },
+    /// Sec. 5.2: a new singular vertex, on a fold between flat regions (fig. 6c) or
+    /// in a curved region (fig. 6d).
+    NewSingular { id: u64, material: Point2, on_fold: bool },
 }
 
 /// Everything the remeshing needs besides the structure.
@@ -264,7 +265,9 @@ fn crumple_inner(
     rng: &mut impl Rng,
 ) -> Option<Vec<CrumpleEvent>> {
     let params = ctx.params;
-    let mut strip = propagate(gmesh, labels, strain.face, &strain.ruling_direction)?;
+    let Some(mut strip) = propagate(gmesh, labels, strain.face, &strain.ruling_direction) else {
+        return None;
+    };
     // region indices -> stable ids
     for b in strip.borders.iter_mut() {
         if let Border::CurvedRuling { region, ruling } = *b {
@@ -311,29 +314,35 @@ fn crumple_inner(
     let mut current = gmesh.clone();
     for side in 0..2 {
         let dir = if side == 0 { band.v_perp } else { -band.v_perp };
+        let before = (layer.singular.len(), layer.regions.len(), layer.creases.len(), layer.next_region_id);
         terminals[side] = match strip.borders[side] {
             Border::Boundary => None,
             Border::Singular { id } => Some(id),
             Border::FlatFold { a, b } => {
-                let id = split_fold(ctx, layer, &current, &band, a, b, rng)?;
+                let Some(id) = split_fold(ctx, layer, &current, &band, a, b, rng) else { return None; };
                 events.push(CrumpleEvent::NewSingular {
                     id,
                     material: layer.singular_material(id)?,
+                    on_fold: true,
                 });
                 Some(id)
             }
             Border::CurvedRuling { region, ruling } => {
-                let (id, new) = insert_in_curved(ctx, layer, &current, &band, region, ruling, &f_refs[side], &dir, rng)?;
+                let Some((id, new)) = insert_in_curved(ctx, layer, &current, &band, region, ruling, &f_refs[side], &dir, rng) else { return None; };
                 if new {
                     events.push(CrumpleEvent::NewSingular {
                         id,
                         material: layer.singular_material(id)?,
+                        on_fold: false,
                     });
                 }
                 Some(id)
             }
         };
-        current = GeometricMesh::build(layer, ctx.pattern, ctx.position).ok()?;
+        if before != (layer.singular.len(), layer.regions.len(), layer.creases.len(), layer.next_region_id) {
+            let Ok(c) = GeometricMesh::build(layer, ctx.pattern, ctx.position) else { return None; };
+            current = c;
+        }
     }
 
     // appendix B: the new curved region
@@ -396,10 +405,18 @@ fn crumple_inner(
 /// Snap a boundary arc length to an existing S_G boundary vertex within a third of
 /// the boundary spacing.
 fn snap(ctx: &CrumpleContext, gmesh: &GeometricMesh, s: f64) -> f64 {
-    let tol = ctx.params.boundary_spacing() / 3.0;
+    snap_to_vertex(ctx, gmesh, s, ctx.params.boundary_spacing() / 3.0, &[])
+}
+
+/// The arc length of the S_G boundary vertex nearest to `s` within `tol` (m), not in
+/// `exclude`, or `s` itself.
+pub(crate) fn snap_to_vertex(ctx: &CrumpleContext, gmesh: &GeometricMesh, s: f64, tol: f64, exclude: &[u32]) -> f64 {
     let per = ctx.pattern.perimeter();
     let mut best = (tol, s);
     for &v in &gmesh.boundary {
+        if exclude.contains(&v) {
+            continue;
+        }
         if let GVertexKind::Boundary { s: x } = gmesh.vertices[v as usize].kind {
             let d = (x - s).abs().min(per - (x - s).abs());
             if d < best.0 {
@@ -614,11 +631,16 @@ fn insert_in_curved(
         o
     };
     let dihedral = |k: usize| gmesh.dihedral(rv[k][0], rv[k][1]).unwrap_or(0.0);
-    let e_sing = order
-        .iter()
-        .copied()
-        .find(|&k| dihedral(k) > params.flat_angle)
-        .unwrap_or(*order.last()?);
+    // the imaginary rulings must really cross C's rulings: nearly parallel ones are
+    // compatible (C can grow instead, sec. 6.1)
+    let e_dir = (mat(rv[ruling][1]) - mat(rv[ruling][0])).normalize();
+    let cross = (e_dir.x * dprop.y - e_dir.y * dprop.x).abs();
+    if cross < params.conflict_angle.sin() {
+        return None;
+    }
+    // sec. 5.2: singular points appear where the rulings meet a region of higher
+    // curvature; a curved region flatter than theta_0 all along does not resist
+    let e_sing = order.iter().copied().find(|&k| dihedral(k) > params.flat_angle)?;
 
     // chi(s) = exp(-d^2/sigma^2): uniform along e_sing (where the band meets it),
     // normal across with standard deviation sigma / sqrt(2)
@@ -702,4 +724,109 @@ fn insert_in_curved(
         }
     }
     Some((id, true))
+}
+
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::paper::compression::{flat_regions, triangle_strain};
+    use rand::SeedableRng;
+
+    /// A 10 cm sheet whose band u in [0.04, 0.08] is a curved region of rulings along
+    /// v, bent about the v axis by `bend` rad per ruling gap; the whole sheet is
+    /// shortened along v by `squeeze` (dimensionless).
+    fn bent_and_squeezed(bend: f64, squeeze: f64) -> (Pattern, GeometricLayer, impl Fn(&GVertexKind, &Point2) -> Point3) {
+        let pattern = Pattern::rectangle(0.1, 0.1);
+        let mut layer = GeometricLayer::default();
+        let us = [0.04, 0.05, 0.06, 0.07, 0.08];
+        layer.add_region(
+            us.iter()
+                .map(|&u| Ruling {
+                    a: Endpoint::Boundary(0.3 - u), // top side, arc runs right to left
+                    b: Endpoint::Boundary(u),       // bottom side
+                })
+                .collect(),
+        );
+        let position = move |_: &GVertexKind, m: &Point2| {
+            // polygonal arc through the rulings: turn by `bend` at each ruling
+            let mut x = 0.0;
+            let mut z = 0.0;
+            let mut angle: f64 = 0.0;
+            let mut u0 = 0.0;
+            for &u in &us {
+                if m.x <= u {
+                    break;
+                }
+                x += (u - u0) * angle.cos();
+                z += (u - u0) * angle.sin();
+                angle += bend;
+                u0 = u;
+            }
+            x += (m.x - u0) * angle.cos();
+            z += (m.x - u0) * angle.sin();
+            Point3::new(x, m.y * (1.0 - squeeze), z)
+        };
+        (pattern, layer, position)
+    }
+
+    #[test]
+    fn a_conflict_creates_a_singular_vertex() {
+        // rulings of the new region would run along u (v is compressed) and cross the
+        // curved region's rulings (along v) at 90 deg, in a region bent by 0.1 rad per
+        // ruling (> theta_0): sec. 5.2 inserts a singular vertex
+        let (pattern, mut layer, position) = bent_and_squeezed(0.1, 0.02);
+        let params = PaperParams::default();
+        let gmesh = GeometricMesh::build(&layer, &pattern, &position).unwrap();
+        let labels = flat_regions(&gmesh, None);
+        let strain = (0..gmesh.faces.len())
+            .filter(|&f| labels[f] != usize::MAX)
+            .filter_map(|f| triangle_strain(&gmesh, f))
+            .max_by(|a, b| a.compression.total_cmp(&b.compression))
+            .unwrap();
+        assert!(strain.compression > params.compression_threshold, "{strain:?}");
+        assert!(strain.ruling_direction.x.abs() > 0.9, "v_perp along u: {strain:?}");
+        let ctx = CrumpleContext {
+            pattern: &pattern,
+            params: &params,
+            position: &position,
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let events = crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng);
+        let new: Vec<&CrumpleEvent> = events
+            .iter()
+            .filter(|e| matches!(e, CrumpleEvent::NewSingular { .. }))
+            .collect();
+        assert_eq!(new.len(), 1, "{events:?}");
+        assert_eq!(layer.singular.len(), 1);
+        let s = layer.singular[0].material;
+        // inside the curved band (where the rulings bend), within a few sigma of a ruling
+        assert!(s.x > 0.04 - 4.0 * params.singularity_sigma && s.x < 0.08, "{s:?}");
+        // the conical rulings of s reach the free border of the flat region
+        assert!(events.iter().any(|e| matches!(e, CrumpleEvent::ConicalRulings { apex: 0, .. })), "{events:?}");
+        // and the structure still meshes
+        assert!(GeometricMesh::build(&layer, &pattern, &position).is_ok());
+    }
+
+    #[test]
+    fn no_singular_vertex_where_the_curved_region_is_flat() {
+        // the same compression against rulings bent by less than theta_0: no conflict
+        let (pattern, mut layer, position) = bent_and_squeezed(0.001, 0.02);
+        let params = PaperParams::default();
+        let gmesh = GeometricMesh::build(&layer, &pattern, &position).unwrap();
+        let labels = flat_regions(&gmesh, None);
+        let strain = (0..gmesh.faces.len())
+            .filter(|&f| labels[f] != usize::MAX)
+            .filter_map(|f| triangle_strain(&gmesh, f))
+            .max_by(|a, b| a.compression.total_cmp(&b.compression))
+            .unwrap();
+        let ctx = CrumpleContext {
+            pattern: &pattern,
+            params: &params,
+            position: &position,
+        };
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng);
+        assert!(layer.singular.is_empty());
+    }
 }

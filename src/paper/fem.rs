@@ -403,9 +403,6 @@ pub fn implicit_step(
             report.failed = true;
             break;
         }
-        if std::env::var("FEM_DEBUG").is_ok() {
-            eprintln!("newton {it}: phi {phi:.6e} step {step_max:.3e} slope {slope:.3e}");
-        }
         if step_max < params.newton_tolerance {
             report.converged = true;
             break;
@@ -431,9 +428,6 @@ pub fn implicit_step(
             // no descent left at round-off level: the current point is the minimizer
             report.converged = step_max < 1e3 * params.newton_tolerance;
             break;
-        }
-        if std::env::var("FEM_DEBUG").is_ok() {
-            eprintln!("   alpha {alpha}");
         }
         std::mem::swap(&mut x, &mut trial);
         if alpha * step_max < params.newton_tolerance {

@@ -99,6 +99,8 @@ pub struct GeometricLayer {
     pub creases: Vec<Crease>,
     /// Boundary arc lengths that are always S_G vertices (handle grasp points), m.
     pub anchors: Vec<f64>,
+    /// Smallest allowed distance between two S_G boundary vertices, m (0: no check).
+    pub min_boundary_spacing: f64,
     pub next_singular_id: u64,
     pub next_region_id: u64,
 }
@@ -282,6 +284,18 @@ impl GeometricMesh {
         }
         if merged.len() > 1 && per - merged[merged.len() - 1] + merged[0] <= MERGE_ARC {
             merged.pop();
+        }
+        if layer.min_boundary_spacing > 0.0 && merged.len() > 1 {
+            for i in 0..merged.len() {
+                let next = if i + 1 < merged.len() { merged[i + 1] } else { merged[0] + per };
+                if next - merged[i] < layer.min_boundary_spacing {
+                    return Err(MeshError::BadFace(format!(
+                        "boundary vertices {} m apart (< {} m)",
+                        next - merged[i],
+                        layer.min_boundary_spacing
+                    )));
+                }
+            }
         }
         let mut mesh = GeometricMesh::default();
         for &s in &merged {

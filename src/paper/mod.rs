@@ -28,4 +28,4 @@ mod sparse;
 pub mod tracking;
 
 pub use params::{Collider, PaperError, PaperInitialShape, PaperParams, PresetCrease};
-pub use sim::{PaperFrameStats, PaperSim};
+pub use sim::{CrumpleAttempt, PaperFrameStats, PaperSim};

@@ -94,6 +94,11 @@ pub struct PaperParams {
     /// that is not aligned with the triangulation. Flat regions are then separated by
     /// rulings and creases only. See docs/paper_simulator.md.
     pub split_flat_regions_at_folds: bool,
+    /// Imaginary rulings that meet a ruling of a curved region at less than this angle
+    /// are compatible with it (no conflict, no singular vertex: the region can grow
+    /// instead, sec. 6.1), rad. Default 0.26 (15 deg). Not a parameter of the paper,
+    /// which leaves "in conflict" undefined; see docs/paper_simulator.md.
+    pub conflict_angle: f64,
     /// theta_low: a curved region shrinks at a border ruling flatter than this, rad.
     /// Default theta_0 / 10 (sec. 6.1).
     pub junction_low_angle: f64,
@@ -114,7 +119,8 @@ pub struct PaperParams {
     pub plastic_angle: f64,
     /// Newton iterations of the implicit step, at most. Default 20.
     pub newton_max_iterations: u32,
-    /// Newton stops when the largest vertex update is below this, m. Default 1e-7.
+    /// Newton stops when the largest vertex update is below this, m. Default 1e-6
+    /// (1e-5 of the sheet; step 3 restores lengths to ~1e-3 anyway).
     pub newton_tolerance: f64,
     /// Phase I iterations of the length restoration, at most (sec. 6.3: 200).
     pub isometry_max_iterations: u32,
@@ -153,6 +159,7 @@ impl Default for PaperParams {
             interior_density: 1.0 / 6.0e-4,
             flat_angle: theta0,
             split_flat_regions_at_folds: false,
+            conflict_angle: 0.26,
             junction_low_angle: theta0 / 10.0,
             junction_high_angle: theta0,
             compression_threshold: 0.001,
@@ -160,7 +167,7 @@ impl Default for PaperParams {
             blaschke_tolerance: 0.005,
             plastic_angle: std::f64::consts::FRAC_PI_8,
             newton_max_iterations: 20,
-            newton_tolerance: 1e-7,
+            newton_tolerance: 1e-6,
             isometry_max_iterations: 200,
             collision_stiffness: 1e4,
             collision_thickness: 5e-4,
@@ -183,6 +190,12 @@ impl PaperParams {
     /// of the boundary spacing (~2 mm by default).
     pub fn min_gap(&self) -> f64 {
         0.25 * self.boundary_spacing()
+    }
+    /// Smallest distance between two boundary vertices of S_G, m: a tenth of the
+    /// boundary spacing (~0.8 mm by default). Closer ends snap together; this keeps the
+    /// edges of S_P from degenerating.
+    pub fn min_boundary_spacing(&self) -> f64 {
+        0.1 * self.boundary_spacing()
     }
 }
 
@@ -221,12 +234,13 @@ impl PaperParams {
                 return Err(PaperError::NotPositive(k));
             }
         }
-        let non_negative: [(&'static str, f64); 7] = [
+        let non_negative: [(&'static str, f64); 8] = [
             ("bending_stiffness", self.bending_stiffness),
             ("damping", self.damping),
             ("junction_low_angle", self.junction_low_angle),
             ("junction_high_angle", self.junction_high_angle),
             ("plastic_angle", self.plastic_angle),
+            ("conflict_angle", self.conflict_angle),
             ("collision_stiffness", self.collision_stiffness),
             ("imperfection", self.imperfection),
         ];

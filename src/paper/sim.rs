@@ -46,10 +46,22 @@ pub struct PaperFrameStats {
     pub geometric_triangles: usize,
     pub curved_regions: usize,
     pub fem: FemReport,
+    /// Each remeshing attempt of step 2: T_comp's compression (1 - lambda_min), its
+    /// pattern centroid (m) and ruling direction v_perp, and whether S_G changed.
+    pub crumple_attempts: Vec<CrumpleAttempt>,
     pub crumple_events: Vec<CrumpleEvent>,
     pub junctions: JunctionReport,
     pub cones: ConeReport,
     pub isometry: IsometryReport,
+}
+
+/// One remeshing attempt of step 2 (see [`PaperFrameStats::crumple_attempts`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CrumpleAttempt {
+    pub compression: f64,
+    pub centroid: Point2,
+    pub ruling_direction: nalgebra::Vector2<f64>,
+    pub changed: bool,
 }
 
 /// One sheet of paper.
@@ -67,6 +79,8 @@ pub struct PaperSim {
     /// Hard constraints of the current frame: vertex material point -> world target.
     held: Vec<(Point2, Point3)>,
     time: f64,
+    /// `gmesh` was built by step 2 from the current structure and S_P positions.
+    gmesh_fresh: bool,
     mesh: SurfaceMesh,
     singular: Vec<SingularPoint>,
     frame: PaperFrameStats,
@@ -78,7 +92,10 @@ impl PaperSim {
     pub fn new(params: PaperParams, handles: &[HandleSpec], index: usize) -> Result<PaperSim, PaperError> {
         params.validate()?;
         let pattern = Pattern::rectangle(params.width, params.height);
-        let mut layer = GeometricLayer::default();
+        let mut layer = GeometricLayer {
+            min_boundary_spacing: params.min_boundary_spacing(),
+            ..Default::default()
+        };
         let mut own = Vec::new();
         for (h, spec) in handles.iter().enumerate() {
             if spec.object != index {
@@ -147,6 +164,7 @@ impl PaperSim {
             handles: own,
             held: Vec::new(),
             time: 0.0,
+            gmesh_fresh: false,
             mesh: SurfaceMesh::default(),
             singular: Vec::new(),
             frame: PaperFrameStats::default(),
@@ -311,6 +329,7 @@ impl PaperSim {
             self.fem = FemSystem::new(&self.sp);
         }
         let report = implicit_step(&mut self.fem, &mut self.sp, &self.params, dt, &dirichlet, &springs);
+        self.gmesh_fresh = false;
         self.frame = PaperFrameStats {
             fem: report,
             ..Default::default()
@@ -339,6 +358,7 @@ impl PaperSim {
             position: &position,
         };
         let Ok(mut gmesh) = GeometricMesh::build(&self.layer, &pattern, &position) else {
+            self.gmesh = GeometricMesh::default();
             return;
         };
         // the flat regions of this frame, each remeshed at most once (sec. 5.1: "it is
@@ -384,15 +404,32 @@ impl PaperSim {
                 processed.push(o);
             }
             let events = crumple_flat_region(&ctx, &mut self.layer, &gmesh, &labels, &strain, &mut self.rng);
+            let face = &gmesh.faces[strain.face];
+            self.frame.crumple_attempts.push(CrumpleAttempt {
+                compression: strain.compression,
+                centroid: Point2::from(
+                    face.vertices
+                        .iter()
+                        .map(|&v| gmesh.vertices[v as usize].material.coords)
+                        .sum::<nalgebra::Vector2<f64>>()
+                        / face.vertices.len() as f64,
+                ),
+                ruling_direction: strain.ruling_direction,
+                changed: !events.is_empty(),
+            });
             if events.is_empty() {
                 continue;
             }
             self.frame.crumple_events.extend(events);
             match GeometricMesh::build(&self.layer, &pattern, &position) {
                 Ok(g) => gmesh = g,
-                Err(_) => break,
+                Err(_) => {
+                    gmesh = GeometricMesh::default();
+                    break;
+                }
             }
         }
+        self.gmesh_fresh = !gmesh.vertices.is_empty();
         self.gmesh = gmesh;
     }
 
@@ -414,15 +451,24 @@ impl PaperSim {
             params: &params,
             position: &position,
         };
-        if let Ok(g) = GeometricMesh::build(&self.layer, &pattern, &position) {
-            self.frame.junctions = update_junctions(&ctx, &mut self.layer, &g);
+        // the mesh of S_G that step 2 left (same structure, same S_P positions)
+        let mut gmesh = std::mem::take(&mut self.gmesh);
+        if !std::mem::take(&mut self.gmesh_fresh) || gmesh.vertices.is_empty() {
+            let Ok(g) = GeometricMesh::build(&self.layer, &pattern, &position) else {
+                return;
+            };
+            gmesh = g;
         }
-        if let Ok(g) = GeometricMesh::build(&self.layer, &pattern, &position) {
-            self.frame.cones = fit_cones(&ctx, &mut self.layer, &g);
+        let (report, changed) = update_junctions(&ctx, &mut self.layer, &gmesh);
+        self.frame.junctions = report;
+        if let Some(g) = changed {
+            gmesh = g;
         }
-        let Ok(gmesh) = GeometricMesh::build(&self.layer, &pattern, &position) else {
-            return;
-        };
+        let (report, changed) = fit_cones(&ctx, &mut self.layer, &gmesh);
+        self.frame.cones = report;
+        if let Some(g) = changed {
+            gmesh = g;
+        }
         let Ok(mut sp) = build_physical(&gmesh, &self.layer, &pattern, &params, &|s| interp.boundary_position(s)) else {
             return;
         };

@@ -104,26 +104,26 @@ impl BlockSpd {
     /// lower triangle of a symmetric block when i == j.
     pub fn add_block(&mut self, i: usize, j: usize, m: &[f64]) {
         let bs = self.bs;
+        let col_ptr = self.symbolic.col_ptr();
         if i == j {
-            for a in 0..bs {
-                for b in 0..=a {
-                    self.add(i * bs + a, j * bs + b, m[a * bs + b]);
+            for b in 0..bs {
+                let start = col_ptr[j * bs + b];
+                for a in b..bs {
+                    self.values[start + (a - b)] += m[a * bs + b];
                 }
             }
-        } else if i > j {
+            return;
+        }
+        // the lower-triangle block is (hi, lo); (i, j) above the diagonal is its transpose
+        let (hi, lo, transpose) = if i > j { (i, j, false) } else { (j, i, true) };
+        let rank = self.upper_nbrs[lo]
+            .binary_search(&(hi as u32))
+            .unwrap_or_else(|_| panic!("block ({i}, {j}) outside the pattern"));
+        for b in 0..bs {
+            let base = col_ptr[lo * bs + b] + (bs - b) + rank * bs;
             for a in 0..bs {
-                for b in 0..bs {
-                    let s = self.slot(i * bs + a, j * bs + b);
-                    self.values[s] += m[a * bs + b];
-                }
-            }
-        } else {
-            // (i, j) block of the upper triangle = transpose of the (j, i) block
-            for a in 0..bs {
-                for b in 0..bs {
-                    let s = self.slot(j * bs + b, i * bs + a);
-                    self.values[s] += m[a * bs + b];
-                }
+                let v = if transpose { m[b * bs + a] } else { m[a * bs + b] };
+                self.values[base + a] += v;
             }
         }
     }
@@ -132,8 +132,8 @@ impl BlockSpd {
     /// entries zeroed, diagonal 1.
     pub fn fix_all(&mut self, fixed: &[bool]) {
         let dim = self.dim();
-        let col_ptr = self.symbolic.col_ptr().to_vec();
-        let row_idx = self.symbolic.row_idx().to_vec();
+        let col_ptr = self.symbolic.col_ptr();
+        let row_idx = self.symbolic.row_idx();
         for c in 0..dim {
             for s in col_ptr[c]..col_ptr[c + 1] {
                 let r = row_idx[s];

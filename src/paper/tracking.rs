@@ -5,7 +5,7 @@
 
 use nalgebra::{Matrix3, Vector2};
 
-use super::crumpling::{segment_is_free, CrumpleContext};
+use super::crumpling::{segment_is_free, snap_to_vertex, CrumpleContext};
 use super::geometric::{Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh, Ruling};
 use super::pattern::Pattern;
 use crate::geometry::{Point2, Point3, Vector3};
@@ -38,11 +38,17 @@ fn step_out(pattern: &Pattern, s: f64, s_inner: f64, spacing: f64) -> f64 {
 /// spacing into F (C grows), only if theta_CF exceeds the angle theta_opp of the other
 /// borders at the same junction point (fig. 13). A region whose rulings are all flatter
 /// than theta_low becomes flat.
-pub fn update_junctions(ctx: &CrumpleContext, layer: &mut GeometricLayer, gmesh: &GeometricMesh) -> JunctionReport {
+/// Returns the report and, when the structure changed, its new mesh.
+pub fn update_junctions(
+    ctx: &CrumpleContext,
+    layer: &mut GeometricLayer,
+    gmesh: &GeometricMesh,
+) -> (JunctionReport, Option<GeometricMesh>) {
     let params = ctx.params;
     let mut report = JunctionReport::default();
     let dihedral = |a: u32, b: u32| gmesh.dihedral(a, b).unwrap_or(0.0);
     let region_ids: Vec<u64> = layer.regions.iter().map(|r| r.id).collect();
+    let mut proposals = Vec::new();
     for (ri, id) in region_ids.iter().enumerate() {
         let Some(rv) = gmesh.ruling_vertices.get(ri) else { continue };
         let Some(cur) = layer.regions.iter().position(|r| r.id == *id) else { continue };
@@ -85,7 +91,13 @@ pub fn update_junctions(ctx: &CrumpleContext, layer: &mut GeometricLayer, gmesh:
             };
             let spacing = params.boundary_spacing();
             let out = |e: Endpoint, inner: Endpoint| match (e, inner) {
-                (Endpoint::Boundary(s), Endpoint::Boundary(si)) => Some(Endpoint::Boundary(step_out(ctx.pattern, s, si, spacing))),
+                (Endpoint::Boundary(s), Endpoint::Boundary(si)) => Some(Endpoint::Boundary(snap_to_vertex(
+                    ctx,
+                    gmesh,
+                    step_out(ctx.pattern, s, si, spacing),
+                    params.min_boundary_spacing(),
+                    &[],
+                ))),
                 (Endpoint::Singular(id), _) => Some(Endpoint::Singular(id)),
                 _ => None,
             };
@@ -106,13 +118,51 @@ pub fn update_junctions(ctx: &CrumpleContext, layer: &mut GeometricLayer, gmesh:
             }
             report.expanded += 1;
         }
-        let saved = layer.regions[cur].rulings.clone();
-        layer.regions[cur].rulings = rulings;
-        if GeometricMesh::build(layer, ctx.pattern, ctx.position).is_err() {
-            layer.regions[cur].rulings = saved;
+        if rulings != layer.regions[cur].rulings {
+            proposals.push((*id, rulings));
         }
     }
-    report
+    let mesh = apply_validated(ctx, layer, proposals);
+    let changed = report.flattened > 0 || report.shrunk > 0 || report.expanded > 0;
+    let mesh = match mesh {
+        Some(m) => Some(m),
+        None if changed => GeometricMesh::build(layer, ctx.pattern, ctx.position).ok(),
+        None => None,
+    };
+    (report, mesh)
+}
+
+/// Replace the rulings of regions (by id) and keep the result if S_G still meshes;
+/// otherwise apply the proposals one at a time, keeping those that mesh. Returns the
+/// mesh of the resulting structure when it was built here.
+fn apply_validated(
+    ctx: &CrumpleContext,
+    layer: &mut GeometricLayer,
+    proposals: Vec<(u64, Vec<Ruling>)>,
+) -> Option<GeometricMesh> {
+    if proposals.is_empty() {
+        return None;
+    }
+    let saved = layer.clone();
+    for (id, rulings) in &proposals {
+        if let Some(r) = layer.regions.iter_mut().find(|r| r.id == *id) {
+            r.rulings = rulings.clone();
+        }
+    }
+    if let Ok(mesh) = GeometricMesh::build(layer, ctx.pattern, ctx.position) {
+        return Some(mesh);
+    }
+    *layer = saved;
+    let mut last = None;
+    for (id, rulings) in proposals {
+        let Some(k) = layer.regions.iter().position(|r| r.id == id) else { continue };
+        let old = std::mem::replace(&mut layer.regions[k].rulings, rulings);
+        match GeometricMesh::build(layer, ctx.pattern, ctx.position) {
+            Ok(mesh) => last = Some(mesh),
+            Err(_) => layer.regions[k].rulings = old,
+        }
+    }
+    last
 }
 
 /// True when ruling edge `r` has a flat face on one side.
@@ -299,10 +349,16 @@ pub struct ConeReport {
 /// resampled: the ends of each 2D ruling move along ∂S̄ so that its line passes
 /// through the apex image ā_proj; two successive cones whose extreme rulings cross
 /// share a boundary vertex, the apex of the junction cone between them, fig. 15).
-pub fn fit_cones(ctx: &CrumpleContext, layer: &mut GeometricLayer, gmesh: &GeometricMesh) -> ConeReport {
+/// Returns the report and, when the structure changed, its new mesh.
+pub fn fit_cones(
+    ctx: &CrumpleContext,
+    layer: &mut GeometricLayer,
+    gmesh: &GeometricMesh,
+) -> (ConeReport, Option<GeometricMesh>) {
     let mut report = ConeReport::default();
     let scale = ctx.pattern.paper_length();
     let tolerance = ctx.params.blaschke_tolerance * scale;
+    let mut proposals = Vec::new();
     for ri in 0..layer.regions.len() {
         if layer.regions[ri].singular_apex().is_some() || layer.regions[ri].rulings.len() < 3 {
             continue;
@@ -317,7 +373,7 @@ pub fn fit_cones(ctx: &CrumpleContext, layer: &mut GeometricLayer, gmesh: &Geome
         );
         let segments = segment_cones(&planes, &reference, scale, tolerance);
         report.cones += segments.len();
-        let old = layer.regions[ri].rulings.clone();
+        let old = &layer.regions[ri].rulings;
         let mut new = old.clone();
         let mut moved = 0;
         for (range, fit) in &segments {
@@ -371,6 +427,11 @@ pub fn fit_cones(ctx: &CrumpleContext, layer: &mut GeometricLayer, gmesh: &Geome
                 } else {
                     (s_hi, s_lo)
                 };
+                // ends closer than the minimum spacing to another vertex join it
+                let own: Vec<u32> = rv.iter().flat_map(|r| [r[0], r[1]]).collect();
+                let tol = ctx.params.min_boundary_spacing();
+                let sa = snap_to_vertex(ctx, gmesh, sa, tol, &own);
+                let sb = snap_to_vertex(ctx, gmesh, sb, tol, &own);
                 let moved_by = (ctx.pattern.point_at(sa) - qa).norm().max((ctx.pattern.point_at(sb) - qb).norm());
                 if moved_by < 1e-5 {
                     continue;
@@ -416,21 +477,25 @@ pub fn fit_cones(ctx: &CrumpleContext, layer: &mut GeometricLayer, gmesh: &Geome
         }
         // drop rulings that became identical or too short
         new.dedup();
-        layer.regions[ri].rulings = new;
-        let ok = layer.regions[ri].rulings.len() >= 2
-            && layer.regions[ri].rulings.iter().all(|r| {
+        let ok = new.len() >= 2
+            && new.iter().all(|r| {
                 let p = layer.endpoint_material(ctx.pattern, &r.a);
                 let q = layer.endpoint_material(ctx.pattern, &r.b);
                 (p - q).norm() > ctx.params.min_gap()
-            })
-            && GeometricMesh::build(layer, ctx.pattern, ctx.position).is_ok();
+            });
         if ok {
-            report.realigned += moved;
-        } else {
-            layer.regions[ri].rulings = old;
+            proposals.push((layer.regions[ri].id, new, moved));
         }
     }
-    report
+    let moved: std::collections::BTreeMap<u64, usize> = proposals.iter().map(|(id, _, m)| (*id, *m)).collect();
+    let before = layer.regions.clone();
+    let mesh = apply_validated(ctx, layer, proposals.into_iter().map(|(id, r, _)| (id, r)).collect());
+    for (r, b) in layer.regions.iter().zip(&before) {
+        if r.rulings != b.rulings {
+            report.realigned += moved.get(&r.id).copied().unwrap_or(0);
+        }
+    }
+    (report, mesh)
 }
 
 #[cfg(test)]

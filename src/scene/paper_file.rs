@@ -51,6 +51,10 @@ pub struct PaperFile {
     /// bool (false).
     #[serde(default)]
     pub split_flat_regions_at_folds: bool,
+    /// Rulings meeting a curved region's ruling at a smaller angle are compatible (no
+    /// singular vertex), rad (0.26).
+    #[serde(default = "d_conflict")]
+    pub conflict_angle: f64,
     /// theta_low, rad (theta_0 / 10).
     #[serde(default)]
     pub junction_low_angle: Option<f64>,
@@ -72,7 +76,7 @@ pub struct PaperFile {
     /// Newton iterations of step 1, at most (20).
     #[serde(default = "d_newton_max")]
     pub newton_max_iterations: u32,
-    /// Newton stop on the largest vertex update, m (1e-7).
+    /// Newton stop on the largest vertex update, m (1e-6).
     #[serde(default = "d_newton_tol")]
     pub newton_tolerance: f64,
     /// Phase I iterations of the length restoration, at most (200).
@@ -149,6 +153,9 @@ fn d_rho_bound() -> f64 {
 }
 fn d_theta0() -> f64 {
     PaperParams::default().flat_angle
+}
+fn d_conflict() -> f64 {
+    PaperParams::default().conflict_angle
 }
 fn d_eps_c() -> f64 {
     PaperParams::default().compression_threshold
@@ -334,6 +341,7 @@ impl SceneFile {
             },
             flat_angle: theta0,
             split_flat_regions_at_folds: paper.split_flat_regions_at_folds,
+            conflict_angle: ck.non_negative(&key("conflict_angle"), paper.conflict_angle)?,
             junction_low_angle: low,
             junction_high_angle: high,
             compression_threshold: eps_c,
