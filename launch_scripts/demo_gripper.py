@@ -14,7 +14,6 @@ The gripper circles around --center (m) in the y-z plane with --radius (m) every
 goes back to the scene's scripted trajectory only after a reset (the last pose holds).
 """
 
-from __future__ import annotations
 
 import argparse
 import math

@@ -116,9 +116,7 @@ enum Command {
         command: BagCommand,
     },
     /// Same as `bag reindex`.
-    Reindex {
-        bag: PathBuf,
-    },
+    Reindex { bag: PathBuf },
 }
 
 #[derive(Subcommand)]
@@ -163,7 +161,15 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             stats,
             record,
             record_compression,
-        } => run_command(scene, duration, dt, sets, stats, record, &record_compression),
+        } => run_command(
+            scene,
+            duration,
+            dt,
+            sets,
+            stats,
+            record,
+            &record_compression,
+        ),
         Command::Node {
             scene,
             record,
@@ -253,8 +259,11 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
                     s.message_count(),
                     match (&s.truncated, s.complete) {
                         (_, true) => String::new(),
-                        (Some(t), false) => format!(" (incomplete file: {t}; run `developable_sim bag reindex`)"),
-                        (None, false) => " (incomplete file: no footer; run `developable_sim bag reindex`)".into(),
+                        (Some(t), false) =>
+                            format!(" (incomplete file: {t}; run `developable_sim bag reindex`)"),
+                        (None, false) =>
+                            " (incomplete file: no footer; run `developable_sim bag reindex`)"
+                                .into(),
                     }
                 );
                 for t in s.topics() {
@@ -454,7 +463,9 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
         None => {
             let d = p.double("duration").unwrap_or(0.0);
             if d < 0.0 {
-                return Err(p.invalid("duration", format!("must be >= 0, got {d}")).into());
+                return Err(p
+                    .invalid("duration", format!("must be >= 0, got {d}"))
+                    .into());
             }
             d
         }
@@ -462,7 +473,10 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
     let factor = match a.real_time_factor {
         Some(f) if f > 0.0 && f.is_finite() => f,
         Some(f) => bail!("--real-time-factor must be > 0, got {f}"),
-        None => positive("real_time_factor", p.double("real_time_factor").unwrap_or(1.0))?,
+        None => positive(
+            "real_time_factor",
+            p.double("real_time_factor").unwrap_or(1.0),
+        )?,
     };
     let pacing = if a.as_fast_as_possible || p.bool("as_fast_as_possible") == Some(true) {
         Pacing::AsFastAsPossible
@@ -511,11 +525,16 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
         "record_flush_period",
         p.double("record_flush_period").unwrap_or(1.0),
     )?;
-    let record = a
-        .record
-        .or_else(|| p.string("record").filter(|s| !s.is_empty()).map(PathBuf::from));
+    let record = a.record.or_else(|| {
+        p.string("record")
+            .filter(|s| !s.is_empty())
+            .map(PathBuf::from)
+    });
     let style = MarkerStyle {
-        line_width: positive("marker.line_width", p.double("marker.line_width").unwrap_or(0.002))?,
+        line_width: positive(
+            "marker.line_width",
+            p.double("marker.line_width").unwrap_or(0.002),
+        )?,
         sphere_diameter: positive(
             "marker.sphere_diameter",
             p.double("marker.sphere_diameter").unwrap_or(0.012),
@@ -530,7 +549,14 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
     };
     let start_paused = a.paused || p.bool("start_paused").unwrap_or(false);
 
-    banner(&scene, &names, domain_id, pacing, &lockstep, record.as_deref());
+    banner(
+        &scene,
+        &names,
+        domain_id,
+        pacing,
+        &lockstep,
+        record.as_deref(),
+    );
     let node = SimNode::new(NodeConfig {
         scene,
         names,
@@ -614,7 +640,10 @@ fn banner(
     }
     for o in &names.objects {
         if scene.outputs.markers {
-            eprintln!("[developable_sim]   out: {} (visualization_msgs/msg/MarkerArray)", o.markers);
+            eprintln!(
+                "[developable_sim]   out: {} (visualization_msgs/msg/MarkerArray)",
+                o.markers
+            );
         }
         if scene.outputs.singular_points {
             eprintln!(
@@ -623,11 +652,17 @@ fn banner(
             );
         }
         if scene.outputs.status {
-            eprintln!("[developable_sim]   out: {} (developable_sim/msg/SimStatus)", o.status);
+            eprintln!(
+                "[developable_sim]   out: {} (developable_sim/msg/SimStatus)",
+                o.status
+            );
         }
     }
     if scene.outputs.clock {
-        eprintln!("[developable_sim]   out: {} (rosgraph_msgs/msg/Clock)", names.clock);
+        eprintln!(
+            "[developable_sim]   out: {} (rosgraph_msgs/msg/Clock)",
+            names.clock
+        );
     }
     eprintln!(
         "[developable_sim]   services: {} {} (std_srvs/srv/Trigger), {} (std_srvs/srv/SetBool)",

@@ -11,10 +11,8 @@ const SCENE: &str = concat!(
 );
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
-        "node_cli_{name}_{}",
-        std::process::id()
-    ));
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("node_cli_{name}_{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -64,7 +62,10 @@ fn bad_params_files_name_the_file_and_the_key() {
         (
             "range.yaml",
             "developable_sim:\n  ros__parameters:\n    real_time_factor: -1.0\n",
-            vec!["developable_sim.ros__parameters.real_time_factor", "must be > 0"],
+            vec![
+                "developable_sim.ros__parameters.real_time_factor",
+                "must be > 0",
+            ],
         ),
         (
             "nested.yaml",
@@ -92,7 +93,11 @@ fn bad_params_files_name_the_file_and_the_key() {
         let mut expected = expected.clone();
         expected.push(p);
         check(&["node", SCENE, "--params", p], &[], &expected);
-        check(&["node", SCENE, "--ros-args", "--params-file", p], &[], &expected);
+        check(
+            &["node", SCENE, "--ros-args", "--params-file", p],
+            &[],
+            &expected,
+        );
     }
     check(
         &["node", SCENE, "--params", "/nonexistent/params.yaml"],
@@ -118,12 +123,32 @@ fn bad_command_line_values_are_explained() {
         &[],
         &["NAME:=VALUE"],
     );
-    check(&["node", SCENE, "--ros-args", "--bogus"], &[], &["unknown ROS argument"]);
-    check(&["node", SCENE], &[("ROS_DOMAIN_ID", "abc")], &["ROS_DOMAIN_ID"]);
-    check(&["node", SCENE, "--domain-id", "300"], &[], &["out of range"]);
-    check(&["node", SCENE, "--namespace", "/a b"], &[], &["invalid ROS name"]);
+    check(
+        &["node", SCENE, "--ros-args", "--bogus"],
+        &[],
+        &["unknown ROS argument"],
+    );
+    check(
+        &["node", SCENE],
+        &[("ROS_DOMAIN_ID", "abc")],
+        &["ROS_DOMAIN_ID"],
+    );
+    check(
+        &["node", SCENE, "--domain-id", "300"],
+        &[],
+        &["out of range"],
+    );
+    check(
+        &["node", SCENE, "--namespace", "/a b"],
+        &[],
+        &["invalid ROS name"],
+    );
     check(&["node"], &[], &["no scene"]);
-    check(&["run", SCENE, "--ros-args", "-p", "a:=1"], &[], &["--ros-args"]);
+    check(
+        &["run", SCENE, "--ros-args", "-p", "a:=1"],
+        &[],
+        &["--ros-args"],
+    );
     check(
         &["node", SCENE, "--set", "ribbon.segments=1"],
         &[],
@@ -136,7 +161,14 @@ fn a_bag_folder_in_use_is_refused() {
     let dir = scratch("bag_in_use");
     std::fs::write(dir.join("something"), "x").unwrap();
     check(
-        &["run", SCENE, "--duration", "0.02", "--record", dir.to_str().unwrap()],
+        &[
+            "run",
+            SCENE,
+            "--duration",
+            "0.02",
+            "--record",
+            dir.to_str().unwrap(),
+        ],
         &[],
         &["already exists"],
     );

@@ -20,10 +20,8 @@ const TORSION: &str = concat!(
 );
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
-        "record_replay_{name}_{}",
-        std::process::id()
-    ));
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("record_replay_{name}_{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -209,7 +207,10 @@ fn a_full_disk_stops_the_recording_with_a_clear_error_and_a_readable_bag() {
     assert!(closed.is_ok() || closed.is_err()); // either way metadata.yaml is written
     let meta = metadata(&dir);
     let s = scan(&dir.join("bag_0.mcap")).unwrap();
-    assert_eq!(meta.rosbag2_bagfile_information.message_count, s.message_count());
+    assert_eq!(
+        meta.rosbag2_bagfile_information.message_count,
+        s.message_count()
+    );
     assert!(s.message_count() > 0 && s.message_count() <= written);
 }
 

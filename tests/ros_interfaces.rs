@@ -33,7 +33,12 @@ fn definition_fields(ros_type: &str) -> Vec<FieldDef> {
         .collect()
 }
 
-fn check_fields(what: &str, fields: &[(&'static str, Value)], defs: &[FieldDef], seen: &mut BTreeSet<String>) {
+fn check_fields(
+    what: &str,
+    fields: &[(&'static str, Value)],
+    defs: &[FieldDef],
+    seen: &mut BTreeSet<String>,
+) {
     let names: Vec<&str> = fields.iter().map(|(n, _)| *n).collect();
     let def_names: Vec<&str> = defs.iter().map(|f| f.name.as_str()).collect();
     assert_eq!(names, def_names, "{what}: field names or order differ");
@@ -57,7 +62,10 @@ fn check_fields(what: &str, fields: &[(&'static str, Value)], defs: &[FieldDef],
                         check_single(&at, &def.base, item, seen);
                     }
                 }
-                other => panic!("{at}: expected a fixed array {}[{n}], got {other:?}", def.base),
+                other => panic!(
+                    "{at}: expected a fixed array {}[{n}], got {other:?}",
+                    def.base
+                ),
             },
         }
     }
@@ -75,7 +83,11 @@ fn check_struct(v: &Value, ros_type: &str, seen: &mut BTreeSet<String>) {
     let Value::Struct(name, fields) = v else {
         panic!("{ros_type}: not a struct: {v:?}");
     };
-    assert_eq!(ros_type_of(name), ros_type, "struct {name} stands for {ros_type}");
+    assert_eq!(
+        ros_type_of(name),
+        ros_type,
+        "struct {name} stands for {ros_type}"
+    );
     seen.insert(ros_type.to_string());
     check_fields(ros_type, fields, &definition_fields(ros_type), seen);
 }
@@ -104,7 +116,11 @@ fn marker_array() -> MarkerArray {
 fn every_message_struct_matches_its_msg_definition() {
     let mut seen = BTreeSet::new();
     let root = |v: Value, t: &str, seen: &mut BTreeSet<String>| check_struct(&v, t, seen);
-    root(to_value(&marker_array()).unwrap(), MarkerArray::TYPE, &mut seen);
+    root(
+        to_value(&marker_array()).unwrap(),
+        MarkerArray::TYPE,
+        &mut seen,
+    );
     root(
         to_value(&SingularPoints {
             points: vec![SingularPoint::default()],
@@ -123,7 +139,11 @@ fn every_message_struct_matches_its_msg_definition() {
         SimStatus::TYPE,
         &mut seen,
     );
-    root(to_value(&PoseStamped::default()).unwrap(), PoseStamped::TYPE, &mut seen);
+    root(
+        to_value(&PoseStamped::default()).unwrap(),
+        PoseStamped::TYPE,
+        &mut seen,
+    );
     root(to_value(&Clock::default()).unwrap(), Clock::TYPE, &mut seen);
     let all: BTreeSet<String> = DEFINITIONS.iter().map(|(n, _)| n.to_string()).collect();
     assert_eq!(seen, all, "every embedded definition has a checked struct");
@@ -132,7 +152,10 @@ fn every_message_struct_matches_its_msg_definition() {
 fn service_parts(name: &str) -> (Vec<FieldDef>, Vec<FieldDef>) {
     let text = SERVICES.iter().find(|(n, _)| *n == name).unwrap().1;
     let (req, resp) = text.split_once("---").unwrap();
-    (parse_msg("std_srvs", req).unwrap(), parse_msg("std_srvs", resp).unwrap())
+    (
+        parse_msg("std_srvs", req).unwrap(),
+        parse_msg("std_srvs", resp).unwrap(),
+    )
 }
 
 fn fields_of(v: Value) -> Vec<(&'static str, Value)> {
@@ -160,14 +183,44 @@ fn or_placeholder(defs: Vec<FieldDef>) -> Vec<FieldDef> {
 fn service_structs_match_std_srvs() {
     let mut seen = BTreeSet::new();
     let (req, resp) = service_parts("std_srvs/srv/Trigger");
-    check_fields("Trigger_Request", &fields_of(to_value(&TriggerRequest::default()).unwrap()), &or_placeholder(req), &mut seen);
-    check_fields("Trigger_Response", &fields_of(to_value(&TriggerResponse::default()).unwrap()), &resp, &mut seen);
+    check_fields(
+        "Trigger_Request",
+        &fields_of(to_value(&TriggerRequest::default()).unwrap()),
+        &or_placeholder(req),
+        &mut seen,
+    );
+    check_fields(
+        "Trigger_Response",
+        &fields_of(to_value(&TriggerResponse::default()).unwrap()),
+        &resp,
+        &mut seen,
+    );
     let (req, resp) = service_parts("std_srvs/srv/SetBool");
-    check_fields("SetBool_Request", &fields_of(to_value(&SetBoolRequest::default()).unwrap()), &req, &mut seen);
-    check_fields("SetBool_Response", &fields_of(to_value(&SetBoolResponse::default()).unwrap()), &resp, &mut seen);
+    check_fields(
+        "SetBool_Request",
+        &fields_of(to_value(&SetBoolRequest::default()).unwrap()),
+        &req,
+        &mut seen,
+    );
+    check_fields(
+        "SetBool_Response",
+        &fields_of(to_value(&SetBoolResponse::default()).unwrap()),
+        &resp,
+        &mut seen,
+    );
     let (req, resp) = service_parts("std_srvs/srv/Empty");
-    check_fields("Empty_Request", &fields_of(to_value(&EmptyMessage::default()).unwrap()), &or_placeholder(req), &mut seen);
-    check_fields("Empty_Response", &fields_of(to_value(&EmptyMessage::default()).unwrap()), &or_placeholder(resp), &mut seen);
+    check_fields(
+        "Empty_Request",
+        &fields_of(to_value(&EmptyMessage::default()).unwrap()),
+        &or_placeholder(req),
+        &mut seen,
+    );
+    check_fields(
+        "Empty_Response",
+        &fields_of(to_value(&EmptyMessage::default()).unwrap()),
+        &or_placeholder(resp),
+        &mut seen,
+    );
 }
 
 #[test]
@@ -185,6 +238,8 @@ fn a_reordered_struct_would_be_caught() {
         z: 0.0,
     })
     .unwrap();
-    let r = std::panic::catch_unwind(|| check_struct(&v, "geometry_msgs/msg/Point", &mut BTreeSet::new()));
+    let r = std::panic::catch_unwind(|| {
+        check_struct(&v, "geometry_msgs/msg/Point", &mut BTreeSet::new())
+    });
     assert!(r.is_err());
 }

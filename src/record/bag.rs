@@ -33,7 +33,9 @@ impl std::str::FromStr for Compression {
         match s {
             "none" | "" => Ok(Compression::None),
             "lz4" => Ok(Compression::Lz4),
-            other => Err(format!("unknown compression `{other}`, expected none or lz4")),
+            other => Err(format!(
+                "unknown compression `{other}`, expected none or lz4"
+            )),
         }
     }
 }
@@ -205,7 +207,11 @@ impl BagWriter {
     }
 
     /// Add a topic of message type `M` offered with `qos`.
-    pub fn add_topic<M: RosMessage>(&mut self, name: &str, qos: Qos) -> Result<TopicId, RecordError> {
+    pub fn add_topic<M: RosMessage>(
+        &mut self,
+        name: &str,
+        qos: Qos,
+    ) -> Result<TopicId, RecordError> {
         let schema = match self.schemas.get(M::TYPE) {
             Some(id) => *id,
             None => {

@@ -265,7 +265,13 @@ mod tests {
             type_hash: "RIHS01_x".into(),
             count: 3,
         };
-        let m = build("b_0.mcap", &[t.clone(), t], Some(10), Some(25), BTreeMap::new());
+        let m = build(
+            "b_0.mcap",
+            &[t.clone(), t],
+            Some(10),
+            Some(25),
+            BTreeMap::new(),
+        );
         let i = &m.rosbag2_bagfile_information;
         assert_eq!((i.message_count, i.duration.nanoseconds), (6, 15));
         assert_eq!(i.files[0].message_count, 6);

@@ -141,15 +141,14 @@ impl Iterator for McapStream {
                     };
                     match record {
                         Record::Schema { header, data } => {
-                            self.schemas
-                                .insert(header.id, (header.name, header.encoding, data.into_owned()));
+                            self.schemas.insert(
+                                header.id,
+                                (header.name, header.encoding, data.into_owned()),
+                            );
                         }
                         Record::Channel(c) => {
-                            let (type_name, schema_encoding, schema) = self
-                                .schemas
-                                .get(&c.schema_id)
-                                .cloned()
-                                .unwrap_or_default();
+                            let (type_name, schema_encoding, schema) =
+                                self.schemas.get(&c.schema_id).cloned().unwrap_or_default();
                             self.channels.insert(
                                 c.id,
                                 ChannelInfo {
@@ -249,7 +248,11 @@ impl Scan {
                     .get("offered_qos_profiles")
                     .and_then(|q| serde_yaml::from_str::<Vec<QosEntry>>(q).ok())
                     .unwrap_or_default(),
-                type_hash: c.metadata.get("topic_type_hash").cloned().unwrap_or_default(),
+                type_hash: c
+                    .metadata
+                    .get("topic_type_hash")
+                    .cloned()
+                    .unwrap_or_default(),
                 count: self.counts.get(&c.id).copied().unwrap_or(0),
             })
             .collect()
@@ -257,7 +260,13 @@ impl Scan {
 
     /// metadata.yaml for a bag of this one file.
     pub fn metadata(&self, file_name: &str, custom: BTreeMap<String, String>) -> MetadataFile {
-        metadata::build(file_name, &self.topics(), self.first_ns, self.last_ns, custom)
+        metadata::build(
+            file_name,
+            &self.topics(),
+            self.first_ns,
+            self.last_ns,
+            custom,
+        )
     }
 }
 
@@ -323,7 +332,10 @@ pub fn reindex(dir: &Path) -> Result<ReindexReport, RecordError> {
     // keep custom_data of an existing metadata.yaml
     if let Ok(text) = std::fs::read_to_string(dir.join("metadata.yaml")) {
         if let Ok(old) = serde_yaml::from_str::<MetadataFile>(&text) {
-            custom = old.rosbag2_bagfile_information.custom_data.unwrap_or_default();
+            custom = old
+                .rosbag2_bagfile_information
+                .custom_data
+                .unwrap_or_default();
         }
     }
     for path in &files {
@@ -337,7 +349,11 @@ pub fn reindex(dir: &Path) -> Result<ReindexReport, RecordError> {
             s = scan(path)?;
         }
         if custom.is_empty() {
-            if let Some((_, v)) = s.metadata_records.iter().find(|(n, _)| n == "developable_sim") {
+            if let Some((_, v)) = s
+                .metadata_records
+                .iter()
+                .find(|(n, _)| n == "developable_sim")
+            {
                 if let Some(name) = v.get("scene_name") {
                     custom.insert("developable_sim.scene".to_string(), name.clone());
                 }
@@ -387,7 +403,10 @@ fn repair(path: &Path) -> Result<PathBuf, RecordError> {
         let out = File::create(&tmp).map_err(|e| io(&tmp, e))?;
         let mut w = mcap::WriteOptions::new()
             .profile("ros2")
-            .library(format!("developable_sim {} (reindex)", env!("CARGO_PKG_VERSION")))
+            .library(format!(
+                "developable_sim {} (reindex)",
+                env!("CARGO_PKG_VERSION")
+            ))
             .compression(None)
             .create(BufWriter::new(out))
             .map_err(|source| RecordError::Mcap {

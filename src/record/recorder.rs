@@ -16,9 +16,9 @@ use serde::{Deserialize, Serialize};
 use super::bag::{now_ns, BagOptions, BagWriter, TopicId};
 use super::metadata::Qos;
 use super::RecordError;
+use crate::ros::input::InputPolicy;
 use crate::ros::msgs::{Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints};
 use crate::ros::names::NodeNames;
-use crate::ros::input::InputPolicy;
 use crate::ros::session::{Frame, FrameContent, Session};
 use crate::runner::StepObserver;
 use crate::scene::Scene;
@@ -248,7 +248,11 @@ pub struct RunRecorder {
 
 impl RunRecorder {
     /// Create the bag and record the initial state of `scene`.
-    pub fn create(scene: &Scene, dir: &Path, options: BagOptions) -> Result<RunRecorder, RecordError> {
+    pub fn create(
+        scene: &Scene,
+        dir: &Path,
+        options: BagOptions,
+    ) -> Result<RunRecorder, RecordError> {
         let names = NodeNames::resolve(scene, "developable_sim", "/", &[]).map_err(|e| {
             RecordError::Bag {
                 path: dir.to_path_buf(),
@@ -265,8 +269,14 @@ impl RunRecorder {
             singular_points: scene.outputs.singular_points,
             status: scene.outputs.status,
         };
-        let mut recorder =
-            SessionRecorder::create(dir, options, &session, &names, published, scene.outputs.clock)?;
+        let mut recorder = SessionRecorder::create(
+            dir,
+            options,
+            &session,
+            &names,
+            published,
+            scene.outputs.clock,
+        )?;
         let content = recorded_content(published);
         recorder.record_frame(&session.frame(None, 0.0, content))?;
         Ok(RunRecorder {
@@ -286,10 +296,17 @@ impl RunRecorder {
 }
 
 impl StepObserver for RunRecorder {
-    fn after_step(&mut self, scene: &Scene, report: &StepReport, step_ms: f64) -> anyhow::Result<()> {
+    fn after_step(
+        &mut self,
+        scene: &Scene,
+        report: &StepReport,
+        step_ms: f64,
+    ) -> anyhow::Result<()> {
         // the session mirrors the runner's world (same steps, scripted targets)
         self.session.scene.world.clone_from(&scene.world);
-        let frame = self.session.frame(Some(report), step_ms * 1e-3, self.content);
+        let frame = self
+            .session
+            .frame(Some(report), step_ms * 1e-3, self.content);
         if let Some(r) = self.recorder.as_mut() {
             r.record_frame(&frame)?;
         }

@@ -109,11 +109,9 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                         .map_err(|m| bag_err(format!("{}: {m}", file.display())))?;
                     let scene = match &options.scene {
                         Some(p) => crate::scene::load(p, &[]),
-                        None => crate::scene::load_str(
-                            &i.scene_yaml,
-                            Path::new(&i.scene_file),
-                            &[],
-                        ),
+                        None => {
+                            crate::scene::load_str(&i.scene_yaml, Path::new(&i.scene_file), &[])
+                        }
                     }
                     .map_err(|e| bag_err(format!("cannot rebuild the scene: {e}")))?;
                     report.scene = scene.name.clone();
@@ -185,12 +183,10 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                                     &cdr::decode::<MarkerArray>(&m.data).map_err(decode_err)?,
                                 ),
                                 Output::Singular(_) => to_value(
-                                    &cdr::decode::<SingularPoints>(&m.data)
-                                        .map_err(decode_err)?,
+                                    &cdr::decode::<SingularPoints>(&m.data).map_err(decode_err)?,
                                 ),
                                 Output::Status(_) => {
-                                    let st: SimStatus =
-                                        cdr::decode(&m.data).map_err(decode_err)?;
+                                    let st: SimStatus = cdr::decode(&m.data).map_err(decode_err)?;
                                     let key = (st.episode, st.step);
                                     if current != Some(key) {
                                         advance(s, current, key, content, &mut frame, &mut report)
@@ -237,7 +233,9 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                                 None => {
                                     entry.differing += 1;
                                     entry.structural.get_or_insert_with(|| {
-                                        format!("step {step}: recorded but not produced by the replay")
+                                        format!(
+                                            "step {step}: recorded but not produced by the replay"
+                                        )
                                     });
                                 }
                                 Some(mut c) => {

@@ -10,7 +10,9 @@ use serde::Serialize;
 pub enum CdrError {
     #[error("CDR payload shorter than its 4-byte encapsulation header")]
     Truncated,
-    #[error("unsupported CDR encapsulation {0:02x} {1:02x} (expected CDR_LE 00 01 or CDR_BE 00 00)")]
+    #[error(
+        "unsupported CDR encapsulation {0:02x} {1:02x} (expected CDR_LE 00 01 or CDR_BE 00 00)"
+    )]
     Encapsulation(u8, u8),
     #[error("CDR: {0}")]
     Codec(#[from] cdr_encoding::Error),

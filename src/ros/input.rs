@@ -115,8 +115,15 @@ pub fn check(
     last_stamp: Option<Time>,
     msg: &PoseStamped,
 ) -> Result<(Pose, bool), Rejection> {
-    let frame = msg.header.frame_id.strip_prefix('/').unwrap_or(&msg.header.frame_id);
-    let scene_frame = policy.frame_id.strip_prefix('/').unwrap_or(&policy.frame_id);
+    let frame = msg
+        .header
+        .frame_id
+        .strip_prefix('/')
+        .unwrap_or(&msg.header.frame_id);
+    let scene_frame = policy
+        .frame_id
+        .strip_prefix('/')
+        .unwrap_or(&policy.frame_id);
     let frame_ok = frame == scene_frame || (frame.is_empty() && policy.accept_empty_frame_id);
     if !frame_ok {
         return Err(Rejection::UnknownFrame);
@@ -183,7 +190,10 @@ mod tests {
         };
         let mut h = HandleInput::default();
         let id = [0.0, 0.0, 0.0, 1.0];
-        assert_eq!(h.offer(&policy, &msg("world", 5, [1.0, 0.0, 0.0], id)), Ok(()));
+        assert_eq!(
+            h.offer(&policy, &msg("world", 5, [1.0, 0.0, 0.0], id)),
+            Ok(())
+        );
         assert_eq!(
             h.offer(&policy, &msg("map", 6, [0.0; 3], id)),
             Err(Rejection::UnknownFrame)
@@ -197,11 +207,17 @@ mod tests {
             Err(Rejection::NonFinite)
         );
         assert_eq!(
-            h.offer(&policy, &msg("world", 6, [0.0; 3], [0.0, f64::INFINITY, 0.0, 1.0])),
+            h.offer(
+                &policy,
+                &msg("world", 6, [0.0; 3], [0.0, f64::INFINITY, 0.0, 1.0])
+            ),
             Err(Rejection::NonFinite)
         );
         assert_eq!(
-            h.offer(&policy, &msg("world", 6, [0.0; 3], [1e300, 1e300, 0.0, 0.0])),
+            h.offer(
+                &policy,
+                &msg("world", 6, [0.0; 3], [1e300, 1e300, 0.0, 0.0])
+            ),
             Err(Rejection::NonFinite)
         );
         assert_eq!(
@@ -216,15 +232,15 @@ mod tests {
         assert!((h.target.unwrap().translation.vector.x - 1.0).abs() < 1e-15);
         // same stamp is not older: accepted; a leading slash is ignored; normalized
         assert_eq!(
-            h.offer(&policy, &msg("/world", 5, [2.0, 0.0, 0.0], [0.0, 0.0, 0.0, 2.0])),
+            h.offer(
+                &policy,
+                &msg("/world", 5, [2.0, 0.0, 0.0], [0.0, 0.0, 0.0, 2.0])
+            ),
             Ok(())
         );
         assert_eq!(h.normalized, 1);
         assert!((h.target.unwrap().rotation.quaternion().norm() - 1.0).abs() < 1e-15);
-        assert_eq!(
-            (h.accepted, h.rejected(), h.rejected_non_finite),
-            (2, 7, 3)
-        );
+        assert_eq!((h.accepted, h.rejected(), h.rejected_non_finite), (2, 7, 3));
         h.clear_target();
         assert!(h.target.is_none());
         assert_eq!(h.offer(&policy, &msg("world", 1, [0.0; 3], id)), Ok(()));

@@ -99,7 +99,10 @@ pub fn compare(a: &Value, b: &Value) -> Difference {
 
 fn note_structural(d: &mut Difference, path: &str, what: String) {
     if d.structural.is_none() {
-        d.structural = Some(format!("{}: {what}", if path.is_empty() { "." } else { path }));
+        d.structural = Some(format!(
+            "{}: {what}",
+            if path.is_empty() { "." } else { path }
+        ));
     }
 }
 
@@ -264,7 +267,12 @@ impl ser::Serializer for ValueSerializer {
     fn serialize_unit_struct(self, name: &'static str) -> Result<Value, Error> {
         Ok(Value::Struct(name, Vec::new()))
     }
-    fn serialize_unit_variant(self, _: &'static str, _: u32, _: &'static str) -> Result<Value, Error> {
+    fn serialize_unit_variant(
+        self,
+        _: &'static str,
+        _: u32,
+        _: &'static str,
+    ) -> Result<Value, Error> {
         Err(unsupported("enum"))
     }
     fn serialize_newtype_struct<T: Serialize + ?Sized>(
@@ -412,7 +420,11 @@ mod tests {
         let mut v = to_value(&a).unwrap();
         v.zero_field("header.stamp.sec");
         assert_eq!(
-            v.field("header").unwrap().field("stamp").unwrap().field("sec"),
+            v.field("header")
+                .unwrap()
+                .field("stamp")
+                .unwrap()
+                .field("sec"),
             Some(&Value::Int(0, "int32"))
         );
     }

@@ -74,11 +74,7 @@ impl NodeNames {
             .iter()
             .enumerate()
             .map(|(i, h)| {
-                let explicit = scene
-                    .source
-                    .handles
-                    .get(i)
-                    .and_then(|f| f.topic.clone());
+                let explicit = scene.source.handles.get(i).and_then(|f| f.topic.clone());
                 resolve(&explicit.unwrap_or_else(|| format!("handles/{}", h.name)))
             })
             .collect::<Result<Vec<_>, _>>()?;

@@ -227,8 +227,8 @@ impl SimNode {
     pub fn new(cfg: NodeConfig) -> Result<SimNode, NodeError> {
         let context = Context::with_options(ContextOptions::new().domain_id(cfg.domain_id))
             .map_err(dds("creating the DDS participant"))?;
-        let node_name = NodeName::new(&cfg.names.namespace, &cfg.names.node)
-            .map_err(dds("node name"))?;
+        let node_name =
+            NodeName::new(&cfg.names.namespace, &cfg.names.node).map_err(dds("node name"))?;
         let mut node = context
             .new_node(
                 node_name,
@@ -263,7 +263,11 @@ impl SimNode {
         let mut subs = Vec::new();
         for (i, t) in names.handles.iter().enumerate() {
             let topic = node
-                .create_topic(&name(t)?, topic_type::<PoseStamped>(), &qos(Qos::SENSOR_DATA))
+                .create_topic(
+                    &name(t)?,
+                    topic_type::<PoseStamped>(),
+                    &qos(Qos::SENSOR_DATA),
+                )
                 .map_err(dds("handle topic"))?;
             let mut sub = node
                 .create_subscription::<PoseStamped>(&topic, Some(qos(Qos::SENSOR_DATA)))
@@ -276,7 +280,11 @@ impl SimNode {
         for o in &names.objects {
             let markers = if outputs.markers {
                 let t = node
-                    .create_topic(&name(&o.markers)?, topic_type::<MarkerArray>(), &qos(Qos::MARKERS))
+                    .create_topic(
+                        &name(&o.markers)?,
+                        topic_type::<MarkerArray>(),
+                        &qos(Qos::MARKERS),
+                    )
                     .map_err(dds("markers topic"))?;
                 Some(
                     node.create_publisher(&t, Some(qos(Qos::MARKERS)))
@@ -302,7 +310,11 @@ impl SimNode {
             };
             let status = if outputs.status {
                 let t = node
-                    .create_topic(&name(&o.status)?, topic_type::<SimStatus>(), &qos(Qos::DATA))
+                    .create_topic(
+                        &name(&o.status)?,
+                        topic_type::<SimStatus>(),
+                        &qos(Qos::DATA),
+                    )
                     .map_err(dds("status topic"))?;
                 Some(
                     node.create_publisher(&t, Some(qos(Qos::DATA)))
@@ -319,7 +331,11 @@ impl SimNode {
         }
         let clock = if outputs.clock {
             let t = node
-                .create_topic(&name(&names.clock)?, topic_type::<Clock>(), &qos(Qos::CLOCK))
+                .create_topic(
+                    &name(&names.clock)?,
+                    topic_type::<Clock>(),
+                    &qos(Qos::CLOCK),
+                )
                 .map_err(dds("clock topic"))?;
             Some(
                 node.create_publisher(&t, Some(qos(Qos::CLOCK)))
@@ -360,8 +376,11 @@ impl SimNode {
                 srv_qos,
             )
             .map_err(dds("step service"))?;
-        poll.registry()
-            .register(&mut reset_srv, Token(SERVICE_TOKEN_BASE), Interest::READABLE)?;
+        poll.registry().register(
+            &mut reset_srv,
+            Token(SERVICE_TOKEN_BASE),
+            Interest::READABLE,
+        )?;
         poll.registry().register(
             &mut pause_srv,
             Token(SERVICE_TOKEN_BASE + 1),
@@ -454,9 +473,7 @@ impl SimNode {
 
     fn done(&self) -> bool {
         match self.cfg_duration {
-            Some(d) => {
-                self.session.scene.world.time() >= d - 0.5 * self.session.scene.world.dt()
-            }
+            Some(d) => self.session.scene.world.time() >= d - 0.5 * self.session.scene.world.dt(),
             None => false,
         }
     }
@@ -529,9 +546,7 @@ impl SimNode {
         self.step_ms.push(step_s * 1e3);
         self.stats.steps += 1;
         self.window_steps += 1;
-        let frame = self
-            .session
-            .frame(Some(&report), step_s, self.content());
+        let frame = self.session.frame(Some(&report), step_s, self.content());
         self.last_report = Some(report);
         self.last_step_duration = step_s;
         self.emit(&frame, Some(trigger));
@@ -573,7 +588,10 @@ impl SimNode {
         self.record(|r| r.record_frame(frame));
     }
 
-    fn record(&mut self, f: impl FnOnce(&mut SessionRecorder) -> Result<(), crate::record::RecordError>) {
+    fn record(
+        &mut self,
+        f: impl FnOnce(&mut SessionRecorder) -> Result<(), crate::record::RecordError>,
+    ) {
         let Some(r) = self.recorder.as_mut() else {
             return;
         };
@@ -600,7 +618,10 @@ impl SimNode {
                     Ok(Some(x)) => x,
                     Ok(None) => break,
                     Err(e) => {
-                        eprintln!("[developable_sim] warning: {}: {e:?}", self.names.handles[h]);
+                        eprintln!(
+                            "[developable_sim] warning: {}: {e:?}",
+                            self.names.handles[h]
+                        );
                         self.stats.inputs_rejected += 1;
                         break;
                     }
@@ -661,11 +682,9 @@ impl SimNode {
                     singular_points: false,
                     status: true,
                 };
-                let frame = self.session.frame(
-                    self.last_report.as_ref(),
-                    self.last_step_duration,
-                    content,
-                );
+                let frame =
+                    self.session
+                        .frame(self.last_report.as_ref(), self.last_step_duration, content);
                 self.emit(&frame, None);
             }
             let t = self.session.scene.world.time();
@@ -769,7 +788,11 @@ impl Drop for SimNode {
 pub fn rss_kib() -> u64 {
     std::fs::read_to_string("/proc/self/statm")
         .ok()
-        .and_then(|s| s.split_whitespace().nth(1).and_then(|p| p.parse::<u64>().ok()))
+        .and_then(|s| {
+            s.split_whitespace()
+                .nth(1)
+                .and_then(|p| p.parse::<u64>().ok())
+        })
         .map(|pages| pages * 4)
         .unwrap_or(0)
 }

@@ -242,14 +242,12 @@ impl Params {
         };
         let Some(decl) = DECLARED.iter().find(|d| d.name == name) else {
             let known: Vec<&str> = DECLARED.iter().map(|d| d.name).collect();
-            let message = format!(
-                "unknown parameter `{name}` (known: {})",
-                known.join(", ")
-            );
+            let message = format!("unknown parameter `{name}` (known: {})", known.join(", "));
             if strict {
                 return Err(invalid(message));
             }
-            self.warnings.push(format!("{file}: `{key}`: {message}; ignored"));
+            self.warnings
+                .push(format!("{file}: `{key}`: {message}; ignored"));
             return Ok(());
         };
         let got = describe(value);
@@ -281,12 +279,7 @@ impl Params {
                 }
                 ParamValue::StringArray(out)
             }
-            (ty, _) => {
-                return Err(invalid(format!(
-                    "expected {}, got {got}",
-                    ty.name()
-                )))
-            }
+            (ty, _) => return Err(invalid(format!("expected {}, got {got}", ty.name()))),
         };
         self.values
             .insert(name.to_string(), (typed, format!("{file}\u{1}{key}")));
@@ -350,8 +343,7 @@ pub fn read_params_str(
         file: file.to_string(),
         message,
     };
-    let root: serde_yaml::Value =
-        serde_yaml::from_str(text).map_err(|e| format(e.to_string()))?;
+    let root: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| format(e.to_string()))?;
     let serde_yaml::Value::Mapping(sections) = root else {
         return Err(format(
             "expected a map of node names (e.g. `developable_sim:` or `/**:`), each holding \
@@ -361,7 +353,9 @@ pub fn read_params_str(
     };
     for (section, body) in &sections {
         let Some(section) = section.as_str() else {
-            return Err(format(format!("section key {section:?} is not a node name")));
+            return Err(format(format!(
+                "section key {section:?} is not a node name"
+            )));
         };
         let serde_yaml::Value::Mapping(body) = body else {
             return Err(ParamsError::Invalid {
@@ -380,22 +374,33 @@ pub fn read_params_str(
             }
         }
         if !section_matches(section, fqn) {
+            let base = fqn.rsplit('/').next().unwrap_or(fqn);
+            if section.trim_start_matches('/') == base || section.ends_with(&format!("/{base}")) {
+                params.warnings.push(format!(
+                    "{file}: section `{section}` does not apply to node {fqn} (ROS matches the \
+                     fully qualified name; write `{fqn}:` or `/**/{base}:`)"
+                ));
+            }
             continue;
         }
-        let wildcard = section.contains('*');
+        // `/**/name` names this node; `/**` or `/ns/*` are shared with other nodes
+        let wildcard = section
+            .rsplit('/')
+            .next()
+            .is_some_and(|last| last.contains('*'));
         let prefix = format!("{section}.ros__parameters");
         let Some(values) = body.get("ros__parameters") else {
             continue;
         };
         let mut flat = Vec::new();
         match values {
-            serde_yaml::Value::Mapping(m) => flatten("", m, &mut flat).map_err(|k| {
-                ParamsError::Invalid {
+            serde_yaml::Value::Mapping(m) => {
+                flatten("", m, &mut flat).map_err(|k| ParamsError::Invalid {
                     file: file.into(),
                     key: format!("{prefix}.{k}"),
                     message: "parameter names must be strings".into(),
-                }
-            })?,
+                })?
+            }
             serde_yaml::Value::Null => {}
             _ => {
                 return Err(ParamsError::Invalid {
@@ -519,12 +524,10 @@ pub fn split_ros_args(args: &[String]) -> Result<(Vec<String>, RosArgs), ParamsE
             | "--disable-stdout-logs"
             | "--enable-external-lib-logs"
             | "--disable-external-lib-logs" => ros.ignored.push(a.to_string()),
-            other => {
-                return Err(ParamsError::RosArgs(format!(
-                    "unknown ROS argument `{other}` (supported: --params-file FILE, -p NAME:=VALUE, \
+            other => return Err(ParamsError::RosArgs(format!(
+                "unknown ROS argument `{other}` (supported: --params-file FILE, -p NAME:=VALUE, \
                      -r FROM:=TO, -r __ns:=/NS, -r __node:=NAME, --log-level LEVEL)"
-                )))
-            }
+            ))),
         }
         i += 1;
     }
@@ -562,8 +565,14 @@ mod tests {
         assert!(section_matches("/**", "/a/b/developable_sim"));
         assert!(section_matches("developable_sim", "/developable_sim"));
         assert!(!section_matches("developable_sim", "/ns/developable_sim"));
-        assert!(section_matches("/ns/developable_sim", "/ns/developable_sim"));
-        assert!(section_matches("/**/developable_sim", "/ns/developable_sim"));
+        assert!(section_matches(
+            "/ns/developable_sim",
+            "/ns/developable_sim"
+        ));
+        assert!(section_matches(
+            "/**/developable_sim",
+            "/ns/developable_sim"
+        ));
         assert!(section_matches("/ns/*", "/ns/developable_sim"));
         assert!(!section_matches("other_node", "/developable_sim"));
     }
@@ -590,7 +599,10 @@ mod tests {
                 .to_string()
         };
         let e = err("developable_sim:\n  ros__parameters:\n    real_time_factr: 2.0\n");
-        assert!(e.contains("p.yaml") && e.contains("developable_sim.ros__parameters.real_time_factr"), "{e}");
+        assert!(
+            e.contains("p.yaml") && e.contains("developable_sim.ros__parameters.real_time_factr"),
+            "{e}"
+        );
         let e = err("developable_sim:\n  ros__parameters:\n    as_fast_as_possible: 1\n");
         assert!(e.contains("expected a bool, got the integer 1"), "{e}");
         let e = err("developable_sim:\n  parameters:\n    duration: 1.0\n");
@@ -600,12 +612,40 @@ mod tests {
         let e = err("developable_sim:\n  ros__parameters:\n    duration: .nan\n");
         assert!(e.contains("finite"), "{e}");
 
+        // `/**/name` names this node: strict; a section for the same name in another
+        // namespace is reported
+        let e = read_params_str(
+            "/**/developable_sim:\n  ros__parameters:\n    bogus: 1\n",
+            "p.yaml",
+            "/robot1/developable_sim",
+            &mut Params::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("/**/developable_sim.ros__parameters.bogus"),
+            "{e}"
+        );
+        let mut p = Params::default();
+        read_params_str(
+            "developable_sim:\n  ros__parameters:\n    duration: 1.0\n",
+            "p.yaml",
+            "/robot1/developable_sim",
+            &mut p,
+        )
+        .unwrap();
+        assert_eq!(p.double("duration"), None);
+        assert!(p.warnings[0].contains("does not apply"), "{:?}", p.warnings);
+
         let mut p = Params::default();
         set_from_command_line(&mut p, "lockstep:=service").unwrap();
         assert_eq!(p.string("lockstep"), Some("service"));
         assert!(set_from_command_line(&mut p, "duration:=abc").is_err());
         assert!(set_from_command_line(&mut p, "duration").is_err());
         let e = p.invalid("lockstep", "bad").to_string();
-        assert!(e.contains("command line (-p)") && e.contains("lockstep"), "{e}");
+        assert!(
+            e.contains("command line (-p)") && e.contains("lockstep"),
+            "{e}"
+        );
     }
 }

@@ -154,23 +154,21 @@ impl Session {
                 let singular = world.singular_points(i);
                 let markers = (content.markers && finite)
                     .then(|| self.markers(name, &header, mesh, singular));
-                let singular_points = (content.singular_points && finite).then(|| {
-                    SingularPoints {
-                        header: header.clone(),
-                        object_name: name.clone(),
-                        points: singular
-                            .iter()
-                            .filter(|s| {
-                                s.position.coords.iter().all(|v| v.is_finite())
-                                    && s.material.coords.iter().all(|v| v.is_finite())
-                            })
-                            .map(|s| SingularPoint {
-                                id: s.id,
-                                position: point(&s.position),
-                                material: [s.material.x, s.material.y],
-                            })
-                            .collect(),
-                    }
+                let singular_points = (content.singular_points && finite).then(|| SingularPoints {
+                    header: header.clone(),
+                    object_name: name.clone(),
+                    points: singular
+                        .iter()
+                        .filter(|s| {
+                            s.position.coords.iter().all(|v| v.is_finite())
+                                && s.material.coords.iter().all(|v| v.is_finite())
+                        })
+                        .map(|s| SingularPoint {
+                            id: s.id,
+                            position: point(&s.position),
+                            material: [s.material.x, s.material.y],
+                        })
+                        .collect(),
                 });
                 let status = content
                     .status

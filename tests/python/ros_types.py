@@ -2,7 +2,6 @@
 DDS (`pkg::msg::dds_::Type_`), so a Cyclone participant talks to the node exactly as an
 rclpy node on rmw_cyclonedds would. Field order follows the .msg definitions."""
 
-from __future__ import annotations
 
 from dataclasses import dataclass, field
 

@@ -16,7 +16,7 @@ def test_shell_launcher_starts_the_node_with_a_params_file(tmp_path, domain_id):
         "/**:\n"
         "  ros__parameters:\n"
         "    use_sim_time: false\n"
-        "developable_sim:\n"
+        "/**/developable_sim:\n"
         "  ros__parameters:\n"
         f"    scene: {SCENES / 'ribbon_gripper.yaml'}\n"
         "    duration: 0.3\n"
