@@ -7,6 +7,7 @@
 pub mod geometry;
 pub mod metrics;
 pub mod optim;
+pub mod render;
 pub mod ribbon;
 pub mod runner;
 pub mod scene;
