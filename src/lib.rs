@@ -8,6 +8,7 @@ pub mod geometry;
 pub mod metrics;
 pub mod optim;
 pub mod record;
+pub mod render;
 pub mod ribbon;
 pub mod ros;
 pub mod runner;

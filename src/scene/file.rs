@@ -81,6 +81,17 @@ pub struct SolverFile {
     /// Outer round limit. 20.
     #[serde(default = "d_outer_max")]
     pub max_outer_iterations: u32,
+    /// Outer stop when all constraints hold to this (m for positions). 1e-6.
+    #[serde(default = "d_constraint_tol")]
+    pub constraint_tolerance: f64,
+    /// Start each step from the linear extrapolation of the last two states. false
+    /// (it halves the median iteration count on smooth motion but lengthens the tail
+    /// on snap-through events).
+    #[serde(default)]
+    pub extrapolate: bool,
+}
+fn d_constraint_tol() -> f64 {
+    1e-6
 }
 fn d_solver_kind() -> String {
     "gauss_newton".into()
@@ -106,6 +117,8 @@ impl Default for SolverFile {
             penalty: d_penalty(),
             outer_tolerance: d_outer_tol(),
             max_outer_iterations: d_outer_max(),
+            constraint_tolerance: d_constraint_tol(),
+            extrapolate: false,
         }
     }
 }
@@ -144,6 +157,10 @@ pub struct RibbonFile {
     /// Initial shape (in the base frame).
     #[serde(default)]
     pub initial_shape: InitialShapeFile,
+    /// Settle to a static equilibrium before t = 0 (closes loops from a ring guess).
+    /// Default false.
+    #[serde(default)]
+    pub settle: bool,
     /// Initial rigid velocity.
     #[serde(default)]
     pub initial_velocity: Option<VelocityFile>,
@@ -213,7 +230,8 @@ impl Default for BaseFile {
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitialShapeFile {
-    /// `flat` (default) or `helix` (every crease with the values below).
+    /// `flat` (default), `helix` (every crease with the values below) or `ring`
+    /// (square creases bent by 2 pi / n: a closed polygon, the start guess of loops).
     #[serde(default)]
     pub kind: Option<String>,
     /// Crease direction c = tan(theta) of every crease (helix). 0.
@@ -689,6 +707,7 @@ impl SceneFile {
         }
         let initial = match ribbon.initial_shape.kind.as_deref().unwrap_or("flat") {
             "flat" => RibbonInitialShape::Flat,
+            "ring" => RibbonInitialShape::Ring,
             "helix" => RibbonInitialShape::Helix {
                 crease_direction: ck.finite(
                     &format!("{rk}.initial_shape.crease_direction"),
@@ -702,7 +721,7 @@ impl SceneFile {
             other => {
                 return Err(ck.fail(
                     &format!("{rk}.initial_shape.kind"),
-                    format!("unknown value `{other}`, expected one of: flat, helix"),
+                    format!("unknown value `{other}`, expected one of: flat, helix, ring"),
                 ))
             }
         };
@@ -764,6 +783,10 @@ impl SceneFile {
             handles.push(spec);
         }
         let mut sim = RibbonSim::new(params, &initial, imperfection, &forces, 0, &handles);
+        if ribbon.settle {
+            let targets: Vec<Pose> = handles.iter().map(|h| h.trajectory.pose_at(0.0)).collect();
+            sim.settle(&handles, &targets, 200);
+        }
         if let Some(v) = &ribbon.initial_velocity {
             sim.set_rigid_velocity(
                 ck.vec3(&format!("{rk}.initial_velocity.angular"), v.angular)?,
@@ -829,6 +852,9 @@ impl SceneFile {
             penalty: ck.positive("solver.penalty", s.penalty)?,
             outer_tolerance: ck.positive("solver.outer_tolerance", s.outer_tolerance)?,
             max_outer_iterations: s.max_outer_iterations,
+            constraint_tolerance: ck
+                .positive("solver.constraint_tolerance", s.constraint_tolerance)?,
+            extrapolate: s.extrapolate,
         })
     }
 }
