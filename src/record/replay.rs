@@ -18,6 +18,7 @@ use crate::ros::input::InputPolicy;
 use crate::ros::introspect::{compare, to_value, Value};
 use crate::ros::msgs::{Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints};
 use crate::ros::session::{Frame, FrameContent, Session};
+use crate::sim::StepReport;
 
 /// Replay settings.
 #[derive(Clone, Debug, Default)]
@@ -96,10 +97,12 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
     };
     let mut current: Option<(u32, u64)> = None;
     let mut frame: Option<Frame> = None;
+    let mut last_step: Option<(StepReport, f64)> = None;
+    let mut inputs_since_frame = false;
     let mut per_topic: BTreeMap<String, TopicReport> = BTreeMap::new();
     for file in &files {
         let mut stream = McapStream::open(file)?;
-        while let Some(event) = stream.next() {
+        for event in stream.by_ref() {
             match event? {
                 BagEvent::Metadata { name, values } if name == SESSION_RECORD => {
                     if session.is_some() {
@@ -173,6 +176,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                             let pose: PoseStamped = cdr::decode(&m.data).map_err(decode_err)?;
                             let _ = s.offer(h, &pose);
                             report.inputs += 1;
+                            inputs_since_frame = true;
                         }
                         Route::Output(out) => {
                             let recorded = match out {
@@ -189,11 +193,29 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                                     let st: SimStatus = cdr::decode(&m.data).map_err(decode_err)?;
                                     let key = (st.episode, st.step);
                                     if current != Some(key) {
-                                        advance(s, current, key, content, &mut frame, &mut report)
-                                            .map_err(|e| {
-                                                bag_err(format!("{} at {}: {e}", m.topic, key.1))
-                                            })?;
+                                        advance(
+                                            s,
+                                            current,
+                                            key,
+                                            content,
+                                            &mut frame,
+                                            &mut last_step,
+                                            &mut report,
+                                        )
+                                        .map_err(|e| {
+                                            bag_err(format!("{} at {}: {e}", m.topic, key.1))
+                                        })?;
                                         current = Some(key);
+                                        inputs_since_frame = false;
+                                    } else if inputs_since_frame {
+                                        // the same state published again (pause toggled):
+                                        // its status carries the inputs taken since
+                                        frame = Some(s.frame(
+                                            last_step.as_ref().map(|(r, _)| r),
+                                            last_step.as_ref().map_or(0.0, |(_, d)| *d),
+                                            content,
+                                        ));
+                                        inputs_since_frame = false;
                                     }
                                     to_value(&st)
                                 }
@@ -207,15 +229,11 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                             };
                             let computed = match out {
                                 Output::Clock => Some(to_value(&f.clock)),
-                                Output::Markers(o) => {
-                                    f.objects[o].markers.as_ref().map(|x| to_value(x))
-                                }
+                                Output::Markers(o) => f.objects[o].markers.as_ref().map(to_value),
                                 Output::Singular(o) => {
-                                    f.objects[o].singular_points.as_ref().map(|x| to_value(x))
+                                    f.objects[o].singular_points.as_ref().map(to_value)
                                 }
-                                Output::Status(o) => {
-                                    f.objects[o].status.as_ref().map(|x| to_value(x))
-                                }
+                                Output::Status(o) => f.objects[o].status.as_ref().map(to_value),
                             }
                             .transpose()
                             .map_err(|e| bag_err(e.to_string()))?;
@@ -306,6 +324,7 @@ fn advance(
     key: (u32, u64),
     content: FrameContent,
     frame: &mut Option<Frame>,
+    last_step: &mut Option<(StepReport, f64)>,
     report: &mut ReplayReport,
 ) -> Result<(), String> {
     let (episode, step) = key;
@@ -325,11 +344,13 @@ fn advance(
                     s.episode += 1;
                 }
                 report.resets += 1;
+                *last_step = None;
                 *frame = Some(s.frame(None, 0.0, content));
             } else if episode == cur_episode && step == cur_step + 1 {
                 let (r, d) = s.step();
                 report.steps += 1;
                 *frame = Some(s.frame(Some(&r), d, content));
+                *last_step = Some((r, d));
             } else {
                 return Err(format!(
                     "status (episode {episode}, step {step}) follows (episode {cur_episode}, step \

@@ -179,3 +179,24 @@ def test_kill_9_leaves_a_streamable_mcap_and_reindex_rebuilds_the_bag(
     )
     rep = replay(bag, tmp_path)
     assert rep["identical"], rep
+
+
+def test_replay_follows_pauses_single_steps_and_resets(start_node, ros, domain_id, tmp_path):
+    bag = tmp_path / "bag"
+    node = start_node(domain_id, GRIPPER, "--record", str(bag))
+    drive(ros, 0.5)
+    r = ros.call("/developable_sim/set_paused", rt.SetBoolRequest, rt.SetBoolResponse, data=True)
+    assert r.success
+    drive(ros, 0.3)  # poses taken while paused land in the next step
+    for _ in range(2):
+        assert ros.call("/developable_sim/step", rt.TriggerRequest, rt.TriggerResponse).success
+    r = ros.call("/developable_sim/set_paused", rt.SetBoolRequest, rt.SetBoolResponse, data=False)
+    assert r.success
+    drive(ros, 0.3)
+    assert ros.call("/developable_sim/reset", rt.TriggerRequest, rt.TriggerResponse).success
+    time.sleep(0.3)  # the script drives again after a reset
+    drive(ros, 0.3)
+    assert node.stop(signal.SIGINT) == 0, node.log()
+    rep = replay(bag, tmp_path)
+    assert rep["resets"] == 1, rep
+    assert rep["identical"], rep
