@@ -50,9 +50,10 @@ enum Command {
         /// Write run statistics as JSON.
         #[arg(long, value_name = "OUT.json")]
         stats: Option<PathBuf>,
-        /// Record every step into this rosbag2 folder (as the node would publish it).
+        /// Record every step into this rosbag2 folder (as the node would publish it);
+        /// without a value: rosbag2_YYYY_MM_DD-HH_MM_SS (UTC), as `ros2 bag record` names it.
         #[arg(long, value_name = "BAG_DIR")]
-        record: Option<PathBuf>,
+        record: Option<Option<PathBuf>>,
         /// MCAP chunk compression of the bag: none or lz4.
         #[arg(long, default_value = "none")]
         record_compression: String,
@@ -81,9 +82,10 @@ enum Command {
     Node {
         /// Scene file (YAML). May instead come from the `scene` parameter.
         scene: Option<PathBuf>,
-        /// Record inputs and outputs into this rosbag2 folder (must not exist yet).
+        /// Record inputs and outputs into this rosbag2 folder (must not exist yet);
+        /// without a value: rosbag2_YYYY_MM_DD-HH_MM_SS (UTC), as `ros2 bag record` names it.
         #[arg(long, value_name = "BAG_DIR")]
-        record: Option<PathBuf>,
+        record: Option<Option<PathBuf>>,
         /// ROS 2 params file (`node_name:` or `/**:` then `ros__parameters:`); repeatable.
         #[arg(long = "params", value_name = "PARAMS.yaml")]
         params: Vec<PathBuf>,
@@ -331,6 +333,34 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
     }
 }
 
+/// `--record` without a value: a new folder named as `ros2 bag record` names it.
+fn bag_folder(given: Option<PathBuf>) -> PathBuf {
+    if let Some(given) = given {
+        return given;
+    }
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_secs() as i64)
+        .unwrap_or(0);
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    // civil date from days since 1970-01-01 (H. Hinnant's algorithm)
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + (month <= 2) as i64;
+    PathBuf::from(format!(
+        "rosbag2_{year:04}_{month:02}_{day:02}-{:02}_{:02}_{:02}",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    ))
+}
+
 fn reindex_command(bag: &Path) -> anyhow::Result<()> {
     let r = read::reindex(bag)?;
     for ((file, kept), why) in r.repaired.iter().zip(&r.truncation) {
@@ -356,7 +386,7 @@ fn run_command(
     dt: Option<f64>,
     sets: Vec<String>,
     stats: Option<PathBuf>,
-    record: Option<PathBuf>,
+    record: Option<Option<PathBuf>>,
     record_compression: &str,
 ) -> anyhow::Result<()> {
     let mut overrides = Vec::new();
@@ -368,6 +398,7 @@ fn run_command(
     }
     overrides.extend(sets);
     let mut loaded = scene::load(&scene_path, &overrides)?;
+    let record = record.map(bag_folder);
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = Arc::clone(&stop);
@@ -425,7 +456,7 @@ fn run_command(
 
 struct NodeArgs {
     scene: Option<PathBuf>,
-    record: Option<PathBuf>,
+    record: Option<Option<PathBuf>>,
     params: Vec<PathBuf>,
     domain_id: Option<u16>,
     namespace: Option<String>,
@@ -581,7 +612,7 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
         "record_flush_period",
         p.double("record_flush_period").unwrap_or(1.0),
     )?;
-    let record = a.record.or_else(|| {
+    let record = a.record.map(bag_folder).or_else(|| {
         p.string("record")
             .filter(|s| !s.is_empty())
             .map(PathBuf::from)
