@@ -4,6 +4,7 @@
 //! no ROS, no serde. `scene` (configs), the CLI and (later) `ros` and `record` are the
 //! edges around it. See ARCHITECTURE.md.
 
+pub mod contact;
 pub mod geometry;
 pub mod metrics;
 pub mod optim;
