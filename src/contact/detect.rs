@@ -462,6 +462,21 @@ fn narrow_phase(
     if same && a == b {
         return;
     }
+    if same {
+        // every feature pair of two leaves of neighbouring elements is a neighbour pair
+        if let (Some(fa), Some(fb)) = (body_a.leaf_face[a], body_a.leaf_face[b]) {
+            let (ta, tb) = (body_a.triangles[fa as usize], body_a.triangles[fb as usize]);
+            let span = |t: &[u32; 3]| {
+                body_a
+                    .station_gap(&t[..1], &t[1..2])
+                    .max(body_a.station_gap(&t[..1], &t[2..]))
+                    .max(body_a.station_gap(&t[1..2], &t[2..]))
+            };
+            if body_a.station_gap(&ta, &tb) + span(&ta) + span(&tb) <= body_a.skip {
+                return;
+            }
+        }
+    }
     let distance = body_a.reach + body_b.reach;
     // vertex-face, both ways
     for (bv, lv, bf, lf) in [(body_a, a, body_b, b), (body_b, b, body_a, a)] {

@@ -849,3 +849,184 @@ impl ContactStage {
         p / sw
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::contact::ColliderShape;
+
+    fn triangle_body() -> BodyTopology {
+        BodyTopology {
+            vertex_of: vec![0, 1, 2],
+            vertices: 3,
+            triangles: vec![[0, 1, 2]],
+            stations: vec![0.0, 1.0, 2.0],
+            period: None,
+            neighbour_skip: 2.0,
+        }
+    }
+
+    fn ground() -> Collider {
+        Collider {
+            shape: ColliderShape::HalfSpace,
+            pose: Pose::identity(),
+            friction: 0.0,
+            attached_to: None,
+        }
+    }
+
+    fn p(x: f64, y: f64, z: f64) -> Point3 {
+        Point3::new(x, y, z)
+    }
+
+    /// One vertex pushed below the ground: the QP's solution is the analytic
+    /// projection x = x~ + λ H^-1 e_0 n with λ = (h/2 - z~_0) / (H^-1)_00.
+    #[test]
+    fn single_vertex_plane_contact_has_the_analytic_projection() {
+        let h = 0.002;
+        let previous = [p(0.0, 0.0, 0.01), p(0.1, 0.0, 0.01), p(0.0, 0.1, 0.01)];
+        let predicted = [p(0.0, 0.0, -0.003), p(0.1, 0.0, 0.01), p(0.0, 0.1, 0.01)];
+        for (closeness, k) in [(Closeness::Plain, 0.0), (Closeness::Stiff, 100.0)] {
+            let settings = ContactSettings {
+                thickness: h,
+                closeness,
+                stiffness: 100.0,
+                ..Default::default()
+            };
+            let mut stage =
+                ContactStage::new(settings, vec![triangle_body()], vec![ground()]).unwrap();
+            let mut out = vec![Vec::new()];
+            let report = stage.resolve(
+                &[BodyInput {
+                    previous: &previous,
+                    predicted: &predicted,
+                }],
+                &[],
+                &[],
+                &mut out,
+            );
+            assert!(report.resolved);
+            assert_eq!(report.contacts, 1);
+            // H_s = I + K L of the triangle
+            let mut hs = nalgebra::Matrix3::<f64>::identity();
+            for (a, b) in [(0, 1), (1, 2), (0, 2)] {
+                hs[(a, a)] += k;
+                hs[(b, b)] += k;
+                hs[(a, b)] -= k;
+                hs[(b, a)] -= k;
+            }
+            let z = hs.try_inverse().unwrap().column(0).into_owned();
+            let lambda = (0.5 * h - predicted[0].z) / z[0];
+            for i in 0..3 {
+                let want = predicted[i] + Vector3::z() * (lambda * z[i]);
+                assert!(
+                    (out[0][i] - want).norm() < 1e-12,
+                    "{closeness:?} vertex {i}: {} vs {}",
+                    out[0][i],
+                    want
+                );
+            }
+            assert!((out[0][0].z - 0.5 * h).abs() < 1e-12);
+            assert!(report.predicted_penetration_max > 0.0039);
+            assert!(report.penetration_max <= settings.tolerance);
+        }
+    }
+
+    /// A box corner moving up through the middle of a ribbon triangle (no ribbon vertex
+    /// near the box): the vertex-face test of the box's feature catches it.
+    #[test]
+    fn a_box_corner_cannot_poke_through_a_triangle() {
+        let h = 0.002;
+        let tri = [p(-0.2, -0.2, 0.0), p(0.4, -0.2, 0.0), p(-0.2, 0.4, 0.0)];
+        // a cube with a corner pointing up, carried by handle 0 from z = -0.05 to +0.02
+        let corner_up =
+            nalgebra::UnitQuaternion::rotation_between(&Vector3::new(1.0, 1.0, 1.0), &Vector3::z())
+                .unwrap();
+        let half = 0.05;
+        let top = half * 3f64.sqrt();
+        let at =
+            |z: f64| Pose::from_parts(nalgebra::Translation3::new(0.0, 0.0, z - top), corner_up);
+        let cube = Collider {
+            shape: ColliderShape::Cuboid {
+                half_extents: Vector3::repeat(half),
+            },
+            pose: Pose::identity(),
+            friction: 0.0,
+            attached_to: Some(0),
+        };
+        let settings = ContactSettings {
+            thickness: h,
+            ..Default::default()
+        };
+        let mut stage = ContactStage::new(settings, vec![triangle_body()], vec![cube]).unwrap();
+        let mut out = vec![Vec::new()];
+        let report = stage.resolve(
+            &[BodyInput {
+                previous: &tri,
+                predicted: &tri,
+            }],
+            &[at(-0.05)],
+            &[at(0.02)],
+            &mut out,
+        );
+        assert!(report.resolved, "{report:?}");
+        // the corner is at (0, 0, 0.02): the triangle must lie above it by h/2
+        let (a, b, c) = (out[0][0], out[0][1], out[0][2]);
+        let n = (b - a).cross(&(c - a)).normalize();
+        let corner = Vector3::new(0.0, 0.0, 0.02);
+        let d = n.dot(&(corner - a.coords)).abs();
+        let above = n.dot(&(a.coords - corner)) * n.z.signum();
+        assert!(above > 0.0, "the triangle went below the corner: {out:?}");
+        assert!(d >= 0.5 * h - 1e-6, "distance {d}");
+    }
+
+    /// Two ribbon triangles: one falls through the other's edge region; after the stage
+    /// their vertices and edges keep the thickness h.
+    #[test]
+    fn two_bodies_crossing_are_separated_by_the_thickness() {
+        let h = 0.002;
+        let lower = [p(0.0, 0.0, 0.0), p(0.2, 0.0, 0.0), p(0.0, 0.2, 0.0)];
+        let upper0 = [p(0.05, 0.05, 0.01), p(0.3, 0.05, 0.01), p(0.05, 0.3, 0.01)];
+        let upper1 = upper0.map(|q| q - Vector3::new(0.0, 0.0, 0.03));
+        let mut stage = ContactStage::new(
+            ContactSettings {
+                thickness: h,
+                ..Default::default()
+            },
+            vec![triangle_body(), triangle_body()],
+            vec![],
+        )
+        .unwrap();
+        let mut out = vec![Vec::new(), Vec::new()];
+        let report = stage.resolve(
+            &[
+                BodyInput {
+                    previous: &lower,
+                    predicted: &lower,
+                },
+                BodyInput {
+                    previous: &upper0,
+                    predicted: &upper1,
+                },
+            ],
+            &[],
+            &[],
+            &mut out,
+        );
+        assert!(report.resolved, "{report:?}");
+        assert!(report.contacts > 0);
+        // the upper vertex over the lower triangle's interior stays above it by h
+        let (a, b, c) = (out[0][0], out[0][1], out[0][2]);
+        let mut n = (b - a).cross(&(c - a)).normalize();
+        if n.z < 0.0 {
+            n = -n;
+        }
+        let d = n.dot(&(out[1][0] - a));
+        assert!(
+            d >= h - 1e-6,
+            "upper vertex at {d} m from the lower triangle: {out:?}"
+        );
+        let (overlap, _) = stage.overlap(&[&out[0], &out[1]], &[]);
+        assert!(overlap <= 1e-6, "overlap {overlap}");
+    }
+}
