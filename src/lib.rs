@@ -8,6 +8,7 @@ pub mod contact;
 pub mod geometry;
 pub mod metrics;
 pub mod optim;
+pub mod render;
 pub mod ribbon;
 pub mod runner;
 pub mod scene;

@@ -41,6 +41,26 @@ enum Command {
         #[arg(long, value_name = "OUT.json")]
         stats: Option<PathBuf>,
     },
+    /// Run a scene headless to a time and render its meshes to a PNG.
+    Render {
+        /// Scene file (YAML).
+        scene: PathBuf,
+        /// Output PNG.
+        #[arg(long, value_name = "OUT.png")]
+        out: PathBuf,
+        /// Simulated time of the picture, s (default: the scene's duration).
+        #[arg(long)]
+        time: Option<f64>,
+        /// Override a scene key (as for `run`).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        sets: Vec<String>,
+        /// View direction (world, towards the scene).
+        #[arg(long, value_delimiter = ',', default_value = "-1,-2,-1.2")]
+        view: Vec<f64>,
+        /// Picture size in pixels, WIDTHxHEIGHT.
+        #[arg(long, default_value = "960x540")]
+        size: String,
+    },
 }
 
 fn main() -> ExitCode {
@@ -105,6 +125,42 @@ fn real_main(cli: Cli) -> anyhow::Result<()> {
                 std::fs::write(&path, json)
                     .with_context(|| format!("writing stats to {}", path.display()))?;
             }
+            Ok(())
+        }
+        Command::Render {
+            scene,
+            out,
+            time,
+            sets,
+            view,
+            size,
+        } => {
+            let mut overrides = sets;
+            if let Some(t) = time {
+                overrides.push(format!("duration={t}"));
+            }
+            let mut loaded = scene::load(&scene, &overrides)?;
+            runner::run(&mut loaded, &mut (), &|| false)?;
+            let (w, h) = size
+                .split_once('x')
+                .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
+                .ok_or_else(|| anyhow::anyhow!("--size must be WIDTHxHEIGHT, got `{size}`"))?;
+            anyhow::ensure!(
+                view.len() == 3 && view.iter().all(|v| v.is_finite()),
+                "--view takes three numbers x,y,z"
+            );
+            let meshes: Vec<_> = (0..loaded.world.object_names().len())
+                .map(|i| loaded.world.mesh(i))
+                .collect();
+            let dir = nalgebra::Vector3::new(view[0], view[1], view[2]);
+            anyhow::ensure!(dir.norm() > 0.0, "--view must not be zero");
+            let up = if dir.normalize().z.abs() > 0.99 {
+                nalgebra::Vector3::y()
+            } else {
+                nalgebra::Vector3::z()
+            };
+            developable_sim::render::render_png(&meshes, &out, w, h, dir, up)?;
+            println!("wrote {}", out.display());
             Ok(())
         }
     }

@@ -21,12 +21,6 @@ pub trait BoxProblem {
         gradient: Option<&mut [f64]>,
         hessian: Option<&mut DMatrix<f64>>,
     ) -> f64;
-    /// A positive semi-definite model (e.g. Gauss-Newton) at the last point evaluated
-    /// with a Hessian, used where the Hessian is indefinite. Returns false if there is
-    /// none (then damping alone makes the system definite).
-    fn fallback_hessian(&mut self, _h: &mut DMatrix<f64>) -> bool {
-        false
-    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,11 +133,19 @@ impl ProjectedNewton {
                 self.damping = (self.damping * 10.0).max(1e-8);
                 step_ok = self.solve_reduced(m);
             }
-            if !step_ok && problem.fallback_hessian(&mut self.h) {
-                self.damping = 1e-9;
-                step_ok = self.solve_reduced(m);
-            }
             if !step_ok {
+                break;
+            }
+            // Stationary to round-off: the model predicts a decrease no larger than the
+            // rounding error of f itself, so no step can be verified. Converged.
+            let predicted: f64 = -self
+                .free
+                .iter()
+                .zip(&self.reduced)
+                .map(|(&i, d)| self.g[i] * d)
+                .sum::<f64>();
+            if predicted <= 1e-14 * f.abs() {
+                converged = true;
                 break;
             }
             // projected Armijo line search along the Newton direction

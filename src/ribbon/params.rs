@@ -64,6 +64,11 @@ pub struct SolverSettings {
     pub outer_tolerance: f64,
     /// Outer round limit.
     pub max_outer_iterations: u32,
+    /// Outer stop when every constraint holds to this: position rows in m, rotation
+    /// rows dimensionless. Default 1e-6.
+    pub constraint_tolerance: f64,
+    /// Start each step from q + (q - q_previous) (linear extrapolation) instead of q.
+    pub extrapolate: bool,
 }
 
 impl Default for SolverSettings {
@@ -75,6 +80,8 @@ impl Default for SolverSettings {
             penalty: 1e3,
             outer_tolerance: 1e-4,
             max_outer_iterations: 20,
+            constraint_tolerance: 1e-6,
+            extrapolate: false,
         }
     }
 }

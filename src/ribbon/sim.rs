@@ -28,6 +28,9 @@ pub enum RibbonInitialShape {
         crease_direction: f64,
         bending_angle: f64,
     },
+    /// A closed ring: every crease square (c = 0) and bent by 2 pi / n, so the
+    /// polygon of elements closes on itself (the start guess of loops).
+    Ring,
     /// Explicit per-crease values (length n-1 each, creases 1..n-1).
     Explicit {
         crease_direction: Vec<f64>,
@@ -64,6 +67,8 @@ pub struct RibbonSim {
     singular: Vec<SingularPoint>,
     last_targets: Vec<Option<Pose>>,
     last_outcome: SolveOutcome,
+    /// q at the end minus q at the start of the last step (extrapolation).
+    q_delta: Vec<f64>,
 }
 
 impl RibbonSim {
@@ -90,6 +95,11 @@ impl RibbonSim {
         let mut coords = Coordinates::flat(n, base_pose);
         match initial {
             RibbonInitialShape::Flat => {}
+            RibbonInitialShape::Ring => {
+                for k in 1..n {
+                    coords.bending_angle[k] = 2.0 * std::f64::consts::PI / n as f64;
+                }
+            }
             RibbonInitialShape::Helix {
                 crease_direction,
                 bending_angle,
@@ -193,7 +203,7 @@ impl RibbonSim {
             crease_bound: params.crease_bound(),
         };
         let mut q = vec![0.0; layout.len()];
-        layout.pack(&coords, &mut q);
+        layout.pack(&coords, &base_pose, &mut q);
         let mut sim = RibbonSim {
             params,
             strip,
@@ -211,6 +221,7 @@ impl RibbonSim {
             singular: Vec::new(),
             last_targets: vec![None; handles.len()],
             last_outcome: SolveOutcome::default(),
+            q_delta: Vec::new(),
         };
         sim.rebuild_outputs();
         sim
@@ -236,6 +247,46 @@ impl RibbonSim {
     }
     pub fn last_outcome(&self) -> &SolveOutcome {
         &self.last_outcome
+    }
+
+    /// Find a static equilibrium before t = 0: quasi-static steps (no inertia, no
+    /// gravity, no point forces) from the current shape until the constraints hold and
+    /// the shape stops changing, then zero velocities. Used to close loops from a ring
+    /// guess. Returns the number of steps taken.
+    pub fn settle(&mut self, handles: &[HandleSpec], targets: &[Pose], max_steps: usize) -> usize {
+        let (kinetic, gravity) = (self.params.kinetic, self.params.gravity);
+        let forces = std::mem::take(&mut self.terms.forces);
+        self.params.kinetic = KineticModel::QuasiStatic;
+        self.terms.kinetic = KineticModel::QuasiStatic;
+        self.terms.gravity = Vector3::zeros();
+        let mut taken = 0;
+        for _ in 0..max_steps {
+            let before = self.q.clone();
+            let report = self.step(1.0, 0.0, 0, handles, targets);
+            taken += 1;
+            let change = before
+                .iter()
+                .zip(&self.q)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
+            if report.kept_previous_state {
+                break;
+            }
+            if report.converged
+                && report.constraint_violation <= self.params.solver.constraint_tolerance
+                && change < 1e-9
+            {
+                break;
+            }
+        }
+        self.params.kinetic = kinetic;
+        self.terms.kinetic = kinetic;
+        self.terms.gravity = Vector3::from(gravity);
+        self.terms.forces = forces;
+        self.history =
+            RimHistory::at_rest(&self.strip, &self.coords.crease_direction, &self.frames);
+        self.q_delta.clear();
+        taken
     }
 
     /// Overwrite the previous-step velocities (m/s) with a rigid motion: angular
@@ -290,10 +341,14 @@ impl RibbonSim {
                 *pose = target * Pose::translation(-grasp.x, -grasp.y, 0.0);
             }
         }
+        // floating: the current base is the reference rotation, w restarts at 0
         let base = match &self.params.base {
             BaseMode::Prescribed { pose, .. } => *pose,
-            BaseMode::Floating { initial } => *initial,
+            BaseMode::Floating { .. } => self.coords.base,
         };
+        if self.layout.floating {
+            self.layout.pack(&self.coords, &base, &mut self.q);
+        }
         for (eq, h) in self.terms.equalities.iter_mut().zip(&self.equality_handles) {
             let Some(h) = h else { continue };
             let Some(target) = valid.get(*h).copied().flatten() else {
@@ -316,6 +371,14 @@ impl RibbonSim {
         }
 
         let mut q = self.q.clone();
+        if self.params.solver.extrapolate && self.q_delta.len() == q.len() {
+            // start from the linear extrapolation of the last step (the solver clamps
+            // it into the crease bounds)
+            for (qi, di) in q.iter_mut().zip(&self.q_delta) {
+                *qi += di;
+            }
+        }
+        let q_start = self.q.clone();
         if !self.layout.floating {
             self.coords.base = base;
         }
@@ -339,8 +402,11 @@ impl RibbonSim {
             ..Default::default()
         };
         if finite {
+            self.q_delta.clear();
+            self.q_delta
+                .extend(q.iter().zip(&q_start).map(|(a, b)| a - b));
             self.q = q;
-            self.layout.unpack(&self.q, &mut self.coords);
+            self.layout.unpack(&self.q, &base, &mut self.coords);
             reconstruct(&self.strip, &self.coords, &mut self.frames);
             self.update_history(dt);
         } else {
@@ -369,8 +435,8 @@ impl RibbonSim {
         let mut new = RimHistory::at_rest(&self.strip, c, &self.frames);
         for j in 0..=n {
             let (xb, _) =
-                super::objective::interpolate(&old.u_bottom, &old.x_bottom, new.u_bottom[j]);
-            let (xt, _) = super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j]);
+                super::objective::interpolate(&old.u_bottom, &old.x_bottom, new.u_bottom[j], j);
+            let (xt, _) = super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j], j);
             new.v_bottom[j] = (new.x_bottom[j] - xb) / h;
             new.v_top[j] = (new.x_top[j] - xt) / h;
         }
@@ -511,10 +577,9 @@ impl RibbonSim {
         mode: super::objective::GradientMode,
         gradient: &mut Vec<f64>,
     ) -> f64 {
-        let base = match &self.params.base {
-            BaseMode::Prescribed { pose, .. } => *pose,
-            BaseMode::Floating { initial } => *initial,
-        };
+        let base = self.coords.base;
+        let mut q = self.q.clone();
+        self.layout.pack(&self.coords, &base, &mut q);
         let objective = super::objective::Objective::new(
             self.strip,
             self.layout.floating,
@@ -522,13 +587,8 @@ impl RibbonSim {
             &self.history,
             base,
         );
-        gradient.resize(self.q.len(), 0.0);
-        objective.evaluate(
-            &self.q,
-            &mut self.solver.workspace,
-            Some((gradient, mode)),
-            None,
-        )
+        gradient.resize(q.len(), 0.0);
+        objective.evaluate(&q, &mut self.solver.workspace, Some((gradient, mode)), None)
     }
 }
 
@@ -536,10 +596,9 @@ impl RibbonSim {
 impl RibbonSim {
     /// Benchmark hook: one evaluation with the Hessian at the current state.
     pub fn evaluate_hessian(&mut self) -> f64 {
-        let base = match &self.params.base {
-            BaseMode::Prescribed { pose, .. } => *pose,
-            BaseMode::Floating { initial } => *initial,
-        };
+        let base = self.coords.base;
+        let mut q = self.q.clone();
+        self.layout.pack(&self.coords, &base, &mut q);
         let objective = super::objective::Objective::new(
             self.strip,
             self.layout.floating,
@@ -547,10 +606,10 @@ impl RibbonSim {
             &self.history,
             base,
         );
-        let mut g = vec![0.0; self.q.len()];
-        let mut h = nalgebra::DMatrix::zeros(self.q.len(), self.q.len());
+        let mut g = vec![0.0; q.len()];
+        let mut h = nalgebra::DMatrix::zeros(q.len(), q.len());
         objective.evaluate(
-            &self.q,
+            &q,
             &mut self.solver.workspace,
             Some((&mut g, super::objective::GradientMode::Adjoint)),
             Some(&mut h),
@@ -620,8 +679,8 @@ impl RibbonSim {
             new.x_top[j] = xt;
             if carry {
                 let (ob, _) =
-                    super::objective::interpolate(&old.u_bottom, &old.x_bottom, new.u_bottom[j]);
-                let (ot, _) = super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j]);
+                    super::objective::interpolate(&old.u_bottom, &old.x_bottom, new.u_bottom[j], j);
+                let (ot, _) = super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j], j);
                 new.v_bottom[j] = (xb - ob) / h;
                 new.v_top[j] = (xt - ot) / h;
             }

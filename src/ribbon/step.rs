@@ -175,11 +175,6 @@ impl BoxProblem for ZNewton<'_, '_, '_> {
             None => self.0.evaluate(z, gradient, None),
         }
     }
-    fn fallback_hessian(&mut self, h: &mut DMatrix<f64>) -> bool {
-        h.clone_from(&self.0.workspace.gauss_newton);
-        hessian_to_z(&self.0.objective.layout, h);
-        true
-    }
 }
 
 impl StepSolver {
@@ -331,7 +326,14 @@ impl StepSolver {
                 .zip(&self.q_prev)
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max);
-            if !(has_equalities || end_active) || change < settings.outer_tolerance {
+            // The paper stops on ||Δq|| < outer_tolerance; we also stop as soon as every
+            // constraint holds to `constraint_tolerance` (with multipliers warm-started
+            // from the previous step this usually saves the second round).
+            let end_ok = c_last.abs() <= bound + settings.constraint_tolerance;
+            let satisfied = max_pos <= settings.constraint_tolerance
+                && max_rot <= settings.constraint_tolerance
+                && end_ok;
+            if !(has_equalities || end_active) || change < settings.outer_tolerance || satisfied {
                 break;
             }
             if outer + 1 == settings.max_outer_iterations {

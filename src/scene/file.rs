@@ -92,6 +92,17 @@ pub struct SolverFile {
     /// Outer round limit. 20.
     #[serde(default = "d_outer_max")]
     pub max_outer_iterations: u32,
+    /// Outer stop when all constraints hold to this (m for positions). 1e-6.
+    #[serde(default = "d_constraint_tol")]
+    pub constraint_tolerance: f64,
+    /// Start each step from the linear extrapolation of the last two states. false
+    /// (it halves the median iteration count on smooth motion but lengthens the tail
+    /// on snap-through events).
+    #[serde(default)]
+    pub extrapolate: bool,
+}
+fn d_constraint_tol() -> f64 {
+    1e-6
 }
 fn d_solver_kind() -> String {
     "gauss_newton".into()
@@ -117,6 +128,8 @@ impl Default for SolverFile {
             penalty: d_penalty(),
             outer_tolerance: d_outer_tol(),
             max_outer_iterations: d_outer_max(),
+            constraint_tolerance: d_constraint_tol(),
+            extrapolate: false,
         }
     }
 }
@@ -159,6 +172,10 @@ pub struct RibbonFile {
     /// Initial shape (in the base frame).
     #[serde(default)]
     pub initial_shape: InitialShapeFile,
+    /// Settle to a static equilibrium before t = 0 (closes loops from a ring guess).
+    /// Default false.
+    #[serde(default)]
+    pub settle: bool,
     /// Initial rigid velocity.
     #[serde(default)]
     pub initial_velocity: Option<VelocityFile>,
@@ -228,7 +245,8 @@ impl Default for BaseFile {
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitialShapeFile {
-    /// `flat` (default) or `helix` (every crease with the values below).
+    /// `flat` (default), `helix` (every crease with the values below) or `ring`
+    /// (square creases bent by 2 pi / n: a closed polygon, the start guess of loops).
     #[serde(default)]
     pub kind: Option<String>,
     /// Crease direction c = tan(theta) of every crease (helix). 0.
@@ -866,6 +884,7 @@ impl SceneFile {
         }
         let initial = match ribbon.initial_shape.kind.as_deref().unwrap_or("flat") {
             "flat" => RibbonInitialShape::Flat,
+            "ring" => RibbonInitialShape::Ring,
             "helix" => RibbonInitialShape::Helix {
                 crease_direction: ck.finite(
                     &format!("{rk}.initial_shape.crease_direction"),
@@ -875,11 +894,6 @@ impl SceneFile {
                     &format!("{rk}.initial_shape.bending_angle"),
                     ribbon.initial_shape.bending_angle,
                 )?,
-            },
-            // a closed circle: every crease bends by 2*pi/n (with the loop's seam)
-            "ring" => RibbonInitialShape::Helix {
-                crease_direction: 0.0,
-                bending_angle: std::f64::consts::TAU / ribbon.segments as f64,
             },
             other => {
                 return Err(ck.fail(
@@ -950,6 +964,9 @@ impl SceneFile {
             penalty: ck.positive("solver.penalty", s.penalty)?,
             outer_tolerance: ck.positive("solver.outer_tolerance", s.outer_tolerance)?,
             max_outer_iterations: s.max_outer_iterations,
+            constraint_tolerance: ck
+                .positive("solver.constraint_tolerance", s.constraint_tolerance)?,
+            extrapolate: s.extrapolate,
         })
     }
 }

@@ -91,9 +91,22 @@ pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<Scene, 
     for spec in overrides {
         apply_override(&mut value, spec)?;
     }
-    let parsed: SceneFile = serde_yaml::from_value(value).map_err(|e| SceneError::Parse {
+    // Deserialize from the text when nothing was overridden (messages keep line and
+    // column), from the overridden tree otherwise; both name the key path.
+    let parse_error = |path_in_scene: String, inner: String| SceneError::Parse {
         file: path.to_path_buf(),
-        message: e.to_string(),
-    })?;
+        message: if path_in_scene.is_empty() || path_in_scene == "." {
+            inner
+        } else {
+            format!("`{path_in_scene}`: {inner}")
+        },
+    };
+    let parsed: SceneFile = if overrides.is_empty() {
+        serde_path_to_error::deserialize(serde_yaml::Deserializer::from_str(text))
+            .map_err(|e| parse_error(e.path().to_string(), e.into_inner().to_string()))?
+    } else {
+        serde_path_to_error::deserialize(value)
+            .map_err(|e| parse_error(e.path().to_string(), e.into_inner().to_string()))?
+    };
     parsed.build(path)
 }

@@ -1,0 +1,93 @@
+//! Criterion benchmarks of the ribbon simulator (Pan et al.):
+//! - one implicit-Euler step of each paper scene (ours), and the paper's L-BFGS-B on
+//!   extreme torsion as the baseline in the same run;
+//! - one objective + gradient evaluation against n, adjoint (appendix C) vs chain rule
+//!   (appendix A).
+//!
+//! Run: `cargo bench --bench ribbon` (add `-- gradient` or `-- step` to filter).
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use developable_sim::ribbon::objective::GradientMode;
+use developable_sim::scene::{self, Scene};
+use developable_sim::sim::SimObject;
+
+fn load(name: &str, sets: &[String]) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("config/scenes")
+        .join(format!("{name}.yaml"));
+    scene::load(&path, sets).expect("scene")
+}
+
+/// A scene advanced `warm` steps, so the step measured is mid-motion.
+fn warmed(name: &str, sets: &[String], warm: usize) -> Scene {
+    let mut s = load(name, sets);
+    for _ in 0..warm {
+        s.world.step(&[]);
+    }
+    s
+}
+
+fn step_per_scene(c: &mut Criterion) {
+    let mut group = c.benchmark_group("step");
+    group.sample_size(20);
+    for (name, warm) in [
+        ("ribbon_extreme_torsion", 50),
+        ("ribbon_extreme_dragging", 20),
+        ("ribbon_wide_torsion", 50),
+        ("ribbon_helix_unrolling", 20),
+        ("ribbon_spinning", 50),
+        ("mobius_band", 5),
+    ] {
+        let base = warmed(name, &[], warm);
+        group.bench_function(BenchmarkId::new("newton", name), |b| {
+            b.iter_batched(
+                || base.clone(),
+                |mut s| black_box(s.world.step(&[])),
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
+    let base = warmed(
+        "ribbon_extreme_torsion",
+        &["solver.kind=lbfgsb".to_string()],
+        50,
+    );
+    group.sample_size(10);
+    group.bench_function(BenchmarkId::new("lbfgsb", "ribbon_extreme_torsion"), |b| {
+        b.iter_batched(
+            || base.clone(),
+            |mut s| black_box(s.world.step(&[])),
+            criterion::BatchSize::LargeInput,
+        )
+    });
+    group.finish();
+}
+
+fn gradient_vs_n(c: &mut Criterion) {
+    let mut group = c.benchmark_group("gradient");
+    group.sample_size(20);
+    for n in [50usize, 100, 200, 400, 800] {
+        let mut s = warmed(
+            "ribbon_extreme_torsion",
+            &[format!("ribbon.segments={n}"), "duration=0.05".into()],
+            3,
+        );
+        let SimObject::Ribbon(r) = &mut s.world.objects_mut()[0];
+        let mut g = Vec::new();
+        group.bench_function(BenchmarkId::new("adjoint", n), |b| {
+            b.iter(|| black_box(r.evaluate_gradient(GradientMode::Adjoint, &mut g)))
+        });
+        if n <= 400 {
+            group.bench_function(BenchmarkId::new("chain_rule", n), |b| {
+                b.iter(|| black_box(r.evaluate_gradient(GradientMode::ChainRule, &mut g)))
+            });
+        }
+    }
+    group.finish();
+}
+
+criterion_group!(benches, step_per_scene, gradient_vs_n);
+criterion_main!(benches);
