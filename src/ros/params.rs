@@ -524,10 +524,12 @@ pub fn split_ros_args(args: &[String]) -> Result<(Vec<String>, RosArgs), ParamsE
             | "--disable-stdout-logs"
             | "--enable-external-lib-logs"
             | "--disable-external-lib-logs" => ros.ignored.push(a.to_string()),
-            other => return Err(ParamsError::RosArgs(format!(
+            other => {
+                return Err(ParamsError::RosArgs(format!(
                 "unknown ROS argument `{other}` (supported: --params-file FILE, -p NAME:=VALUE, \
                      -r FROM:=TO, -r __ns:=/NS, -r __node:=NAME, --log-level LEVEL)"
-            ))),
+            )))
+            }
         }
         i += 1;
     }
