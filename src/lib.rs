@@ -4,6 +4,7 @@
 //! no ROS, no serde. `scene` (configs), `ros` (the ROS 2 node and messages), `record`
 //! (bags, replay) and the CLI are the edges around it. See ARCHITECTURE.md.
 
+pub mod contact;
 pub mod geometry;
 pub mod metrics;
 pub mod optim;

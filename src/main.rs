@@ -446,6 +446,17 @@ fn run_command(
         run_stats.singular_points_max,
         run_stats.finite
     );
+    if let Some(c) = &run_stats.contact {
+        println!(
+            "contact: median {:.3} ms per step, penetration max {:.2e} m, contacts max {}, rounds max {}, {} unresolved steps, developability error (|X - X~|) max {:.2e} m",
+            run_stats.contact_ms.median,
+            run_stats.penetration_max,
+            c.contacts_max,
+            c.iterations_max,
+            c.unresolved_steps,
+            c.correction_max
+        );
+    }
     if let Some(path) = stats {
         let json = serde_json::to_string_pretty(&run_stats)?;
         std::fs::write(&path, json)

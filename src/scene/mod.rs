@@ -4,12 +4,16 @@
 //!
 //! This is an edge module: it reads files; the core never sees serde.
 
+mod contact;
 mod file;
+mod mesh_file;
 mod overrides;
 
 use std::path::{Path, PathBuf};
 
+pub use contact::{ColliderFile, ContactFile};
 pub use file::{OutputsFile, SceneFile};
+pub use mesh_file::load_mesh;
 pub use overrides::apply_override;
 
 use crate::sim::World;

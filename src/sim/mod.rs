@@ -9,5 +9,6 @@ mod world;
 
 pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
 pub use world::{
-    Energies, ObjectKind, ObjectStepReport, SimObject, SingularPoint, StepReport, World,
+    ContactStepReport, Energies, ObjectKind, ObjectStepReport, SimObject, SingularPoint,
+    StepReport, World,
 };

@@ -1,3 +1,6 @@
+use rayon::prelude::*;
+
+use crate::contact::{BodyInput, ContactReport, ContactStage};
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh};
 use crate::ribbon::RibbonSim;
 
@@ -61,6 +64,27 @@ pub struct StepReport {
     /// Simulation time after the step, s.
     pub time: f64,
     pub objects: Vec<ObjectStepReport>,
+    /// The contact stage, when the scene has one.
+    pub contact: Option<ContactStepReport>,
+}
+
+/// What the contact stage did in a step, with its wall time.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactStepReport {
+    pub report: ContactReport,
+    /// Wall time of the stage (gathering, detection, QP, friction, write-back), ms.
+    pub wall_ms: f64,
+}
+
+/// The contact stage of a world and its per-step buffers.
+#[derive(Clone, Debug)]
+struct ContactState {
+    stage: ContactStage,
+    /// Object index of each contact body.
+    objects: Vec<usize>,
+    previous: Vec<Vec<Point3>>,
+    predicted: Vec<Vec<Point3>>,
+    corrected: Vec<Vec<Point3>>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -92,12 +116,16 @@ pub struct World {
     dt: f64,
     time: f64,
     steps: u64,
+    contact: Option<ContactState>,
+    /// Handle targets at the end of the last step (the start of the next one).
+    last_targets: Vec<Pose>,
 }
 
 impl World {
     /// A world at t = 0. `dt` is the time step, s.
     pub fn new(objects: Vec<(String, SimObject)>, handles: Vec<HandleSpec>, dt: f64) -> World {
         let (names, objects): (Vec<_>, Vec<_>) = objects.into_iter().unzip();
+        let last_targets = handles.iter().map(|h| h.trajectory.pose_at(0.0)).collect();
         World {
             names,
             initial_objects: objects.clone(),
@@ -106,7 +134,39 @@ impl World {
             dt,
             time: 0.0,
             steps: 0,
+            contact: None,
+            last_targets,
         }
+    }
+
+    /// Add a contact stage whose bodies are the ribbons of this world, in object order
+    /// (build it from [`RibbonSim::contact_topology`]).
+    pub fn with_contact(mut self, stage: ContactStage) -> World {
+        let objects: Vec<usize> = (0..self.objects.len()).collect();
+        assert_eq!(
+            stage.body_count(),
+            objects.len(),
+            "one contact body per ribbon"
+        );
+        let empty = vec![Vec::new(); objects.len()];
+        self.contact = Some(ContactState {
+            stage,
+            objects,
+            previous: empty.clone(),
+            predicted: empty.clone(),
+            corrected: empty,
+        });
+        self
+    }
+
+    /// The contact stage, if the scene has one.
+    pub fn contact_stage(&self) -> Option<&ContactStage> {
+        self.contact.as_ref().map(|c| &c.stage)
+    }
+
+    /// Handle targets (`world_from_gripper`) at the end of the last step.
+    pub fn current_targets(&self) -> &[Pose] {
+        &self.last_targets
     }
 
     /// Simulation time, s.
@@ -157,19 +217,32 @@ impl World {
             .collect();
         let dt = self.dt;
         let handles = &self.handles;
-        let reports = self
+        // Every object's optimization in parallel: each is independent and sequential
+        // inside, so the results do not depend on the thread count.
+        let mut reports: Vec<ObjectStepReport> = self
             .objects
-            .iter_mut()
+            .par_iter_mut()
             .enumerate()
             .map(|(index, object)| match object {
                 SimObject::Ribbon(r) => r.step(dt, t_next, index, handles, &resolved),
             })
             .collect();
+        let contact = self.contact.as_mut().map(|c| {
+            c.run(
+                &mut self.objects,
+                &mut reports,
+                &self.last_targets,
+                &resolved,
+                dt,
+            )
+        });
+        self.last_targets = resolved;
         self.time = t_next;
         self.steps += 1;
         StepReport {
             time: self.time,
             objects: reports,
+            contact,
         }
     }
 
@@ -192,5 +265,59 @@ impl World {
         self.objects = self.initial_objects.clone();
         self.time = 0.0;
         self.steps = 0;
+        self.last_targets = self
+            .handles
+            .iter()
+            .map(|h| h.trajectory.pose_at(0.0))
+            .collect();
+    }
+}
+
+impl ContactState {
+    /// The contact stage on all ribbon meshes together (Pan et al. algorithm 1, line 5);
+    /// the corrected meshes become the ribbons' X^{n+1}.
+    fn run(
+        &mut self,
+        objects: &mut [SimObject],
+        reports: &mut [ObjectStepReport],
+        targets0: &[Pose],
+        targets1: &[Pose],
+        dt: f64,
+    ) -> ContactStepReport {
+        let start = std::time::Instant::now();
+        for (b, &o) in self.objects.iter().enumerate() {
+            match &objects[o] {
+                SimObject::Ribbon(r) => {
+                    r.previous_mesh_vertices(&mut self.previous[b]);
+                    self.predicted[b].clear();
+                    self.predicted[b].extend_from_slice(&r.mesh().vertices);
+                }
+            }
+        }
+        let inputs: Vec<BodyInput> = self
+            .previous
+            .iter()
+            .zip(&self.predicted)
+            .map(|(p, q)| BodyInput {
+                previous: p,
+                predicted: q,
+            })
+            .collect();
+        let report = self
+            .stage
+            .resolve(&inputs, targets0, targets1, &mut self.corrected);
+        for (b, &o) in self.objects.iter().enumerate() {
+            match &mut objects[o] {
+                SimObject::Ribbon(r) => {
+                    r.apply_contact_correction(&self.corrected[b], dt);
+                    reports[o].isometry_error = r.mesh().isometry_error();
+                    reports[o].energies = r.energies();
+                }
+            }
+        }
+        ContactStepReport {
+            report,
+            wall_ms: start.elapsed().as_secs_f64() * 1e3,
+        }
     }
 }
