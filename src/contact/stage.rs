@@ -518,6 +518,21 @@ impl ContactStage {
                 report.resolved = true;
                 break;
             }
+            if std::env::var_os("DEVSIM_CONTACT_DEBUG").is_some() {
+                let worst = self.detected.iter().max_by(|a, b| {
+                    (a.distance - a.gap(&self.x)).total_cmp(&(b.distance - b.gap(&self.x)))
+                });
+                if let Some(w) = worst {
+                    eprintln!(
+                        "  worst {:?} gap {:.3e} crossing {} n {:?} w {:?}",
+                        w.key,
+                        w.gap(&self.x),
+                        w.crossing,
+                        w.normal.as_slice(),
+                        &w.weights[..w.count as usize]
+                    );
+                }
+            }
             let qi = self.solve_qp();
             report.qp_iterations += qi;
             if std::env::var_os("DEVSIM_CONTACT_DEBUG").is_some() {
@@ -533,26 +548,37 @@ impl ContactStage {
         first_overlap.max(0.0)
     }
 
-    /// Add the detected contacts to the step's constraint set (both sorted by key):
-    /// a detected key replaces the old linearization, undetected keys stay.
+    /// Add the detected contacts to the step's constraint set (both sorted by key).
+    /// Constraints are never dropped within a step (impact zones only grow, Harmon et
+    /// al.): a contact detected again is added as another cutting plane when its old
+    /// linearization let it be violated beyond the tolerance, so the rounds cannot
+    /// cycle between linearizations (nearly parallel edges slide their closest
+    /// points from round to round).
     fn merge_detected(&mut self) {
         if self.detected.is_empty() {
             return;
         }
+        let tol = self.settings.tolerance;
         self.merged.clear();
         let (mut i, mut j) = (0, 0);
         let (old, new) = (&self.constraints, &self.detected);
         while i < old.len() || j < new.len() {
-            let take_new = j < new.len() && (i >= old.len() || new[j].key <= old[i].key);
-            if take_new {
-                if i < old.len() && new[j].key == old[i].key {
+            if j >= new.len() || (i < old.len() && old[i].key <= new[j].key) {
+                let key = old[i].key;
+                // every old constraint of this key, then the new one if still violated
+                while i < old.len() && old[i].key == key {
+                    self.merged.push(old[i]);
                     i += 1;
                 }
+                if j < new.len() && new[j].key == key {
+                    if new[j].distance - new[j].gap(&self.x) > tol {
+                        self.merged.push(new[j]);
+                    }
+                    j += 1;
+                }
+            } else {
                 self.merged.push(new[j]);
                 j += 1;
-            } else {
-                self.merged.push(old[i]);
-                i += 1;
             }
         }
         std::mem::swap(&mut self.constraints, &mut self.merged);

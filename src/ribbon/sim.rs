@@ -680,7 +680,8 @@ impl RibbonSim {
             if carry {
                 let (ob, _) =
                     super::objective::interpolate(&old.u_bottom, &old.x_bottom, new.u_bottom[j], j);
-                let (ot, _) = super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j], j);
+                let (ot, _) =
+                    super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j], j);
                 new.v_bottom[j] = (xb - ob) / h;
                 new.v_top[j] = (xt - ot) / h;
             }
