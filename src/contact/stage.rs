@@ -114,6 +114,11 @@ pub struct ContactReport {
     pub correction_max: f64,
     /// False when the round limit stopped the stage before it was collision-free.
     pub resolved: bool,
+    /// Triangles whose normal the stage turned by more than 90 degrees against the
+    /// prediction X~ (flipped), and triangles it shrank below a tenth of their area in
+    /// X~ (degenerate): the failure mode of the plain closeness (Pan et al. fig. 6).
+    pub flipped_triangles: usize,
+    pub degenerate_triangles: usize,
 }
 
 struct DeformableBody {
@@ -480,7 +485,28 @@ impl ContactStage {
             }
         }
         report.correction_max = correction_max;
+        let (flipped, degenerate) = self.distorted_triangles();
+        report.flipped_triangles = flipped;
+        report.degenerate_triangles = degenerate;
         report
+    }
+
+    /// (flipped, degenerate) triangles of X against X~ (see [`ContactReport`]).
+    fn distorted_triangles(&self) -> (usize, usize) {
+        let (mut flipped, mut degenerate) = (0, 0);
+        for body in &self.bodies {
+            for t in &body.topology.triangles {
+                let g = t.map(|v| body.first + v as usize);
+                let normal = |x: &[Vector3]| (x[g[1]] - x[g[0]]).cross(&(x[g[2]] - x[g[0]]));
+                let (n0, n1) = (normal(&self.predicted), normal(&self.x));
+                if n0.dot(&n1) < 0.0 {
+                    flipped += 1;
+                } else if n1.norm() < 0.1 * n0.norm() {
+                    degenerate += 1;
+                }
+            }
+        }
+        (flipped, degenerate)
     }
 
     /// Rounds of detection and response from `self.target`; returns the largest
@@ -518,30 +544,8 @@ impl ContactStage {
                 report.resolved = true;
                 break;
             }
-            if std::env::var_os("DEVSIM_CONTACT_DEBUG").is_some() {
-                let worst = self.detected.iter().max_by(|a, b| {
-                    (a.distance - a.gap(&self.x)).total_cmp(&(b.distance - b.gap(&self.x)))
-                });
-                if let Some(w) = worst {
-                    eprintln!(
-                        "  worst {:?} gap {:.3e} crossing {} n {:?} w {:?}",
-                        w.key,
-                        w.gap(&self.x),
-                        w.crossing,
-                        w.normal.as_slice(),
-                        &w.weights[..w.count as usize]
-                    );
-                }
-            }
             let qi = self.solve_qp();
             report.qp_iterations += qi;
-            if std::env::var_os("DEVSIM_CONTACT_DEBUG").is_some() {
-                eprintln!(
-                    "round {round}: detected {} constraints {} overlap {overlap:.3e} qp {qi}",
-                    self.detected.len(),
-                    self.constraints.len()
-                );
-            }
         }
         report.constraints = self.constraints.len();
         report.contacts = self.lambda.iter().filter(|&&l| l > 0.0).count();
