@@ -448,13 +448,15 @@ fn run_command(
     );
     if let Some(c) = &run_stats.contact {
         println!(
-            "contact: median {:.3} ms per step, penetration max {:.2e} m, contacts max {}, rounds max {}, {} unresolved steps, developability error (|X - X~|) max {:.2e} m",
+            "contact: median {:.3} ms per step, penetration max {:.2e} m, contacts max {}, rounds max {}, {} unresolved steps, developability error (|X - X~|) max {:.2e} m, flipped/degenerate triangles {}/{}",
             run_stats.contact_ms.median,
             run_stats.penetration_max,
             c.contacts_max,
             c.iterations_max,
             c.unresolved_steps,
-            c.correction_max
+            c.correction_max,
+            c.flipped_triangles,
+            c.degenerate_triangles
         );
     }
     if let Some(path) = stats {

@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use crate::ribbon::objective::GradientMode;
 use crate::scene::Scene;
-use crate::sim::{SimObject, StepReport};
+use crate::sim::{SimObject, StepPhase, StepReport};
 use crate::stats::{RunStats, StatsCollector};
 
 /// Called after every step with the world and the report (recording, progress).
@@ -51,9 +51,19 @@ pub fn run(
             break;
         }
         let start = Instant::now();
-        let report = scene.world.step(&[]);
+        let mut contact_start = None;
+        let mut contact_ms = None;
+        let report = scene.world.step_observed(&[], &mut |phase| match phase {
+            StepPhase::ContactStart => contact_start = Some(Instant::now()),
+            StepPhase::ContactEnd => {
+                contact_ms = contact_start.map(|s: Instant| s.elapsed().as_secs_f64() * 1e3)
+            }
+        });
         let step_ms = start.elapsed().as_secs_f64() * 1e3;
         stats.record(&scene.world, &report, step_ms);
+        if let Some(ms) = contact_ms {
+            stats.record_contact_ms(ms);
+        }
         observer.after_step(scene, &report, step_ms)?;
     }
     let wall_s = wall.elapsed().as_secs_f64();

@@ -90,6 +90,11 @@ pub(crate) struct MeshBody {
     pub stations: Vec<f64>,
     pub period: Option<f64>,
     pub skip: f64,
+    /// Station ranges (start, length) of every vertex, edge and triangle, precomputed
+    /// for the neighbour filter.
+    vertex_arc: Vec<(f64, f64)>,
+    edge_arc: Vec<(f64, f64)>,
+    triangle_arc: Vec<(f64, f64)>,
     leaf_face: Vec<Option<u32>>,
     leaf_vertex_start: Vec<u32>,
     leaf_vertices: Vec<u32>,
@@ -136,6 +141,9 @@ impl MeshBody {
             stations,
             period,
             skip,
+            vertex_arc: Vec::new(),
+            edge_arc: Vec::new(),
+            triangle_arc: Vec::new(),
             leaf_face: Vec::new(),
             leaf_vertex_start: vec![0],
             leaf_vertices: Vec::new(),
@@ -187,6 +195,9 @@ impl MeshBody {
                 body.leaf_edge_start.push(body.leaf_edges.len() as u32);
             }
         }
+        body.vertex_arc = (0..vertex_count).map(|v| body.range(&[v])).collect();
+        body.edge_arc = edges.iter().map(|e| body.range(e)).collect();
+        body.triangle_arc = triangles.iter().map(|t| body.range(t)).collect();
         body.edges = edges;
         body.triangles = triangles;
         body
@@ -217,56 +228,66 @@ impl MeshBody {
         self.first + v
     }
 
-    /// Distance between the station ranges of two local vertex sets: intervals on a
-    /// line, or the shortest arcs covering them on a circle of length `period`.
-    fn station_gap(&self, a: &[u32], b: &[u32]) -> f64 {
+    /// The station range (start, length) of a set of local vertices: an interval on a
+    /// line, or the shortest arc covering them on a circle of length `period`.
+    fn range(&self, vs: &[u32]) -> (f64, f64) {
         match self.period {
             None => {
-                let range = |vs: &[u32]| {
+                let (lo, hi) =
                     vs.iter()
                         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
                             let s = self.stations[v as usize];
                             (lo.min(s), hi.max(s))
-                        })
-                };
-                let (lo_a, hi_a) = range(a);
-                let (lo_b, hi_b) = range(b);
-                (lo_b - hi_a).max(lo_a - hi_b).max(0.0)
+                        });
+                (lo, hi - lo)
             }
             Some(p) => {
-                let (sa, la) = self.arc(a, p);
-                let (sb, lb) = self.arc(b, p);
-                let fwd = |from: f64, to: f64| (to - from).rem_euclid(p);
-                if fwd(sa, sb) <= la || fwd(sb, sa) <= lb {
-                    0.0
-                } else {
-                    fwd(sa + la, sb).min(fwd(sb + lb, sa))
+                let mut s = [0.0; 3];
+                let k = vs.len().min(3);
+                for i in 0..k {
+                    s[i] = self.stations[vs[i] as usize].rem_euclid(p);
                 }
+                s[..k].sort_by(f64::total_cmp);
+                // leave out the largest gap between cyclically consecutive stations
+                let mut best = (s[0], 0.0);
+                let mut largest = -1.0;
+                for i in 0..k {
+                    let next = if i + 1 < k { s[i + 1] } else { s[0] + p };
+                    let gap = next - s[i];
+                    if gap > largest {
+                        largest = gap;
+                        best = (next.rem_euclid(p), p - gap);
+                    }
+                }
+                best
             }
         }
     }
 
-    /// The shortest arc (start, length) covering the stations of `vs` (at most 3) on a
-    /// circle of length `p`.
-    fn arc(&self, vs: &[u32], p: f64) -> (f64, f64) {
-        let mut s = [0.0; 3];
-        let k = vs.len().min(3);
-        for i in 0..k {
-            s[i] = self.stations[vs[i] as usize].rem_euclid(p);
-        }
-        s[..k].sort_by(f64::total_cmp);
-        // the largest gap between cyclically consecutive stations is left out
-        let mut best = (s[0], 0.0);
-        let mut largest = -1.0;
-        for i in 0..k {
-            let next = if i + 1 < k { s[i + 1] } else { s[0] + p };
-            let gap = next - s[i];
-            if gap > largest {
-                largest = gap;
-                best = (next.rem_euclid(p), p - gap);
+    /// Distance between two station ranges (0 when they overlap).
+    #[inline]
+    fn range_gap(&self, a: (f64, f64), b: (f64, f64)) -> f64 {
+        match self.period {
+            None => (b.0 - (a.0 + a.1)).max(a.0 - (b.0 + b.1)).max(0.0),
+            Some(p) => {
+                // forward distance from `from` to `to` on the circle (both in [0, 2p))
+                let fwd = |from: f64, to: f64| {
+                    let mut d = to - from;
+                    while d < 0.0 {
+                        d += p;
+                    }
+                    while d >= p {
+                        d -= p;
+                    }
+                    d
+                };
+                if fwd(a.0, b.0) <= a.1 || fwd(b.0, a.0) <= b.1 {
+                    0.0
+                } else {
+                    fwd(a.0 + a.1, b.0).min(fwd(b.0 + b.1, a.0))
+                }
             }
         }
-        best
     }
 }
 
@@ -465,14 +486,11 @@ fn narrow_phase(
     if same {
         // every feature pair of two leaves of neighbouring elements is a neighbour pair
         if let (Some(fa), Some(fb)) = (body_a.leaf_face[a], body_a.leaf_face[b]) {
-            let (ta, tb) = (body_a.triangles[fa as usize], body_a.triangles[fb as usize]);
-            let span = |t: &[u32; 3]| {
-                body_a
-                    .station_gap(&t[..1], &t[1..2])
-                    .max(body_a.station_gap(&t[..1], &t[2..]))
-                    .max(body_a.station_gap(&t[1..2], &t[2..]))
-            };
-            if body_a.station_gap(&ta, &tb) + span(&ta) + span(&tb) <= body_a.skip {
+            let (ra, rb) = (
+                body_a.triangle_arc[fa as usize],
+                body_a.triangle_arc[fb as usize],
+            );
+            if body_a.range_gap(ra, rb) + ra.1 + rb.1 <= body_a.skip {
                 return;
             }
         }
@@ -492,7 +510,9 @@ fn narrow_phase(
         }
         let tri = bf.triangles[f as usize];
         for &v in bv.owned_vertices(lv) {
-            if same && bv.station_gap(&[v], &tri) <= bv.skip {
+            if same
+                && bv.range_gap(bv.vertex_arc[v as usize], bv.triangle_arc[f as usize]) <= bv.skip
+            {
                 continue;
             }
             let ids = [
@@ -512,7 +532,10 @@ fn narrow_phase(
         let e1 = body_a.edges[ea as usize];
         for &eb in body_b.owned_edges(b) {
             let e2 = body_b.edges[eb as usize];
-            if same && body_a.station_gap(&e1, &e2) <= body_a.skip {
+            if same
+                && body_a.range_gap(body_a.edge_arc[ea as usize], body_a.edge_arc[eb as usize])
+                    <= body_a.skip
+            {
                 continue;
             }
             let ids = [

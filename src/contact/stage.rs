@@ -114,6 +114,11 @@ pub struct ContactReport {
     pub correction_max: f64,
     /// False when the round limit stopped the stage before it was collision-free.
     pub resolved: bool,
+    /// Triangles whose normal the stage turned by more than 90 degrees against the
+    /// prediction X~ (flipped), and triangles it shrank below a tenth of their area in
+    /// X~ (degenerate): the failure mode of the plain closeness (Pan et al. fig. 6).
+    pub flipped_triangles: usize,
+    pub degenerate_triangles: usize,
 }
 
 struct DeformableBody {
@@ -480,7 +485,28 @@ impl ContactStage {
             }
         }
         report.correction_max = correction_max;
+        let (flipped, degenerate) = self.distorted_triangles();
+        report.flipped_triangles = flipped;
+        report.degenerate_triangles = degenerate;
         report
+    }
+
+    /// (flipped, degenerate) triangles of X against X~ (see [`ContactReport`]).
+    fn distorted_triangles(&self) -> (usize, usize) {
+        let (mut flipped, mut degenerate) = (0, 0);
+        for body in &self.bodies {
+            for t in &body.topology.triangles {
+                let g = t.map(|v| body.first + v as usize);
+                let normal = |x: &[Vector3]| (x[g[1]] - x[g[0]]).cross(&(x[g[2]] - x[g[0]]));
+                let (n0, n1) = (normal(&self.predicted), normal(&self.x));
+                if n0.dot(&n1) < 0.0 {
+                    flipped += 1;
+                } else if n1.norm() < 0.1 * n0.norm() {
+                    degenerate += 1;
+                }
+            }
+        }
+        (flipped, degenerate)
     }
 
     /// Rounds of detection and response from `self.target`; returns the largest
@@ -520,39 +546,43 @@ impl ContactStage {
             }
             let qi = self.solve_qp();
             report.qp_iterations += qi;
-            if std::env::var_os("DEVSIM_CONTACT_DEBUG").is_some() {
-                eprintln!(
-                    "round {round}: detected {} constraints {} overlap {overlap:.3e} qp {qi}",
-                    self.detected.len(),
-                    self.constraints.len()
-                );
-            }
         }
         report.constraints = self.constraints.len();
         report.contacts = self.lambda.iter().filter(|&&l| l > 0.0).count();
         first_overlap.max(0.0)
     }
 
-    /// Add the detected contacts to the step's constraint set (both sorted by key):
-    /// a detected key replaces the old linearization, undetected keys stay.
+    /// Add the detected contacts to the step's constraint set (both sorted by key).
+    /// Constraints are never dropped within a step (impact zones only grow, Harmon et
+    /// al.): a contact detected again is added as another cutting plane when its old
+    /// linearization let it be violated beyond the tolerance, so the rounds cannot
+    /// cycle between linearizations (nearly parallel edges slide their closest
+    /// points from round to round).
     fn merge_detected(&mut self) {
         if self.detected.is_empty() {
             return;
         }
+        let tol = self.settings.tolerance;
         self.merged.clear();
         let (mut i, mut j) = (0, 0);
         let (old, new) = (&self.constraints, &self.detected);
         while i < old.len() || j < new.len() {
-            let take_new = j < new.len() && (i >= old.len() || new[j].key <= old[i].key);
-            if take_new {
-                if i < old.len() && new[j].key == old[i].key {
+            if j >= new.len() || (i < old.len() && old[i].key <= new[j].key) {
+                let key = old[i].key;
+                // every old constraint of this key, then the new one if still violated
+                while i < old.len() && old[i].key == key {
+                    self.merged.push(old[i]);
                     i += 1;
                 }
+                if j < new.len() && new[j].key == key {
+                    if new[j].distance - new[j].gap(&self.x) > tol {
+                        self.merged.push(new[j]);
+                    }
+                    j += 1;
+                }
+            } else {
                 self.merged.push(new[j]);
                 j += 1;
-            } else {
-                self.merged.push(old[i]);
-                i += 1;
             }
         }
         std::mem::swap(&mut self.constraints, &mut self.merged);

@@ -245,8 +245,9 @@ impl Default for BaseFile {
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitialShapeFile {
-    /// `flat` (default), `helix` (every crease with the values below) or `ring`
-    /// (square creases bent by 2 pi / n: a closed polygon, the start guess of loops).
+    /// `flat` (default), `helix` (every crease with the values below), `ring`
+    /// (square creases bent by 2 pi / n: a closed polygon, the start guess of loops) or
+    /// `explicit` (every crease given: `crease_directions`, `bending_angles`).
     #[serde(default)]
     pub kind: Option<String>,
     /// Crease direction c = tan(theta) of every crease (helix). 0.
@@ -255,6 +256,13 @@ pub struct InitialShapeFile {
     /// Bending angle psi of every crease, rad (helix). 0.
     #[serde(default)]
     pub bending_angle: f64,
+    /// `explicit`: c_1 .. c_{n-1}, one per interior crease (dimensionless). Required
+    /// for `explicit`, not used otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crease_directions: Option<Vec<f64>>,
+    /// `explicit`: psi_1 .. psi_{n-1}, rad. Required for `explicit`, not used otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bending_angles: Option<Vec<f64>>,
     /// Amplitude of a seeded random perturbation of every c and psi (rad), drawn from
     /// the scene `seed`. A flat strip twisted or spun about its axis sits on a
     /// bifurcation; this breaks the symmetry as a real ribbon's imperfections do. 0.
@@ -454,6 +462,10 @@ impl Check<'_> {
             ))
         }
     }
+}
+
+fn initial_kind_is_not_explicit(ribbon: &RibbonFile) -> bool {
+    ribbon.initial_shape.kind.as_deref() != Some("explicit")
 }
 
 pub(super) fn pose_from(position: Vector3, rotation: Vector3) -> Pose {
@@ -895,13 +907,64 @@ impl SceneFile {
                     ribbon.initial_shape.bending_angle,
                 )?,
             },
+            "explicit" => {
+                let n = ribbon.segments;
+                let list = |name: &str, v: &Option<Vec<f64>>| -> Result<Vec<f64>, SceneError> {
+                    let key = format!("{rk}.initial_shape.{name}");
+                    let v = v.as_ref().ok_or_else(|| {
+                        ck.fail(&key, "required for kind `explicit` (n - 1 values)")
+                    })?;
+                    if v.len() + 1 != n {
+                        return Err(ck.fail(
+                            &key,
+                            format!(
+                                "{} values for {n} segments: expected n - 1 = {}",
+                                v.len(),
+                                n.saturating_sub(1)
+                            ),
+                        ));
+                    }
+                    for (i, x) in v.iter().enumerate() {
+                        ck.finite(&format!("{key}.{i}"), *x)?;
+                    }
+                    Ok(v.clone())
+                };
+                RibbonInitialShape::Explicit {
+                    crease_direction: list(
+                        "crease_directions",
+                        &ribbon.initial_shape.crease_directions,
+                    )?,
+                    bending_angle: list("bending_angles", &ribbon.initial_shape.bending_angles)?,
+                }
+            }
             other => {
                 return Err(ck.fail(
                     &format!("{rk}.initial_shape.kind"),
-                    format!("unknown value `{other}`, expected one of: flat, helix, ring"),
+                    format!(
+                        "unknown value `{other}`, expected one of: flat, helix, ring, explicit"
+                    ),
                 ))
             }
         };
+        if initial_kind_is_not_explicit(ribbon) {
+            for (name, present) in [
+                (
+                    "crease_directions",
+                    ribbon.initial_shape.crease_directions.is_some(),
+                ),
+                (
+                    "bending_angles",
+                    ribbon.initial_shape.bending_angles.is_some(),
+                ),
+            ] {
+                if present {
+                    return Err(ck.fail(
+                        &format!("{rk}.initial_shape.{name}"),
+                        "only used with kind: explicit",
+                    ));
+                }
+            }
+        }
         let params = RibbonParams {
             length,
             width,

@@ -10,5 +10,5 @@ mod world;
 pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
 pub use world::{
     ContactStepReport, Energies, ObjectKind, ObjectStepReport, SimObject, SingularPoint,
-    StepReport, World,
+    StepPhase, StepReport, World,
 };

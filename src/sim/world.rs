@@ -68,12 +68,21 @@ pub struct StepReport {
     pub contact: Option<ContactStepReport>,
 }
 
-/// What the contact stage did in a step, with its wall time.
+/// What the contact stage did in a step (its wall time is measured by the caller, see
+/// [`World::step_observed`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ContactStepReport {
     pub report: ContactReport,
-    /// Wall time of the stage (gathering, detection, QP, friction, write-back), ms.
-    pub wall_ms: f64,
+}
+
+/// The boundaries of a world step's phases, reported to [`World::step_observed`] so a
+/// caller can time them (the core reads no clock).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepPhase {
+    /// Every object optimized; the contact stage starts.
+    ContactStart,
+    /// The contact stage wrote the corrected meshes back.
+    ContactEnd,
 }
 
 /// The contact stage of a world and its per-step buffers.
@@ -205,6 +214,16 @@ impl World {
     /// target of handle `i` (`world_from_gripper` at the end of the step); missing entries
     /// follow the script.
     pub fn step(&mut self, targets: &[Option<Pose>]) -> StepReport {
+        self.step_observed(targets, &mut |_| {})
+    }
+
+    /// [`World::step`], calling `observe` at the boundaries of its phases (only those
+    /// the scene has: no contact stage, no contact phase).
+    pub fn step_observed(
+        &mut self,
+        targets: &[Option<Pose>],
+        observe: &mut dyn FnMut(StepPhase),
+    ) -> StepReport {
         let t_next = self.time + self.dt;
         let resolved: Vec<Pose> = (0..self.handles.len())
             .map(|i| {
@@ -228,13 +247,16 @@ impl World {
             })
             .collect();
         let contact = self.contact.as_mut().map(|c| {
-            c.run(
+            observe(StepPhase::ContactStart);
+            let r = c.run(
                 &mut self.objects,
                 &mut reports,
                 &self.last_targets,
                 &resolved,
                 dt,
-            )
+            );
+            observe(StepPhase::ContactEnd);
+            r
         });
         self.last_targets = resolved;
         self.time = t_next;
@@ -284,7 +306,6 @@ impl ContactState {
         targets1: &[Pose],
         dt: f64,
     ) -> ContactStepReport {
-        let start = std::time::Instant::now();
         for (b, &o) in self.objects.iter().enumerate() {
             match &objects[o] {
                 SimObject::Ribbon(r) => {
@@ -315,9 +336,6 @@ impl ContactState {
                 }
             }
         }
-        ContactStepReport {
-            report,
-            wall_ms: start.elapsed().as_secs_f64() * 1e3,
-        }
+        ContactStepReport { report }
     }
 }
