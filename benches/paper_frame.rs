@@ -14,7 +14,8 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use developable_sim::scene;
 
 fn frame(c: &mut Criterion) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/scenes/paper_cylinder_then_bend.yaml");
+    let path =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("config/scenes/paper_cylinder_then_bend.yaml");
     let mut group = c.benchmark_group("paper_frame");
     group.sample_size(30);
     // frame 30 (t = 1 s, cylinder wrap) and frame 70 (t = 2.33 s, after the singular

@@ -3,9 +3,18 @@ use developable_sim::paper::{PaperParams, PaperSim};
 use developable_sim::sim::{HandleSpec, Motion, OrientationMode, Trajectory};
 
 fn main() {
-    let squeeze: f64 = std::env::args().nth(1).map(|s| s.parse().unwrap()).unwrap_or(0.01);
-    let tilt: f64 = std::env::args().nth(2).map(|s| s.parse().unwrap()).unwrap_or(0.6);
-    let steps: usize = std::env::args().nth(3).map(|s| s.parse().unwrap()).unwrap_or(15);
+    let squeeze: f64 = std::env::args()
+        .nth(1)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(0.01);
+    let tilt: f64 = std::env::args()
+        .nth(2)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(0.6);
+    let steps: usize = std::env::args()
+        .nth(3)
+        .map(|s| s.parse().unwrap())
+        .unwrap_or(15);
     let mk = |name: &str, u: f64, sign: f64| HandleSpec {
         name: name.into(),
         object: 0,
@@ -14,7 +23,13 @@ fn main() {
         orientation: OrientationMode::Full,
         trajectory: Trajectory {
             initial: Pose::translation(u, 0.05, 0.0),
-            motions: vec![Motion { start: 0.0, end: 1.0, translation: Vector3::new(sign * squeeze / 2.0, 0.0, 0.0), axis: Vector3::y(), angle: -sign * tilt }],
+            motions: vec![Motion {
+                start: 0.0,
+                end: 1.0,
+                translation: Vector3::new(sign * squeeze / 2.0, 0.0, 0.0),
+                axis: Vector3::y(),
+                angle: -sign * tilt,
+            }],
         },
     };
     let handles = vec![mk("left", 0.0, 1.0), mk("right", 0.1, -1.0)];
@@ -27,11 +42,29 @@ fn main() {
         let f = sim.frame_stats();
         println!("step {k}: newton {} conv {} viol {:.2e} iso_err {:.3} comp {:.3}% ({:.1}%) tris {} Gflat {} regions {} sing {}",
             r.iterations, r.converged, r.constraint_violation, r.isometry_error, f.compression_mean_pct, f.compressed_edges_pct, f.triangles, f.geometric_triangles, f.curved_regions, r.singular_points);
-        for e in &f.crumple_events { println!("   event {e:?}"); }
-        println!("   junctions {:?} cones {:?} iso {:?}", f.junctions, f.cones, f.isometry);
-        for reg in &sim.geometric_layer().regions {
-            println!("   region {} rulings {:?}", reg.id, reg.rulings.iter().map(|r| (sim.geometric_layer().endpoint_material(sim.pattern(), &r.a), sim.geometric_layer().endpoint_material(sim.pattern(), &r.b))).map(|(a,b)| format!("({:.3},{:.3})-({:.3},{:.3})", a.x,a.y,b.x,b.y)).collect::<Vec<_>>());
+        for e in &f.crumple_events {
+            println!("   event {e:?}");
         }
-        for c in &sim.geometric_layer().creases { println!("   crease {c:?}"); }
+        println!(
+            "   junctions {:?} cones {:?} iso {:?}",
+            f.junctions, f.cones, f.isometry
+        );
+        for reg in &sim.geometric_layer().regions {
+            println!(
+                "   region {} rulings {:?}",
+                reg.id,
+                reg.rulings
+                    .iter()
+                    .map(|r| (
+                        sim.geometric_layer().endpoint_material(sim.pattern(), &r.a),
+                        sim.geometric_layer().endpoint_material(sim.pattern(), &r.b)
+                    ))
+                    .map(|(a, b)| format!("({:.3},{:.3})-({:.3},{:.3})", a.x, a.y, b.x, b.y))
+                    .collect::<Vec<_>>()
+            );
+        }
+        for c in &sim.geometric_layer().creases {
+            println!("   crease {c:?}");
+        }
     }
 }

@@ -9,7 +9,9 @@ fn main() {
     let steps = (sc.duration / sc.world.dt()).round() as usize;
     for k in 1..=steps {
         let r = sc.world.step(&[]);
-        let SimObject::Paper(p) = &sc.world.objects()[0] else { panic!() };
+        let SimObject::Paper(p) = &sc.world.objects()[0] else {
+            panic!()
+        };
         let f = p.frame_stats();
         let m = p.mesh();
         let mut worst = (0.0, 0u32, 0u32);
@@ -17,14 +19,28 @@ fn main() {
             let rest = (m.material[a as usize] - m.material[b as usize]).norm();
             let len = (m.vertices[a as usize] - m.vertices[b as usize]).norm();
             let e = (len - rest).abs() / rest;
-            if e > worst.0 { worst = (e, a, b); }
+            if e > worst.0 {
+                worst = (e, a, b);
+            }
         }
         let o = &r.objects[0];
         println!("step {k} t={:.3}: newton {} conv {} iso_err {:.3} (edge {}-{} m {:?}-{:?} rest {:.4}) comp {:.3}% ({:.1}%) tris {} regions {} sing {} events {} junc {:?} cones {:?} iso_it {} lenerr {:.2e}->{:.2e}",
             r.time, o.iterations, o.converged, o.isometry_error, worst.1, worst.2, m.material[worst.1 as usize], m.material[worst.2 as usize],
             (m.material[worst.1 as usize]-m.material[worst.2 as usize]).norm(),
             f.compression_mean_pct, f.compressed_edges_pct, f.triangles, f.curved_regions, o.singular_points, f.crumple_events.len(), f.junctions, f.cones, f.isometry.iterations, f.isometry.length_error_before, f.isometry.length_error_after);
-        for a in &f.crumple_attempts { println!("    attempt comp {:.4} at ({:.3},{:.3}) dir ({:.2},{:.2}) changed {}", a.compression, a.centroid.x, a.centroid.y, a.ruling_direction.x, a.ruling_direction.y, a.changed); }
-        for e in &f.crumple_events { println!("    {e:?}"); }
+        for a in &f.crumple_attempts {
+            println!(
+                "    attempt comp {:.4} at ({:.3},{:.3}) dir ({:.2},{:.2}) changed {}",
+                a.compression,
+                a.centroid.x,
+                a.centroid.y,
+                a.ruling_direction.x,
+                a.ruling_direction.y,
+                a.changed
+            );
+        }
+        for e in &f.crumple_events {
+            println!("    {e:?}");
+        }
     }
 }

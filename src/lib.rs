@@ -1,14 +1,19 @@
 //! developable_sim: developable ribbons (Pan et al.) and paper (Schreck et al.) for robots.
 //!
-//! The simulation core (`geometry`, `ribbon`, `paper`, `optim`, `sim`, `metrics`) is pure: no I/O,
-//! no ROS, no serde. `scene` (configs), the CLI and (later) `ros` and `record` are the
-//! edges around it. See ARCHITECTURE.md.
+//! The simulation core (`geometry`, `ribbon`, `paper`, `contact`, `optim`, `sim`, `metrics`)
+//! is pure: no I/O, no ROS, no serde. `scene` (configs), `ros` (the ROS 2 node and
+//! messages), `record` (bags, replay) and the CLI are the edges around it. See
+//! ARCHITECTURE.md.
 
+pub mod contact;
 pub mod geometry;
 pub mod metrics;
 pub mod optim;
 pub mod paper;
+pub mod record;
+pub mod render;
 pub mod ribbon;
+pub mod ros;
 pub mod runner;
 pub mod scene;
 pub mod sim;

@@ -51,13 +51,17 @@ pub fn run(
         if should_stop() {
             break;
         }
-        let mut clock = PhaseTimer::default();
+        let clock = PhaseTimer::default();
         let start = Instant::now();
-        let report = scene.world.step_with_clock(&[], &mut clock);
+        let report = scene.world.step_with_clock(&[], &clock);
         let step_ms = start.elapsed().as_secs_f64() * 1e3;
         stats.record(&scene.world, &report, step_ms);
-        if clock.paper {
-            stats.record_phases(clock.ms);
+        let phases = clock.ms();
+        if phases.paper {
+            stats.record_phases([phases.simulation, phases.remesh, phases.isometry]);
+        }
+        if let Some(ms) = phases.contact {
+            stats.record_contact_ms(ms);
         }
         observer.after_step(scene, &report, step_ms)?;
     }
@@ -66,27 +70,44 @@ pub fn run(
     Ok(stats.finish(&scene.world, gradient_us, wall_s))
 }
 
-/// Times the phases of the paper objects' frames (the ribbon's step is one phase).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct PhaseTimer {
-    /// Simulation, remesh, isometry, ms (summed over objects).
-    pub ms: [f64; 3],
-    /// True when a phase other than the simulation ran (a paper object).
+/// Wall time of each phase of one step, ms, summed over objects (they step in
+/// parallel, so the sum is CPU time, not the step's wall time).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhaseTimes {
+    pub simulation: f64,
+    pub remesh: f64,
+    pub isometry: f64,
+    /// The contact stage, when the scene has one.
+    pub contact: Option<f64>,
+    /// True when a phase other than the simulation ran for an object (a paper object).
     pub paper: bool,
 }
 
+/// Times the phases of a step (a [`PhaseClock`] shared by the objects' threads).
+#[derive(Debug, Default)]
+pub struct PhaseTimer {
+    times: std::sync::Mutex<PhaseTimes>,
+}
+
+impl PhaseTimer {
+    pub fn ms(&self) -> PhaseTimes {
+        *self.times.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
 impl PhaseClock for PhaseTimer {
-    fn time(&mut self, _object: usize, phase: Phase, work: &mut dyn FnMut()) {
+    fn time(&self, _object: Option<usize>, phase: Phase, work: &mut dyn FnMut()) {
         let start = Instant::now();
         work();
         let ms = start.elapsed().as_secs_f64() * 1e3;
-        let k = match phase {
-            Phase::Simulation => 0,
-            Phase::Remesh => 1,
-            Phase::Isometry => 2,
-        };
-        self.ms[k] += ms;
-        self.paper |= phase != Phase::Simulation;
+        let mut t = self.times.lock().unwrap_or_else(|e| e.into_inner());
+        match phase {
+            Phase::Simulation => t.simulation += ms,
+            Phase::Remesh => t.remesh += ms,
+            Phase::Isometry => t.isometry += ms,
+            Phase::Contact => *t.contact.get_or_insert(0.0) += ms,
+        }
+        t.paper |= matches!(phase, Phase::Remesh | Phase::Isometry);
     }
 }
 

@@ -56,6 +56,36 @@ pub struct EnergyStats {
     pub max: f64,
 }
 
+/// The contact stage over a run (present only when the scene has one).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ContactStats {
+    /// Most active contacts in one step.
+    pub contacts_max: usize,
+    /// Most constraints (impact-zone size) in one step.
+    pub constraints_max: usize,
+    /// Detection/response rounds per step: median and max.
+    pub iterations_median: f64,
+    pub iterations_max: u32,
+    /// Active-set changes of the dual QP per step, median.
+    pub qp_iterations_median: f64,
+    /// Steps the round limit stopped before collision-free.
+    pub unresolved_steps: usize,
+    /// Largest penetration of the optimizer's predictions X~ (before the stage), m.
+    pub predicted_penetration_max: f64,
+    /// Developability error after contact: the largest |X^{n+1} - X~^{n+1}| (how far
+    /// the stage moved a vertex off the developable prediction), m; max over the run
+    /// and the median over steps.
+    pub correction_max: f64,
+    pub correction_median: f64,
+    /// Triangles the stage flipped (normal turned by more than 90 degrees against X~)
+    /// or made degenerate (area below a tenth), summed over the steps (Pan et al. fig.
+    /// 6: the plain closeness distorts, the stiff one does not), and the most in one
+    /// step.
+    pub flipped_triangles: usize,
+    pub degenerate_triangles: usize,
+    pub distorted_triangles_max: usize,
+}
+
 /// The `--stats` JSON.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct RunStats {
@@ -76,6 +106,14 @@ pub struct RunStats {
     pub constraint_violation_max: f64,
     pub singular_points_max: usize,
     pub energy: EnergyStats,
+    /// Wall time of the contact stage per step, ms (0 without a contact stage).
+    pub contact_ms: MedianOnly,
+    /// Largest penetration depth over the run, m: the overlap of thickened surfaces
+    /// left after the contact stage (ribbon mid-surface closer than thickness/2 to a
+    /// collider or thickness to another ribbon), 0 when none.
+    pub penetration_max: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub contact: Option<ContactStats>,
     /// Wall time of the whole run, s.
     pub wall_s: f64,
     /// Paper objects (Schreck et al. table IV): mean over frames of the mean over S_P
@@ -149,6 +187,10 @@ pub struct StatsCollector {
     paper_compressed: Vec<f64>,
     paper_triangles: Vec<f64>,
     phase_ms: [Vec<f64>; 3],
+    contact_ms: Vec<f64>,
+    contact_rounds: Vec<f64>,
+    contact_qp: Vec<f64>,
+    contact_correction: Vec<f64>,
     pub stats: RunStats,
 }
 
@@ -221,6 +263,27 @@ impl StatsCollector {
             }
             s.singular_vertices = Some(papers.iter().map(|p| p.singular_points().len()).sum());
         }
+        if let Some(c) = &report.contact {
+            let r = &c.report;
+            self.contact_rounds.push(r.iterations as f64);
+            self.contact_qp.push(r.qp_iterations as f64);
+            self.contact_correction.push(r.correction_max);
+            s.penetration_max = s.penetration_max.max(r.penetration_max);
+            let cs = s.contact.get_or_insert_with(ContactStats::default);
+            cs.contacts_max = cs.contacts_max.max(r.contacts);
+            cs.constraints_max = cs.constraints_max.max(r.constraints);
+            cs.iterations_max = cs.iterations_max.max(r.iterations);
+            cs.unresolved_steps += usize::from(!r.resolved);
+            cs.predicted_penetration_max = cs
+                .predicted_penetration_max
+                .max(r.predicted_penetration_max);
+            cs.correction_max = cs.correction_max.max(r.correction_max);
+            cs.flipped_triangles += r.flipped_triangles;
+            cs.degenerate_triangles += r.degenerate_triangles;
+            cs.distorted_triangles_max = cs
+                .distorted_triangles_max
+                .max(r.flipped_triangles + r.degenerate_triangles);
+        }
         let e: f64 = report.objects.iter().map(|o| o.energies.total()).sum();
         s.energy.last = e;
         s.energy.max = s.energy.max.max(e);
@@ -233,6 +296,12 @@ impl StatsCollector {
         for (v, t) in self.phase_ms.iter_mut().zip(phase_ms) {
             v.push(t);
         }
+    }
+
+    /// The wall time of a step's contact stage, ms (measured by the caller around
+    /// the contact phase of [`World::step_with_clock`]).
+    pub fn record_contact_ms(&mut self, ms: f64) {
+        self.contact_ms.push(ms);
     }
 
     pub fn finish(mut self, world: &World, gradient_us: f64, wall_s: f64) -> RunStats {
@@ -255,6 +324,14 @@ impl StatsCollector {
         self.stats.gradient_us = MedianOnly {
             median: gradient_us,
         };
+        self.stats.contact_ms = MedianOnly {
+            median: percentiles(&self.contact_ms).median,
+        };
+        if let Some(cs) = &mut self.stats.contact {
+            cs.iterations_median = percentiles(&self.contact_rounds).median;
+            cs.qp_iterations_median = percentiles(&self.contact_qp).median;
+            cs.correction_median = percentiles(&self.contact_correction).median;
+        }
         self.stats.wall_s = wall_s;
         self.stats.final_state = final_state(world);
         self.stats

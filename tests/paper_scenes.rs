@@ -44,7 +44,10 @@ fn cylinder_then_bend_is_nearly_isometric_and_creases_only_in_the_second_bend() 
     assert!(c <= 0.5, "compression_mean_pct {c}");
     assert!(n <= 5.0, "compressed_edges_pct {n}");
     // the cylinder wrap (0-1.5 s) is smooth; the orthogonal bend creates singular points
-    let first = stats.first_singular_point.as_ref().expect("singular points appear");
+    let first = stats
+        .first_singular_point
+        .as_ref()
+        .expect("singular points appear");
     assert!(first.time > 1.5, "first singular point at {} s", first.time);
     assert!(stats.singular_vertices.unwrap() >= 1);
     // a coarse mesh (table V: 87-156 triangles)
@@ -68,7 +71,9 @@ fn the_same_seed_gives_a_bit_identical_run_and_another_seed_moves_the_singular_p
     assert_eq!(ma.vertices, mb.vertices, "bit-identical vertices");
     assert_eq!(ma.triangles, mb.triangles);
     assert_eq!(paper(&a).singular_points(), paper(&b).singular_points());
-    let fa = sa.first_singular_point.expect("a singular point appears after the push");
+    let fa = sa
+        .first_singular_point
+        .expect("a singular point appears after the push");
     let fb = sb.first_singular_point.unwrap();
     assert_eq!(fa.material, fb.material);
     // the position of a new singular vertex is random (sec. 5.2): another seed moves it
@@ -102,7 +107,10 @@ fn singular_vertices_survive_unloading() {
     let after = paper(&s).singular_points();
     // persistence: every singular vertex is still there, same id, same pattern point
     for b in &before {
-        let a = after.iter().find(|a| a.id == b.id).expect("singular vertex kept");
+        let a = after
+            .iter()
+            .find(|a| a.id == b.id)
+            .expect("singular vertex kept");
         assert_eq!(a.material, b.material);
     }
     // the sheet straightens when unloaded (fig. 18): its elastic energy drops
@@ -130,7 +138,10 @@ fn fewer_singular_points_as_epsilon_c_grows() {
     };
     let thin = mean("0.001");
     let stiff = mean("0.01");
-    assert!(thin > stiff, "mean singular points: eps_c 0.1 %: {thin}, 1 %: {stiff}");
+    assert!(
+        thin > stiff,
+        "mean singular points: eps_c 0.1 %: {thin}, 1 %: {stiff}"
+    );
 }
 
 #[test]
@@ -167,7 +178,10 @@ fn the_preset_crease_folds_the_sheet() {
     }
     assert!(!folded.is_empty());
     let mean = folded.iter().sum::<f64>() / folded.len() as f64;
-    assert!(mean > 0.3, "mean fold along the crease {mean} rad (rest 1.2)");
+    assert!(
+        mean > 0.3,
+        "mean fold along the crease {mean} rad (rest 1.2)"
+    );
 }
 
 #[test]
@@ -197,10 +211,16 @@ fn bad_paper_scenes_name_the_key() {
     let path = scene_path("paper_preset_crease");
     let cases: [(&[&str], &str); 5] = [
         (&["handles.0.point=[0.02, 0.05]"], "handles.0.point"),
-        (&["paper.compression_threshold=1.5"], "paper.compression_threshold"),
+        (
+            &["paper.compression_threshold=1.5"],
+            "paper.compression_threshold",
+        ),
         (&["paper.size=[0.1, -0.1]"], "paper.size.1"),
         (&["paper.creases.0.to=[0.05, 0.05]"], "paper.creases.0.to"),
-        (&["paper.colliders=[{kind: cube}]"], "paper.colliders.0.kind"),
+        (
+            &["paper.colliders=[{kind: cube}]"],
+            "paper.colliders.0.kind",
+        ),
     ];
     for (sets, key) in cases {
         let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
@@ -208,6 +228,8 @@ fn bad_paper_scenes_name_the_key() {
         assert!(err.contains(key), "`{err}` should name `{key}`");
     }
     let sets = vec!["paper.stiffness=3".to_string()];
-    let err = scene::load(&path, &sets).expect_err("unknown key").to_string();
+    let err = scene::load(&path, &sets)
+        .expect_err("unknown key")
+        .to_string();
     assert!(err.contains("stiffness"), "{err}");
 }

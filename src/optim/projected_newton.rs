@@ -55,6 +55,8 @@ pub struct ProjectedNewton {
     scratch: Option<(usize, MemBuffer)>,
     /// Levenberg-Marquardt damping relative to the Hessian diagonal, adapted per step.
     damping: f64,
+    /// The damping the first iteration of the last solve needed.
+    first_damping: f64,
 }
 
 impl Clone for ProjectedNewton {
@@ -108,7 +110,11 @@ impl ProjectedNewton {
         }
         let mut iterations = 0;
         let mut converged = pg <= options.pgtol;
-        self.damping = 1e-9;
+        // Start from a tenth of the damping the last solve's first iteration needed:
+        // consecutive time steps have similar curvature, and every rejected
+        // factorization costs as much as an accepted one.
+        self.damping = (self.first_damping * 0.1).max(1e-9);
+        let mut first = true;
         while !converged && iterations < options.max_iterations {
             iterations += 1;
             // Active set: at a bound with the gradient pointing out of the box.
@@ -132,6 +138,10 @@ impl ProjectedNewton {
             while !step_ok && self.damping < 1e2 {
                 self.damping = (self.damping * 10.0).max(1e-8);
                 step_ok = self.solve_reduced(m);
+            }
+            if first {
+                self.first_damping = self.damping;
+                first = false;
             }
             if !step_ok {
                 break;
@@ -212,15 +222,21 @@ impl ProjectedNewton {
     /// sequential dense Cholesky (faer; systems here are at most a few hundred rows,
     /// where threads cost more than they save).
     fn solve_reduced(&mut self, m: usize) -> bool {
+        let n = self.h.nrows();
         self.system.clear();
-        self.system.resize(m * m, 0.0);
         let mut max_diag: f64 = 0.0;
-        for (c, &j) in self.free.iter().enumerate() {
-            let col = self.h.column(j);
-            for (r, &i) in self.free.iter().enumerate() {
-                self.system[c * m + r] = col[i];
+        if m == n {
+            // nothing held at a bound: the whole (column-major) Hessian
+            self.system.extend_from_slice(self.h.as_slice());
+        } else {
+            let h = self.h.as_slice();
+            for &j in &self.free {
+                let col = &h[j * n..(j + 1) * n];
+                self.system.extend(self.free.iter().map(|&i| col[i]));
             }
-            max_diag = max_diag.max(col[j].abs());
+        }
+        for k in 0..m {
+            max_diag = max_diag.max(self.system[k * m + k].abs());
         }
         let floor = 1e-14 * max_diag.max(1e-300);
         for k in 0..m {
@@ -250,13 +266,27 @@ impl ProjectedNewton {
         {
             return false;
         }
-        let l = faer::MatRef::from_column_major_slice(&self.system, m, m);
-        llt::solve::solve_in_place(
-            l,
-            MatMut::from_column_major_slice_mut(&mut self.reduced, m, 1),
-            Par::Seq,
-            stack,
-        );
+        // L L^T d = rhs by forward and back substitution on the column-major factor
+        // (contiguous column sweeps; one right-hand side)
+        let l = &self.system;
+        let d = &mut self.reduced;
+        for j in 0..m {
+            let col = &l[j * m..(j + 1) * m];
+            d[j] /= col[j];
+            let dj = d[j];
+            for (di, lij) in d[j + 1..].iter_mut().zip(&col[j + 1..]) {
+                *di -= lij * dj;
+            }
+        }
+        for j in (0..m).rev() {
+            let col = &l[j * m..(j + 1) * m];
+            let dot: f64 = d[j + 1..]
+                .iter()
+                .zip(&col[j + 1..])
+                .map(|(x, y)| x * y)
+                .sum();
+            d[j] = (d[j] - dot) / col[j];
+        }
         self.reduced.iter().all(|v| v.is_finite())
     }
 }

@@ -64,7 +64,9 @@ pub fn flat_regions(gmesh: &GeometricMesh, fold_angle: Option<f64>) -> Vec<usize
         x
     }
     for (&(a, b), e) in &gmesh.edges {
-        let [Some(f0), Some(f1)] = e.faces else { continue };
+        let [Some(f0), Some(f1)] = e.faces else {
+            continue;
+        };
         if gmesh.faces[f0].kind != FaceKind::Flat || gmesh.faces[f1].kind != FaceKind::Flat {
             continue;
         }
@@ -110,11 +112,18 @@ mod tests {
         let squeeze = |_: &GVertexKind, m: &Point2| Point3::new(0.99 * m.x, m.y, 0.0);
         let gmesh = GeometricMesh::build(&layer, &pattern, &squeeze).unwrap();
         let labels = flat_regions(&gmesh, Some(0.01));
-        assert!(labels.iter().all(|&l| l == 0), "one flat region: {labels:?}");
+        assert!(
+            labels.iter().all(|&l| l == 0),
+            "one flat region: {labels:?}"
+        );
         for f in 0..gmesh.faces.len() {
             let s = triangle_strain(&gmesh, f).unwrap();
             assert!((s.compression - 0.01).abs() < 1e-12);
-            assert!(s.direction.x.abs() > 1.0 - 1e-12, "v along u: {:?}", s.direction);
+            assert!(
+                s.direction.x.abs() > 1.0 - 1e-12,
+                "v along u: {:?}",
+                s.direction
+            );
             assert!(s.ruling_direction.y.abs() > 1.0 - 1e-12);
         }
     }

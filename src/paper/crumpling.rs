@@ -62,7 +62,12 @@ fn edge_angle(gmesh: &GeometricMesh, a: u32, b: u32, dir: &Vector2<f64>) -> f64 
 
 /// Appendix A: propagate the imaginary rulings of `t_comp` (a flat triangle of the
 /// region `labels[t_comp]`) along `v_perp` in both directions.
-pub fn propagate(gmesh: &GeometricMesh, labels: &[usize], t_comp: usize, v_perp: &Vector2<f64>) -> Option<Strip> {
+pub fn propagate(
+    gmesh: &GeometricMesh,
+    labels: &[usize],
+    t_comp: usize,
+    v_perp: &Vector2<f64>,
+) -> Option<Strip> {
     let face = &gmesh.faces[t_comp];
     if face.vertices.len() != 3 || face.kind != FaceKind::Flat {
         return None;
@@ -95,11 +100,27 @@ pub fn propagate(gmesh: &GeometricMesh, labels: &[usize], t_comp: usize, v_perp:
             let opposite = face.vertices[(k + 2) % 3];
             if let GVertexKind::Singular { id } = gmesh.vertices[opposite as usize].kind {
                 strip.borders[1 - side] = Border::Singular { id };
-                strip.borders[side] = walk(gmesh, labels, t_comp, k, &dir, &mut strip.faces, &mut strip.last_faces[side])?;
+                strip.borders[side] = walk(
+                    gmesh,
+                    labels,
+                    t_comp,
+                    k,
+                    &dir,
+                    &mut strip.faces,
+                    &mut strip.last_faces[side],
+                )?;
                 return Some(strip);
             }
         }
-        strip.borders[side] = walk(gmesh, labels, t_comp, k, &dir, &mut strip.faces, &mut strip.last_faces[side])?;
+        strip.borders[side] = walk(
+            gmesh,
+            labels,
+            t_comp,
+            k,
+            &dir,
+            &mut strip.faces,
+            &mut strip.last_faces[side],
+        )?;
     }
     Some(strip)
 }
@@ -126,7 +147,8 @@ fn walk(
             return Some(Border::Boundary); // fig. 6(b)
         };
         match (gmesh.faces[g].kind, e.kind) {
-            (FaceKind::Curved { .. }, EdgeKind::Ruling { region, index }) | (FaceKind::Flat, EdgeKind::Ruling { region, index }) => {
+            (FaceKind::Curved { .. }, EdgeKind::Ruling { region, index })
+            | (FaceKind::Flat, EdgeKind::Ruling { region, index }) => {
                 return Some(Border::CurvedRuling {
                     region: region as u64, // region index, mapped to an id by the caller
                     ruling: index,
@@ -184,12 +206,20 @@ pub enum CrumpleEvent {
     /// Appendix B, fig. 24(a): a curved region of parallel rulings.
     ParallelRulings { region: u64, rulings: usize },
     /// Fig. 24(b): conical rulings to singular vertex `apex`.
-    ConicalRulings { region: u64, apex: u64, rulings: usize },
+    ConicalRulings {
+        region: u64,
+        apex: u64,
+        rulings: usize,
+    },
     /// Fig. 24(c): a degenerate curved region (one crease between two singular points).
     Crease { from: u64, to: u64 },
     /// Sec. 5.2: a new singular vertex, on a fold between flat regions (fig. 6c) or
     /// in a curved region (fig. 6d).
-    NewSingular { id: u64, material: Point2, on_fold: bool },
+    NewSingular {
+        id: u64,
+        material: Point2,
+        on_fold: bool,
+    },
 }
 
 /// Everything the remeshing needs besides the structure.
@@ -280,7 +310,12 @@ fn crumple_inner(
     let tri = &gmesh.faces[strain.face].vertices;
     let ts: Vec<f64> = tri
         .iter()
-        .map(|&v| gmesh.vertices[v as usize].material.coords.dot(&strain.direction))
+        .map(|&v| {
+            gmesh.vertices[v as usize]
+                .material
+                .coords
+                .dot(&strain.direction)
+        })
         .collect();
     let (t0, t1) = (
         ts.iter().copied().fold(f64::INFINITY, f64::min),
@@ -305,7 +340,10 @@ fn crumple_inner(
                 / vs.len() as f64,
         )
     };
-    let f_refs = [face_center(strip.last_faces[0], gmesh), face_center(strip.last_faces[1], gmesh)];
+    let f_refs = [
+        face_center(strip.last_faces[0], gmesh),
+        face_center(strip.last_faces[1], gmesh),
+    ];
 
     // resolve the borders into terminals: None = the free boundary, Some(id) = a
     // singular vertex the rulings pass through
@@ -314,12 +352,19 @@ fn crumple_inner(
     let mut current = gmesh.clone();
     for side in 0..2 {
         let dir = if side == 0 { band.v_perp } else { -band.v_perp };
-        let before = (layer.singular.len(), layer.regions.len(), layer.creases.len(), layer.next_region_id);
+        let before = (
+            layer.singular.len(),
+            layer.regions.len(),
+            layer.creases.len(),
+            layer.next_region_id,
+        );
         terminals[side] = match strip.borders[side] {
             Border::Boundary => None,
             Border::Singular { id } => Some(id),
             Border::FlatFold { a, b } => {
-                let Some(id) = split_fold(ctx, layer, &current, &band, a, b, rng) else { return None; };
+                let Some(id) = split_fold(ctx, layer, &current, &band, a, b, rng) else {
+                    return None;
+                };
                 events.push(CrumpleEvent::NewSingular {
                     id,
                     material: layer.singular_material(id)?,
@@ -328,7 +373,19 @@ fn crumple_inner(
                 Some(id)
             }
             Border::CurvedRuling { region, ruling } => {
-                let Some((id, new)) = insert_in_curved(ctx, layer, &current, &band, region, ruling, &f_refs[side], &dir, rng) else { return None; };
+                let Some((id, new)) = insert_in_curved(
+                    ctx,
+                    layer,
+                    &current,
+                    &band,
+                    region,
+                    ruling,
+                    &f_refs[side],
+                    &dir,
+                    rng,
+                ) else {
+                    return None;
+                };
                 if new {
                     events.push(CrumpleEvent::NewSingular {
                         id,
@@ -339,8 +396,17 @@ fn crumple_inner(
                 Some(id)
             }
         };
-        if before != (layer.singular.len(), layer.regions.len(), layer.creases.len(), layer.next_region_id) {
-            let Ok(c) = GeometricMesh::build(layer, ctx.pattern, ctx.position) else { return None; };
+        if before
+            != (
+                layer.singular.len(),
+                layer.regions.len(),
+                layer.creases.len(),
+                layer.next_region_id,
+            )
+        {
+            let Ok(c) = GeometricMesh::build(layer, ctx.pattern, ctx.position) else {
+                return None;
+            };
             current = c;
         }
     }
@@ -375,7 +441,10 @@ fn crumple_inner(
             }
             let n = rulings.len();
             let id = layer.add_region(rulings);
-            events.push(CrumpleEvent::ParallelRulings { region: id, rulings: n });
+            events.push(CrumpleEvent::ParallelRulings {
+                region: id,
+                rulings: n,
+            });
         }
         [Some(s), None] | [None, Some(s)] => {
             // fig. 24(b): conical rulings from s to the free border
@@ -394,7 +463,11 @@ fn crumple_inner(
             }
             let n = rulings.len();
             let id = layer.add_region(rulings);
-            events.push(CrumpleEvent::ConicalRulings { region: id, apex: s, rulings: n });
+            events.push(CrumpleEvent::ConicalRulings {
+                region: id,
+                apex: s,
+                rulings: n,
+            });
         }
     }
     // the result must mesh
@@ -410,7 +483,13 @@ fn snap(ctx: &CrumpleContext, gmesh: &GeometricMesh, s: f64) -> f64 {
 
 /// The arc length of the S_G boundary vertex nearest to `s` within `tol` (m), not in
 /// `exclude`, or `s` itself.
-pub(crate) fn snap_to_vertex(ctx: &CrumpleContext, gmesh: &GeometricMesh, s: f64, tol: f64, exclude: &[u32]) -> f64 {
+pub(crate) fn snap_to_vertex(
+    ctx: &CrumpleContext,
+    gmesh: &GeometricMesh,
+    s: f64,
+    tol: f64,
+    exclude: &[u32],
+) -> f64 {
     let per = ctx.pattern.perimeter();
     let mut best = (tol, s);
     for &v in &gmesh.boundary {
@@ -498,7 +577,10 @@ pub(crate) fn segment_is_free(
         if gmesh.dihedral(a, b).unwrap_or(0.0) <= ctx.params.flat_angle {
             continue;
         }
-        let (pa, pb) = (gmesh.vertices[a as usize].material, gmesh.vertices[b as usize].material);
+        let (pa, pb) = (
+            gmesh.vertices[a as usize].material,
+            gmesh.vertices[b as usize].material,
+        );
         if segments_cross(p, q, &pa, &pb, tol) {
             return false;
         }
@@ -517,7 +599,11 @@ pub(crate) fn segment_is_free(
         if f.kind == FaceKind::Flat {
             continue;
         }
-        let poly: Vec<Point2> = f.vertices.iter().map(|&v| gmesh.vertices[v as usize].material).collect();
+        let poly: Vec<Point2> = f
+            .vertices
+            .iter()
+            .map(|&v| gmesh.vertices[v as usize].material)
+            .collect();
         if super::pattern::in_convex_polygon(&poly, &mid, 1e-9) {
             return false;
         }
@@ -546,7 +632,11 @@ fn split_fold(
     }
     let (u0, u1) = band.clip_segment(&p, &q).unwrap_or((0.0, 1.0));
     let (u0, u1) = (u0.max(gap / len), u1.min(1.0 - gap / len));
-    let (u0, u1) = if u1 > u0 { (u0, u1) } else { (gap / len, 1.0 - gap / len) };
+    let (u0, u1) = if u1 > u0 {
+        (u0, u1)
+    } else {
+        (gap / len, 1.0 - gap / len)
+    };
     let u = rng.random_range(u0..=u1);
     let s = p + (q - p) * u;
     if ctx.pattern.signed_inside_distance(&s) < gap
@@ -640,7 +730,10 @@ fn insert_in_curved(
     }
     // sec. 5.2: singular points appear where the rulings meet a region of higher
     // curvature; a curved region flatter than theta_0 all along does not resist
-    let e_sing = order.iter().copied().find(|&k| dihedral(k) > params.flat_angle)?;
+    let e_sing = order
+        .iter()
+        .copied()
+        .find(|&k| dihedral(k) > params.flat_angle)?;
 
     // chi(s) = exp(-d^2/sigma^2): uniform along e_sing (where the band meets it),
     // normal across with standard deviation sigma / sqrt(2)
@@ -660,11 +753,18 @@ fn insert_in_curved(
         if ctx.pattern.signed_inside_distance(&cand) < gap {
             continue;
         }
-        if gmesh.vertices.iter().any(|v| (v.material - cand).norm() < gap) {
+        if gmesh
+            .vertices
+            .iter()
+            .any(|v| (v.material - cand).norm() < gap)
+        {
             continue;
         }
         // not on another ruling of C
-        if rv.iter().any(|&[a, b]| point_segment(&cand, &mat(a), &mat(b)).0 < 1e-6) {
+        if rv
+            .iter()
+            .any(|&[a, b]| point_segment(&cand, &mat(a), &mat(b)).0 < 1e-6)
+        {
             continue;
         }
         s = Some(cand);
@@ -707,10 +807,16 @@ fn insert_in_curved(
     let ends: Vec<usize> = removed.iter().copied().chain(e_sup).collect();
     for k in ends {
         if let e @ Endpoint::Boundary(_) = old[k].a {
-            fan_a.push(Ruling { a: Endpoint::Singular(id), b: e });
+            fan_a.push(Ruling {
+                a: Endpoint::Singular(id),
+                b: e,
+            });
         }
         if let e @ Endpoint::Boundary(_) = old[k].b {
-            fan_b.push(Ruling { a: Endpoint::Singular(id), b: e });
+            fan_b.push(Ruling {
+                a: Endpoint::Singular(id),
+                b: e,
+            });
         }
     }
     if kept.len() >= 2 {
@@ -726,7 +832,6 @@ fn insert_in_curved(
     Some((id, true))
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -736,7 +841,14 @@ mod tests {
     /// A 10 cm sheet whose band u in [0.04, 0.08] is a curved region of rulings along
     /// v, bent about the v axis by `bend` rad per ruling gap; the whole sheet is
     /// shortened along v by `squeeze` (dimensionless).
-    fn bent_and_squeezed(bend: f64, squeeze: f64) -> (Pattern, GeometricLayer, impl Fn(&GVertexKind, &Point2) -> Point3) {
+    fn bent_and_squeezed(
+        bend: f64,
+        squeeze: f64,
+    ) -> (
+        Pattern,
+        GeometricLayer,
+        impl Fn(&GVertexKind, &Point2) -> Point3,
+    ) {
         let pattern = Pattern::rectangle(0.1, 0.1);
         let mut layer = GeometricLayer::default();
         let us = [0.04, 0.05, 0.06, 0.07, 0.08];
@@ -784,8 +896,14 @@ mod tests {
             .filter_map(|f| triangle_strain(&gmesh, f))
             .max_by(|a, b| a.compression.total_cmp(&b.compression))
             .unwrap();
-        assert!(strain.compression > params.compression_threshold, "{strain:?}");
-        assert!(strain.ruling_direction.x.abs() > 0.9, "v_perp along u: {strain:?}");
+        assert!(
+            strain.compression > params.compression_threshold,
+            "{strain:?}"
+        );
+        assert!(
+            strain.ruling_direction.x.abs() > 0.9,
+            "v_perp along u: {strain:?}"
+        );
         let ctx = CrumpleContext {
             pattern: &pattern,
             params: &params,
@@ -801,9 +919,17 @@ mod tests {
         assert_eq!(layer.singular.len(), 1);
         let s = layer.singular[0].material;
         // inside the curved band (where the rulings bend), within a few sigma of a ruling
-        assert!(s.x > 0.04 - 4.0 * params.singularity_sigma && s.x < 0.08, "{s:?}");
+        assert!(
+            s.x > 0.04 - 4.0 * params.singularity_sigma && s.x < 0.08,
+            "{s:?}"
+        );
         // the conical rulings of s reach the free border of the flat region
-        assert!(events.iter().any(|e| matches!(e, CrumpleEvent::ConicalRulings { apex: 0, .. })), "{events:?}");
+        assert!(
+            events
+                .iter()
+                .any(|e| matches!(e, CrumpleEvent::ConicalRulings { apex: 0, .. })),
+            "{events:?}"
+        );
         // and the structure still meshes
         assert!(GeometricMesh::build(&layer, &pattern, &position).is_ok());
     }

@@ -110,7 +110,6 @@ fn lame(params: &PaperParams) -> (f64, f64) {
     (k / (2.0 * (1.0 + nu)), k * nu / (1.0 - nu * nu))
 }
 
-
 /// Gradient of the signed dihedral angle ([`signed_dihedral`]) of hinge (x0, x1; x2
 /// left, x3 right) with respect to its four vertices (Bridson et al. 2003).
 pub fn dihedral_gradient(x: &[Vector3; 4]) -> [Vector3; 4] {
@@ -199,7 +198,8 @@ impl Potential<'_> {
                 jac[0][v] = f0 * b[v].x;
                 jac[1][v] = f1 * b[v].y;
                 jac[2][v] = 0.5 * (f1 * b[v].x + f0 * b[v].y);
-                g[t[v] as usize] += a * (s00 * b[v].x * f0 + s01 * (b[v].x * f1 + b[v].y * f0) + s11 * b[v].y * f1);
+                g[t[v] as usize] +=
+                    a * (s00 * b[v].x * f0 + s01 * (b[v].x * f1 + b[v].y * f0) + s11 * b[v].y * f1);
             }
             let c = [
                 [a * (2.0 * mu + lambda), a * lambda, 0.0],
@@ -212,7 +212,11 @@ impl Potential<'_> {
             let mut splus = Matrix2::zeros();
             let clamp = self.clamp_stress.get();
             for k in 0..2 {
-                let l = if clamp { eig.eigenvalues[k].max(0.0) } else { eig.eigenvalues[k] };
+                let l = if clamp {
+                    eig.eigenvalues[k].max(0.0)
+                } else {
+                    eig.eigenvalues[k]
+                };
                 let v = eig.eigenvectors.column(k);
                 splus += l * v * v.transpose();
             }
@@ -480,7 +484,11 @@ mod tests {
                 xm[v][a] -= h;
                 let fd = (signed_dihedral(&xp) - signed_dihedral(&xm)) / (2.0 * h);
                 // central differences: error O(h^2) ~ 1e-12 times third derivatives ~ 1
-                assert!((fd - g[v][a]).abs() < 1e-7, "vertex {v} axis {a}: {fd} vs {}", g[v][a]);
+                assert!(
+                    (fd - g[v][a]).abs() < 1e-7,
+                    "vertex {v} axis {a}: {fd} vs {}",
+                    g[v][a]
+                );
             }
         }
     }
@@ -489,7 +497,11 @@ mod tests {
     fn stretching_gradient_matches_finite_differences() {
         use crate::geometry::Point2;
         let mut mesh = PhysicalMesh {
-            material: vec![Point2::new(0.0, 0.0), Point2::new(0.01, 0.0), Point2::new(0.002, 0.012)],
+            material: vec![
+                Point2::new(0.0, 0.0),
+                Point2::new(0.01, 0.0),
+                Point2::new(0.002, 0.012),
+            ],
             triangles: vec![[0, 1, 2]],
             ..Default::default()
         };
@@ -525,9 +537,15 @@ mod tests {
                 let mut xm = x.clone();
                 xp[v][a] += h;
                 xm[v][a] -= h;
-                let fd = (pot.evaluate(&xp, None, &mut parts) - pot.evaluate(&xm, None, &mut parts)) / (2.0 * h);
+                let fd = (pot.evaluate(&xp, None, &mut parts)
+                    - pot.evaluate(&xm, None, &mut parts))
+                    / (2.0 * h);
                 let scale = g.iter().map(|v| v.norm()).fold(0.0, f64::max);
-                assert!((fd - g[v][a]).abs() < 1e-5 * scale, "{v} {a}: {fd} vs {}", g[v][a]);
+                assert!(
+                    (fd - g[v][a]).abs() < 1e-5 * scale,
+                    "{v} {a}: {fd} vs {}",
+                    g[v][a]
+                );
             }
         }
         let _ = mesh.position.len();

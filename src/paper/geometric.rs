@@ -198,8 +198,13 @@ pub enum EdgeKind {
     /// An edge of the flat triangulation only.
     Plain,
     Boundary,
-    Ruling { region: usize, index: usize },
-    Crease { index: usize },
+    Ruling {
+        region: usize,
+        index: usize,
+    },
+    Crease {
+        index: usize,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -287,7 +292,11 @@ impl GeometricMesh {
         }
         if layer.min_boundary_spacing > 0.0 && merged.len() > 1 {
             for i in 0..merged.len() {
-                let next = if i + 1 < merged.len() { merged[i + 1] } else { merged[0] + per };
+                let next = if i + 1 < merged.len() {
+                    merged[i + 1]
+                } else {
+                    merged[0] + per
+                };
                 if next - merged[i] < layer.min_boundary_spacing {
                     return Err(MeshError::BadFace(format!(
                         "boundary vertices {} m apart (< {} m)",
@@ -367,7 +376,13 @@ impl GeometricMesh {
                 if kinds.contains_key(&key) {
                     return Err(MeshError::Crossing("two rulings share both ends".into()));
                 }
-                kinds.insert(key, EdgeKind::Ruling { region: ri, index: k });
+                kinds.insert(
+                    key,
+                    EdgeKind::Ruling {
+                        region: ri,
+                        index: k,
+                    },
+                );
                 constraints.push([a as usize, b as usize]);
             }
             mesh.ruling_vertices.push(rv);
@@ -409,7 +424,8 @@ impl GeometricMesh {
                 if vi == a || vi == b {
                     continue;
                 }
-                let (d, t) = super::pattern::point_segment(&v.material, &seg_pts[i][0], &seg_pts[i][1]);
+                let (d, t) =
+                    super::pattern::point_segment(&v.material, &seg_pts[i][0], &seg_pts[i][1]);
                 if d < 1e-7 && t > 0.0 && t < 1.0 {
                     return Err(MeshError::Crossing(format!(
                         "segment {i} passes through vertex {vi}"
@@ -418,7 +434,9 @@ impl GeometricMesh {
             }
             let mid = Point2::from((seg_pts[i][0].coords + seg_pts[i][1].coords) * 0.5);
             if !pattern.contains(&mid, 1e-9) || pattern.signed_inside_distance(&mid) < 1e-9 {
-                return Err(MeshError::BadFace(format!("segment {i} is not inside the sheet")));
+                return Err(MeshError::BadFace(format!(
+                    "segment {i} is not inside the sheet"
+                )));
             }
         }
 
@@ -436,7 +454,9 @@ impl GeometricMesh {
         )
         .map_err(|e| MeshError::Triangulation(format!("{e:?}")))?;
         if conflict {
-            return Err(MeshError::Crossing("constraint conflict in the triangulation".into()));
+            return Err(MeshError::Crossing(
+                "constraint conflict in the triangulation".into(),
+            ));
         }
         use spade::Triangulation;
         if cdt.num_vertices() != mesh.vertices.len() {
@@ -452,7 +472,11 @@ impl GeometricMesh {
                 // the chains along ∂S̄ between consecutive ruling ends pass no other end
                 // of this region's rulings (the shorter one when both qualify)
                 let mut others: Vec<u32> = rv.iter().flat_map(|r| [r[0], r[1]]).collect();
-                let avoid_a: Vec<u32> = others.iter().copied().filter(|&v| v != a0 && v != a1).collect();
+                let avoid_a: Vec<u32> = others
+                    .iter()
+                    .copied()
+                    .filter(|&v| v != a0 && v != a1)
+                    .collect();
                 others.retain(|&v| v != b0 && v != b1);
                 let chain_a = mesh.boundary_chain(a0, a1, &avoid_a, nb)?;
                 let chain_b = mesh.boundary_chain(b1, b0, &others, nb)?;
@@ -468,7 +492,10 @@ impl GeometricMesh {
                         layer.regions[ri].id
                     )));
                 }
-                let mat: Vec<Point2> = poly.iter().map(|&v| mesh.vertices[v as usize].material).collect();
+                let mat: Vec<Point2> = poly
+                    .iter()
+                    .map(|&v| mesh.vertices[v as usize].material)
+                    .collect();
                 let area = polygon_area(&mat);
                 if area.abs() < 1e-12 {
                     return Err(MeshError::BadFace(format!(
@@ -479,12 +506,22 @@ impl GeometricMesh {
                 if area < 0.0 {
                     poly.reverse();
                 }
-                curved_polys.push((poly, FaceKind::Curved { region: ri, face: k }));
+                curved_polys.push((
+                    poly,
+                    FaceKind::Curved {
+                        region: ri,
+                        face: k,
+                    },
+                ));
             }
         }
         let curved_mats: Vec<Vec<Point2>> = curved_polys
             .iter()
-            .map(|(p, _)| p.iter().map(|&v| mesh.vertices[v as usize].material).collect())
+            .map(|(p, _)| {
+                p.iter()
+                    .map(|&v| mesh.vertices[v as usize].material)
+                    .collect()
+            })
             .collect();
         let mut covered = vec![0.0; curved_polys.len()];
         let mut flat = Vec::new();
@@ -545,7 +582,11 @@ impl GeometricMesh {
             .faces
             .iter()
             .map(|f| {
-                let pts: Vec<Point3> = f.vertices.iter().map(|&v| mesh.vertices[v as usize].position).collect();
+                let pts: Vec<Point3> = f
+                    .vertices
+                    .iter()
+                    .map(|&v| mesh.vertices[v as usize].position)
+                    .collect();
                 newell_normal(&pts)
             })
             .collect();
@@ -554,7 +595,13 @@ impl GeometricMesh {
 
     /// The boundary vertices from `from` to `to` (both included) along ∂S̄, in the
     /// direction that does not pass any of `avoid`. A single vertex when equal.
-    fn boundary_chain(&self, from: u32, to: u32, avoid: &[u32], nb: usize) -> Result<Vec<u32>, MeshError> {
+    fn boundary_chain(
+        &self,
+        from: u32,
+        to: u32,
+        avoid: &[u32],
+        nb: usize,
+    ) -> Result<Vec<u32>, MeshError> {
         if from == to {
             return Ok(vec![from]);
         }
@@ -583,7 +630,11 @@ impl GeometricMesh {
             }
             let length = |c: &[u32]| -> f64 {
                 c.windows(2)
-                    .map(|w| (self.vertices[w[1] as usize].material - self.vertices[w[0] as usize].material).norm())
+                    .map(|w| {
+                        (self.vertices[w[1] as usize].material
+                            - self.vertices[w[0] as usize].material)
+                            .norm()
+                    })
                     .sum()
             };
             if ok && best.as_ref().is_none_or(|b| length(&chain) < length(b)) {
@@ -593,7 +644,9 @@ impl GeometricMesh {
         if let Some(chain) = best {
             return Ok(chain);
         }
-        Err(MeshError::BadFace("no boundary chain between two rulings".into()))
+        Err(MeshError::BadFace(
+            "no boundary chain between two rulings".into(),
+        ))
     }
 
     /// Unsigned dihedral angle across edge (a, b), rad; None on the boundary.
@@ -690,10 +743,17 @@ mod tests {
         }
         layer.add_region(rulings);
         let mesh = GeometricMesh::build(&layer, &pattern, &flat_position).unwrap();
-        let curved = mesh.faces.iter().filter(|f| f.kind != FaceKind::Flat).count();
+        let curved = mesh
+            .faces
+            .iter()
+            .filter(|f| f.kind != FaceKind::Flat)
+            .count();
         assert_eq!(curved, 2);
         let total: f64 = (0..mesh.faces.len()).map(|f| mesh.face_area(f)).sum();
-        assert!((total - 0.01).abs() < 1e-12, "faces tile the sheet: {total}");
+        assert!(
+            (total - 0.01).abs() < 1e-12,
+            "faces tile the sheet: {total}"
+        );
         // crossing segments are rejected
         layer.creases.push(Crease {
             a: Endpoint::Boundary(0.05),
@@ -717,7 +777,11 @@ mod tests {
             .collect();
         layer.add_region(rulings);
         let mesh = GeometricMesh::build(&layer, &pattern, &flat_position).unwrap();
-        let curved: Vec<&GFace> = mesh.faces.iter().filter(|f| f.kind != FaceKind::Flat).collect();
+        let curved: Vec<&GFace> = mesh
+            .faces
+            .iter()
+            .filter(|f| f.kind != FaceKind::Flat)
+            .collect();
         assert_eq!(curved.len(), 3);
         assert!(curved.iter().all(|f| f.vertices.len() == 3));
         assert_eq!(layer.regions[0].singular_apex(), Some(s));

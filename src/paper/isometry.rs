@@ -34,7 +34,11 @@ fn mean_length_error(mesh: &PhysicalMesh) -> f64 {
 
 /// Restore edge lengths of `mesh` (positions only). `fixed[v]` marks handle
 /// vertices, which do not move. At most `max_iterations` phase I iterations.
-pub fn restore_lengths(mesh: &mut PhysicalMesh, fixed: &[bool], max_iterations: u32) -> IsometryReport {
+pub fn restore_lengths(
+    mesh: &mut PhysicalMesh,
+    fixed: &[bool],
+    max_iterations: u32,
+) -> IsometryReport {
     let ne = mesh.edges.len();
     let nt = mesh.triangles.len();
     let mut report = IsometryReport {
@@ -198,7 +202,9 @@ pub fn restore_lengths(mesh: &mut PhysicalMesh, fixed: &[bool], max_iterations: 
         }
     }
     // fixed vertices: move their columns to the right-hand side
-    let fixed_dofs: Vec<bool> = (0..n).map(|v| fixed.get(v).copied().unwrap_or(false)).collect();
+    let fixed_dofs: Vec<bool> = (0..n)
+        .map(|v| fixed.get(v).copied().unwrap_or(false))
+        .collect();
     for [i, j] in &mesh.edges {
         let (i, j) = (*i as usize, *j as usize);
         for (free, fix) in [(i, j), (j, i)] {
@@ -245,7 +251,8 @@ mod tests {
         for j in 0..n {
             for i in 0..n {
                 mesh.material.push(Point2::new(i as f64 * h, j as f64 * h));
-                mesh.position.push(Point3::new(i as f64 * h, j as f64 * h, 0.0));
+                mesh.position
+                    .push(Point3::new(i as f64 * h, j as f64 * h, 0.0));
             }
         }
         for j in 0..n - 1 {
@@ -277,19 +284,35 @@ mod tests {
             let r = 0.03;
             let phi = m.x / r;
             let squeeze = 0.98;
-            *p = Point3::new(r * (phi * squeeze).sin(), m.y * squeeze, r * (1.0 - (phi * squeeze).cos()));
+            *p = Point3::new(
+                r * (phi * squeeze).sin(),
+                m.y * squeeze,
+                r * (1.0 - (phi * squeeze).cos()),
+            );
             p.z += 2e-4 * (37.0 * m.x + 11.0 * m.y).sin();
         }
         let before = mean_length_error(&mesh);
         let mut fixed = vec![false; mesh.material.len()];
         fixed[0] = true;
         let report = restore_lengths(&mut mesh, &fixed, 200);
-        assert!(report.length_error_before > 0.01, "perturbed: {}", report.length_error_before);
+        assert!(
+            report.length_error_before > 0.01,
+            "perturbed: {}",
+            report.length_error_before
+        );
         // phase I reduces the closure defect, phase II the length error (the paper's
         // table III: 0.15 % -> 0.13 % on fig. 1 with 200 iterations; we ask for a
         // reduction by at least 3x from a 2 % error)
         assert!(report.closure_after < report.closure_before);
-        assert!(report.length_error_after < before / 3.0, "{} -> {}", before, report.length_error_after);
-        assert!(mesh.position[0] == Point3::new(0.0, 0.0, 0.0), "handle fixed");
+        assert!(
+            report.length_error_after < before / 3.0,
+            "{} -> {}",
+            before,
+            report.length_error_after
+        );
+        assert!(
+            mesh.position[0] == Point3::new(0.0, 0.0, 0.0),
+            "handle fixed"
+        );
     }
 }

@@ -309,14 +309,22 @@ pub fn build_physical(
     let mut gedges: Vec<[Point2; 2]> = Vec::new();
     for (&(a, b), e) in &gmesh.edges {
         if matches!(e.kind, EdgeKind::Ruling { .. } | EdgeKind::Crease { .. }) {
-            gedges.push([gmesh.vertices[a as usize].material, gmesh.vertices[b as usize].material]);
+            gedges.push([
+                gmesh.vertices[a as usize].material,
+                gmesh.vertices[b as usize].material,
+            ]);
         }
     }
     let curved_polys: Vec<Vec<Point2>> = gmesh
         .faces
         .iter()
         .filter(|f| f.kind != FaceKind::Flat)
-        .map(|f| f.vertices.iter().map(|&v| gmesh.vertices[v as usize].material).collect())
+        .map(|f| {
+            f.vertices
+                .iter()
+                .map(|&v| gmesh.vertices[v as usize].material)
+                .collect()
+        })
         .collect();
     let nrows = ((hi.y - lo.y) / row).ceil() as i64 + 1;
     let ncols = ((hi.x - lo.x) / d).ceil() as i64 + 2;
@@ -341,7 +349,10 @@ pub fn build_physical(
             {
                 continue;
             }
-            if curved_polys.iter().any(|poly| in_convex_polygon(poly, &p, -1e-12)) {
+            if curved_polys
+                .iter()
+                .any(|poly| in_convex_polygon(poly, &p, -1e-12))
+            {
                 continue;
             }
             let Some(f) = gmesh.flat_face_at(&p) else {
@@ -407,9 +418,10 @@ pub fn build_physical(
         for i in 0..n {
             let (a, b) = (f.vertices[i], f.vertices[(i + 1) % n]);
             poly.push(a);
-            if let (GVertexKind::Boundary { s: sa }, GVertexKind::Boundary { s: sb }) =
-                (gmesh.vertices[a as usize].kind, gmesh.vertices[b as usize].kind)
-            {
+            if let (GVertexKind::Boundary { s: sa }, GVertexKind::Boundary { s: sb }) = (
+                gmesh.vertices[a as usize].kind,
+                gmesh.vertices[b as usize].kind,
+            ) {
                 let is_boundary_edge = gmesh
                     .edges
                     .get(&super::geometric::edge_key(a, b))
@@ -440,7 +452,11 @@ pub fn build_physical(
                 }
             }
         }
-        let mats: Vec<Point2> = f.vertices.iter().map(|&v| gmesh.vertices[v as usize].material).collect();
+        let mats: Vec<Point2> = f
+            .vertices
+            .iter()
+            .map(|&v| gmesh.vertices[v as usize].material)
+            .collect();
         for &v in &poly {
             curved_of_vertex[v as usize] = true;
         }
@@ -451,7 +467,10 @@ pub fn build_physical(
         let vs = face.vertices().map(|v| v.fix().index() as u32);
         let m = vs.map(|v| sp.material[v as usize]);
         let c = Point2::from((m[0].coords + m[1].coords + m[2].coords) / 3.0);
-        if curved_polys_2d.iter().any(|p| in_convex_polygon(p, &c, 0.0)) {
+        if curved_polys_2d
+            .iter()
+            .any(|p| in_convex_polygon(p, &c, 0.0))
+        {
             continue;
         }
         sp.triangles.push(vs);
@@ -515,7 +534,12 @@ pub fn build_physical(
 
 impl PhysicalMesh {
     /// Edges, hinges with rest angles (eq. 1, preset creases), lumped masses.
-    fn finish_topology(&mut self, layer: &GeometricLayer, gmesh: &GeometricMesh, params: &PaperParams) {
+    fn finish_topology(
+        &mut self,
+        layer: &GeometricLayer,
+        gmesh: &GeometricMesh,
+        params: &PaperParams,
+    ) {
         let mut edge_tris: BTreeMap<(u32, u32), Vec<(usize, u32)>> = BTreeMap::new();
         for (ti, t) in self.triangles.iter().enumerate() {
             for k in 0..3 {
@@ -553,7 +577,10 @@ impl PhysicalMesh {
             .zip(&gmesh.crease_vertices)
             .filter_map(|(c, [a, b])| match c.kind {
                 super::geometric::CreaseKind::Preset { rest_angle } => Some((
-                    [gmesh.vertices[*a as usize].material, gmesh.vertices[*b as usize].material],
+                    [
+                        gmesh.vertices[*a as usize].material,
+                        gmesh.vertices[*b as usize].material,
+                    ],
                     rest_angle,
                 )),
                 _ => None,
@@ -567,11 +594,12 @@ impl PhysicalMesh {
             // orient (v0, v1) as in the first triangle
             let t0 = &self.triangles[tris[0].0];
             let k = (0..3).find(|&k| t0[k] == a || t0[k] == b).unwrap_or(0);
-            let (v0, v1) = if t0[k] == a && t0[(k + 1) % 3] == b || t0[(k + 2) % 3] == a && t0[k] == b {
-                (a, b)
-            } else {
-                (b, a)
-            };
+            let (v0, v1) =
+                if t0[k] == a && t0[(k + 1) % 3] == b || t0[(k + 2) % 3] == a && t0[k] == b {
+                    (a, b)
+                } else {
+                    (b, a)
+                };
             let (v2, v3) = (tris[0].1, tris[1].1);
             let e2 = (self.material[a as usize] - self.material[b as usize]).norm_squared();
             let areas = area(&self.triangles[tris[0].0]) + area(&self.triangles[tris[1].0]);
@@ -580,7 +608,9 @@ impl PhysicalMesh {
             let mb = self.material[b as usize];
             let mut preset_rest = None;
             for (seg, angle) in &preset {
-                if point_segment(&ma, &seg[0], &seg[1]).0 < 1e-9 && point_segment(&mb, &seg[0], &seg[1]).0 < 1e-9 {
+                if point_segment(&ma, &seg[0], &seg[1]).0 < 1e-9
+                    && point_segment(&mb, &seg[0], &seg[1]).0 < 1e-9
+                {
                     preset_rest = Some(*angle);
                 }
             }

@@ -13,14 +13,18 @@ use rand_chacha::ChaCha8Rng;
 use super::compression::{flat_regions, triangle_strain};
 use super::crumpling::{crumple_flat_region, CrumpleContext, CrumpleEvent};
 use super::fem::{implicit_step, Dirichlet, FemReport, FemSystem, Spring};
-use super::geometric::{Crease, CreaseKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh};
+use super::geometric::{
+    Crease, CreaseKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
+};
 use super::isometry::{restore_lengths, IsometryReport};
 use super::params::{PaperError, PaperParams};
 use super::pattern::Pattern;
 use super::physical::{build_physical, Interpolator, PhysicalMesh};
 use super::tracking::{fit_cones, update_junctions, ConeReport, JunctionReport};
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3};
-use crate::sim::{Energies, HandleSpec, ObjectStepReport, OrientationMode, Phase, PhaseClock, SingularPoint};
+use crate::sim::{
+    Energies, HandleSpec, ObjectStepReport, OrientationMode, Phase, PhaseClock, SingularPoint,
+};
 
 /// A handle holding this sheet.
 #[derive(Clone, Debug, PartialEq)]
@@ -89,7 +93,11 @@ pub struct PaperSim {
 impl PaperSim {
     /// A flat sheet at `params.placement`. `handles` are the world's handles; those
     /// with `object == index` hold this sheet and must grasp it on its boundary.
-    pub fn new(params: PaperParams, handles: &[HandleSpec], index: usize) -> Result<PaperSim, PaperError> {
+    pub fn new(
+        params: PaperParams,
+        handles: &[HandleSpec],
+        index: usize,
+    ) -> Result<PaperSim, PaperError> {
         params.validate()?;
         let pattern = Pattern::rectangle(params.width, params.height);
         let mut layer = GeometricLayer {
@@ -122,7 +130,8 @@ impl PaperSim {
             });
         }
         for c in &params.preset_creases {
-            let (Some(a), Some(b)) = (pattern.arc_of(&c.from, 1e-9), pattern.arc_of(&c.to, 1e-9)) else {
+            let (Some(a), Some(b)) = (pattern.arc_of(&c.from, 1e-9), pattern.arc_of(&c.to, 1e-9))
+            else {
                 return Err(PaperError::Invalid {
                     key: "creases",
                     message: "a preset crease must go from boundary to boundary".into(),
@@ -131,7 +140,9 @@ impl PaperSim {
             layer.creases.push(Crease {
                 a: Endpoint::Boundary(a),
                 b: Endpoint::Boundary(b),
-                kind: CreaseKind::Preset { rest_angle: c.rest_angle },
+                kind: CreaseKind::Preset {
+                    rest_angle: c.rest_angle,
+                },
             });
         }
         let placement = params.placement;
@@ -215,8 +226,15 @@ impl PaperSim {
     }
 
     /// All three steps of one frame (see the module doc).
-    pub fn step(&mut self, dt: f64, time: f64, index: usize, handles: &[HandleSpec], targets: &[Pose]) -> ObjectStepReport {
-        self.step_with_clock(dt, time, index, handles, targets, &mut crate::sim::NoClock)
+    pub fn step(
+        &mut self,
+        dt: f64,
+        time: f64,
+        index: usize,
+        handles: &[HandleSpec],
+        targets: &[Pose],
+    ) -> ObjectStepReport {
+        self.step_with_clock(dt, time, index, handles, targets, &crate::sim::NoClock)
     }
 
     /// [`PaperSim::step`] with each phase run inside `clock` (the edge times them).
@@ -227,12 +245,14 @@ impl PaperSim {
         index: usize,
         handles: &[HandleSpec],
         targets: &[Pose],
-        clock: &mut dyn PhaseClock,
+        clock: &dyn PhaseClock,
     ) -> ObjectStepReport {
         let mut fem = FemReport::default();
-        clock.time(index, Phase::Simulation, &mut || fem = self.simulate(dt, time, handles, targets));
-        clock.time(index, Phase::Remesh, &mut || self.remesh());
-        clock.time(index, Phase::Isometry, &mut || self.track());
+        clock.time(Some(index), Phase::Simulation, &mut || {
+            fem = self.simulate(dt, time, handles, targets)
+        });
+        clock.time(Some(index), Phase::Remesh, &mut || self.remesh());
+        clock.time(Some(index), Phase::Isometry, &mut || self.track());
         self.report(&fem)
     }
 
@@ -256,17 +276,17 @@ impl PaperSim {
     }
 
     fn vertex_at(&self, m: &Point2) -> Option<usize> {
-        self.sp
-            .material
-            .iter()
-            .position(|x| (x - m).norm() < 1e-9)
+        self.sp.material.iter().position(|x| (x - m).norm() < 1e-9)
     }
 
     /// The hard constraints of the handles at time `time`: each active handle holds its
     /// grasp vertex (the axes it holds) and, unless its orientation is free, the tangent
     /// plane through two neighbouring vertices placed rigidly in the gripper frame
     /// (sec. 4). Returns (dirichlet, springs, held points for the isometry step).
-    fn handle_constraints(&self, time: f64) -> (Vec<Dirichlet>, Vec<Spring>, Vec<(Point2, Point3)>) {
+    fn handle_constraints(
+        &self,
+        time: f64,
+    ) -> (Vec<Dirichlet>, Vec<Spring>, Vec<(Point2, Point3)>) {
         let mut dirichlet = Vec::new();
         let mut springs = Vec::new();
         let mut held = Vec::new();
@@ -274,12 +294,25 @@ impl PaperSim {
             if h.release_at.is_some_and(|t| time >= t) {
                 continue;
             }
-            let Some(target) = self.last_targets.get(h.world).copied().flatten() else { continue };
-            let Some(v) = self.sp.material.iter().position(|x| (x - h.material).norm() < 1e-9) else { continue };
+            let Some(target) = self.last_targets.get(h.world).copied().flatten() else {
+                continue;
+            };
+            let Some(v) = self
+                .sp
+                .material
+                .iter()
+                .position(|x| (x - h.material).norm() < 1e-9)
+            else {
+                continue;
+            };
             let p = Point3::from(target.translation.vector);
             for axis in 0..3 {
                 if h.axes[axis] {
-                    dirichlet.push(Dirichlet { vertex: v as u32, axis, value: p[axis] });
+                    dirichlet.push(Dirichlet {
+                        vertex: v as u32,
+                        axis,
+                        value: p[axis],
+                    });
                 }
             }
             if h.axes.iter().all(|&a| a) {
@@ -294,7 +327,11 @@ impl PaperSim {
                 match h.orientation {
                     OrientationMode::Full => {
                         for axis in 0..3 {
-                            dirichlet.push(Dirichlet { vertex: n as u32, axis, value: q[axis] });
+                            dirichlet.push(Dirichlet {
+                                vertex: n as u32,
+                                axis,
+                                value: q[axis],
+                            });
                         }
                         held.push((self.sp.material[n], q));
                     }
@@ -312,11 +349,18 @@ impl PaperSim {
 
     /// Step 1 (sec. 4): move the handles to `targets` (world handle order) and relax
     /// S_P by one implicit step of `dt` s ending at `time` s.
-    pub fn simulate(&mut self, dt: f64, time: f64, _handles: &[HandleSpec], targets: &[Pose]) -> FemReport {
+    pub fn simulate(
+        &mut self,
+        dt: f64,
+        time: f64,
+        _handles: &[HandleSpec],
+        targets: &[Pose],
+    ) -> FemReport {
         self.time = time;
         // a non-finite target is ignored: the handle keeps its last valid target
         for (h, t) in targets.iter().enumerate() {
-            let finite = t.translation.vector.iter().all(|x| x.is_finite()) && t.rotation.coords.iter().all(|x| x.is_finite());
+            let finite = t.translation.vector.iter().all(|x| x.is_finite())
+                && t.rotation.coords.iter().all(|x| x.is_finite());
             if finite {
                 if let Some(slot) = self.last_targets.get_mut(h) {
                     *slot = Some(*t);
@@ -328,7 +372,14 @@ impl PaperSim {
         if !self.fem.matches(&self.sp) {
             self.fem = FemSystem::new(&self.sp);
         }
-        let report = implicit_step(&mut self.fem, &mut self.sp, &self.params, dt, &dirichlet, &springs);
+        let report = implicit_step(
+            &mut self.fem,
+            &mut self.sp,
+            &self.params,
+            dt,
+            &dirichlet,
+            &springs,
+        );
         self.gmesh_fresh = false;
         self.frame = PaperFrameStats {
             fem: report,
@@ -363,13 +414,19 @@ impl PaperSim {
         };
         // the flat regions of this frame, each remeshed at most once (sec. 5.1: "it is
         // applied to each flat region F"); later meshes map back to them by position
-        let fold = params.split_flat_regions_at_folds.then_some(params.flat_angle);
+        let fold = params
+            .split_flat_regions_at_folds
+            .then_some(params.flat_angle);
         let original = gmesh.clone();
         let original_labels = flat_regions(&original, fold);
         let mut processed: Vec<usize> = Vec::new();
         for _ in 0..8 {
             let labels = flat_regions(&gmesh, fold);
-            let n_labels = labels.iter().filter(|&&l| l != usize::MAX).max().map_or(0, |m| m + 1);
+            let n_labels = labels
+                .iter()
+                .filter(|&&l| l != usize::MAX)
+                .max()
+                .map_or(0, |m| m + 1);
             let mut worst: Vec<Option<super::compression::TriangleStrain>> = vec![None; n_labels];
             for (f, &l) in labels.iter().enumerate() {
                 if l == usize::MAX {
@@ -396,14 +453,23 @@ impl PaperSim {
                 .iter()
                 .flatten()
                 .filter(|w| w.compression > params.compression_threshold)
-                .filter(|w| origin_of(w).is_some_and(|o| o != usize::MAX && !processed.contains(&o)))
+                .filter(|w| {
+                    origin_of(w).is_some_and(|o| o != usize::MAX && !processed.contains(&o))
+                })
                 .max_by(|a, b| a.compression.total_cmp(&b.compression))
                 .copied();
             let Some(strain) = candidate else { break };
             if let Some(o) = origin_of(&strain) {
                 processed.push(o);
             }
-            let events = crumple_flat_region(&ctx, &mut self.layer, &gmesh, &labels, &strain, &mut self.rng);
+            let events = crumple_flat_region(
+                &ctx,
+                &mut self.layer,
+                &gmesh,
+                &labels,
+                &strain,
+                &mut self.rng,
+            );
             let face = &gmesh.faces[strain.face];
             self.frame.crumple_attempts.push(CrumpleAttempt {
                 compression: strain.compression,
@@ -469,7 +535,9 @@ impl PaperSim {
         if let Some(g) = changed {
             gmesh = g;
         }
-        let Ok(mut sp) = build_physical(&gmesh, &self.layer, &pattern, &params, &|s| interp.boundary_position(s)) else {
+        let Ok(mut sp) = build_physical(&gmesh, &self.layer, &pattern, &params, &|s| {
+            interp.boundary_position(s)
+        }) else {
             return;
         };
         for (v, m) in sp.velocity.iter_mut().zip(&sp.material) {
@@ -512,7 +580,10 @@ impl PaperSim {
             .singular
             .iter()
             .filter_map(|s| {
-                let v = sp.material.iter().position(|m| (m - s.material).norm() < 1e-9)?;
+                let v = sp
+                    .material
+                    .iter()
+                    .position(|m| (m - s.material).norm() < 1e-9)?;
                 Some(SingularPoint {
                     id: s.id,
                     position: sp.position[v],
@@ -524,7 +595,12 @@ impl PaperSim {
         self.frame.compression_mean_pct = mean;
         self.frame.compressed_edges_pct = count;
         self.frame.triangles = sp.triangles.len();
-        self.frame.geometric_triangles = self.gmesh.faces.iter().filter(|f| f.kind == FaceKind::Flat).count();
+        self.frame.geometric_triangles = self
+            .gmesh
+            .faces
+            .iter()
+            .filter(|f| f.kind == FaceKind::Flat)
+            .count();
         self.frame.curved_regions = self.layer.regions.len();
     }
 }
@@ -589,7 +665,12 @@ mod tests {
         vec![mk("left", 0.0, 1.0), mk("right", 0.1, -1.0)]
     }
 
-    pub(crate) fn run(sim: &mut PaperSim, handles: &[HandleSpec], steps: usize, dt: f64) -> Vec<ObjectStepReport> {
+    pub(crate) fn run(
+        sim: &mut PaperSim,
+        handles: &[HandleSpec],
+        steps: usize,
+        dt: f64,
+    ) -> Vec<ObjectStepReport> {
         (1..=steps)
             .map(|k| {
                 let t = k as f64 * dt;
@@ -608,7 +689,11 @@ mod tests {
         assert!(reports.iter().all(|r| r.converged), "{reports:?}");
         assert!(sim.mesh().is_finite());
         let layer = sim.geometric_layer();
-        assert!(!layer.regions.is_empty(), "a curved region appears: {:?}", sim.frame_stats());
+        assert!(
+            !layer.regions.is_empty(),
+            "a curved region appears: {:?}",
+            sim.frame_stats()
+        );
         // the rulings of a sheet bent about y run along y (v_perp of the compression)
         let r = &layer.regions[0].rulings[0];
         let p = layer.endpoint_material(sim.pattern(), &r.a);

@@ -122,7 +122,11 @@ impl BlockSpd {
         for b in 0..bs {
             let base = col_ptr[lo * bs + b] + (bs - b) + rank * bs;
             for a in 0..bs {
-                let v = if transpose { m[b * bs + a] } else { m[a * bs + b] };
+                let v = if transpose {
+                    m[b * bs + a]
+                } else {
+                    m[a * bs + b]
+                };
                 self.values[base + a] += v;
             }
         }
@@ -148,11 +152,14 @@ impl BlockSpd {
     pub fn solve_in_place(&mut self, rhs: MatMut<'_, f64>) -> Result<(), FactorError> {
         let mat = SparseColMatRef::new(self.symbolic.as_ref(), &self.values);
         if self.llt_symbolic.is_none() {
-            self.llt_symbolic =
-                Some(SymbolicLlt::try_new(self.symbolic.as_ref(), Side::Lower).map_err(|_| FactorError)?);
+            self.llt_symbolic = Some(
+                SymbolicLlt::try_new(self.symbolic.as_ref(), Side::Lower)
+                    .map_err(|_| FactorError)?,
+            );
         }
         let symbolic = self.llt_symbolic.clone().ok_or(FactorError)?;
-        let llt = Llt::try_new_with_symbolic(symbolic, mat, Side::Lower).map_err(|_| FactorError)?;
+        let llt =
+            Llt::try_new_with_symbolic(symbolic, mat, Side::Lower).map_err(|_| FactorError)?;
         llt.solve_in_place(rhs);
         Ok(())
     }

@@ -50,8 +50,12 @@ pub fn update_junctions(
     let region_ids: Vec<u64> = layer.regions.iter().map(|r| r.id).collect();
     let mut proposals = Vec::new();
     for (ri, id) in region_ids.iter().enumerate() {
-        let Some(rv) = gmesh.ruling_vertices.get(ri) else { continue };
-        let Some(cur) = layer.regions.iter().position(|r| r.id == *id) else { continue };
+        let Some(rv) = gmesh.ruling_vertices.get(ri) else {
+            continue;
+        };
+        let Some(cur) = layer.regions.iter().position(|r| r.id == *id) else {
+            continue;
+        };
         let angles: Vec<f64> = rv.iter().map(|&[a, b]| dihedral(a, b)).collect();
         if angles.iter().all(|&t| t < params.junction_low_angle) {
             layer.regions.remove(cur);
@@ -62,18 +66,26 @@ pub fn update_junctions(
         // shrink from both ends while the border ruling is flatter than theta_low
         let mut lo = 0usize;
         let mut hi = rulings.len();
-        while hi - lo > 2 && angles[lo] < params.junction_low_angle && border_is_flat(gmesh, rv[lo]) {
+        while hi - lo > 2 && angles[lo] < params.junction_low_angle && border_is_flat(gmesh, rv[lo])
+        {
             lo += 1;
             report.shrunk += 1;
         }
-        while hi - lo > 2 && angles[hi - 1] < params.junction_low_angle && border_is_flat(gmesh, rv[hi - 1]) {
+        while hi - lo > 2
+            && angles[hi - 1] < params.junction_low_angle
+            && border_is_flat(gmesh, rv[hi - 1])
+        {
             hi -= 1;
             report.shrunk += 1;
         }
         rulings = rulings[lo..hi].to_vec();
         // expand at an end sharper than theta_high
         for front in [true, false] {
-            let (k, k_in) = if front { (lo, lo + 1) } else { (hi - 1, hi - 2) };
+            let (k, k_in) = if front {
+                (lo, lo + 1)
+            } else {
+                (hi - 1, hi - 2)
+            };
             if k_in >= rv.len() || !border_is_flat(gmesh, rv[k]) {
                 continue;
             }
@@ -91,17 +103,21 @@ pub fn update_junctions(
             };
             let spacing = params.boundary_spacing();
             let out = |e: Endpoint, inner: Endpoint| match (e, inner) {
-                (Endpoint::Boundary(s), Endpoint::Boundary(si)) => Some(Endpoint::Boundary(snap_to_vertex(
-                    ctx,
-                    gmesh,
-                    step_out(ctx.pattern, s, si, spacing),
-                    params.min_boundary_spacing(),
-                    &[],
-                ))),
+                (Endpoint::Boundary(s), Endpoint::Boundary(si)) => {
+                    Some(Endpoint::Boundary(snap_to_vertex(
+                        ctx,
+                        gmesh,
+                        step_out(ctx.pattern, s, si, spacing),
+                        params.min_boundary_spacing(),
+                        &[],
+                    )))
+                }
                 (Endpoint::Singular(id), _) => Some(Endpoint::Singular(id)),
                 _ => None,
             };
-            let (Some(a), Some(b)) = (out(r.a, r_in.a), out(r.b, r_in.b)) else { continue };
+            let (Some(a), Some(b)) = (out(r.a, r_in.a), out(r.b, r_in.b)) else {
+                continue;
+            };
             if a == r.a && b == r.b {
                 continue;
             }
@@ -155,7 +171,9 @@ fn apply_validated(
     *layer = saved;
     let mut last = None;
     for (id, rulings) in proposals {
-        let Some(k) = layer.regions.iter().position(|r| r.id == id) else { continue };
+        let Some(k) = layer.regions.iter().position(|r| r.id == id) else {
+            continue;
+        };
         let old = std::mem::replace(&mut layer.regions[k].rulings, rulings);
         match GeometricMesh::build(layer, ctx.pattern, ctx.position) {
             Ok(mesh) => last = Some(mesh),
@@ -179,7 +197,10 @@ fn border_is_flat(gmesh: &GeometricMesh, r: [u32; 2]) -> bool {
 fn opposite_angle(gmesh: &GeometricMesh, r: [u32; 2]) -> f64 {
     let mut best: f64 = 0.0;
     for &j in &r {
-        if !matches!(gmesh.vertices[j as usize].kind, GVertexKind::Boundary { .. }) {
+        if !matches!(
+            gmesh.vertices[j as usize].kind,
+            GVertexKind::Boundary { .. }
+        ) {
             continue;
         }
         for (&(a, b), e) in &gmesh.edges {
@@ -284,7 +305,12 @@ fn contributions(planes: &[TangentPlane], fit: &ConeFit) -> Vec<f64> {
 
 /// The iterative segmentation of sec. 6.2: ranges of consecutive rulings, each
 /// approximated by one generalized cone with error <= `tolerance` (m).
-pub fn segment_cones(planes: &[TangentPlane], reference: &Point3, scale: f64, tolerance: f64) -> Vec<(std::ops::Range<usize>, ConeFit)> {
+pub fn segment_cones(
+    planes: &[TangentPlane],
+    reference: &Point3,
+    scale: f64,
+    tolerance: f64,
+) -> Vec<(std::ops::Range<usize>, ConeFit)> {
     let mut out = Vec::new();
     let mut stack = vec![0..planes.len()];
     while let Some(range) = stack.pop() {
@@ -327,8 +353,14 @@ pub fn ruling_plane(gmesh: &GeometricMesh, r: [u32; 2]) -> TangentPlane {
     for f in gmesh.edge_faces(r[0], r[1]).iter().flatten() {
         n += gmesh.normals[*f];
     }
-    let n = if n.norm() > 1e-12 { n.normalize() } else { Vector3::z() };
-    let mid = (gmesh.vertices[r[0] as usize].position.coords + gmesh.vertices[r[1] as usize].position.coords) * 0.5;
+    let n = if n.norm() > 1e-12 {
+        n.normalize()
+    } else {
+        Vector3::z()
+    };
+    let mid = (gmesh.vertices[r[0] as usize].position.coords
+        + gmesh.vertices[r[1] as usize].position.coords)
+        * 0.5;
     TangentPlane {
         normal: n,
         offset: -n.dot(&mid),
@@ -363,11 +395,17 @@ pub fn fit_cones(
         if layer.regions[ri].singular_apex().is_some() || layer.regions[ri].rulings.len() < 3 {
             continue;
         }
-        let Some(rv) = gmesh.ruling_vertices.get(ri) else { continue };
+        let Some(rv) = gmesh.ruling_vertices.get(ri) else {
+            continue;
+        };
         let planes: Vec<TangentPlane> = rv.iter().map(|&r| ruling_plane(gmesh, r)).collect();
         let reference = Point3::from(
             rv.iter()
-                .map(|&[a, b]| (gmesh.vertices[a as usize].position.coords + gmesh.vertices[b as usize].position.coords) * 0.5)
+                .map(|&[a, b]| {
+                    (gmesh.vertices[a as usize].position.coords
+                        + gmesh.vertices[b as usize].position.coords)
+                        * 0.5
+                })
                 .sum::<Vector3>()
                 / rv.len() as f64,
         );
@@ -388,8 +426,14 @@ pub fn fit_cones(
                     .map(|(k, _)| k)
                     .unwrap_or(0);
             let [ja, jb] = rv[j];
-            let (pa, pb) = (gmesh.vertices[ja as usize].position, gmesh.vertices[jb as usize].position);
-            let (ma, mb) = (gmesh.vertices[ja as usize].material, gmesh.vertices[jb as usize].material);
+            let (pa, pb) = (
+                gmesh.vertices[ja as usize].position,
+                gmesh.vertices[jb as usize].position,
+            );
+            let (ma, mb) = (
+                gmesh.vertices[ja as usize].material,
+                gmesh.vertices[jb as usize].material,
+            );
             // the 2D apex (or direction) in the frame of ruling r_j
             let apex_2d: Result<Point2, Vector2<f64>> = match fit.direction {
                 Some(_) => Err((mb - ma).normalize()),
@@ -411,18 +455,27 @@ pub fn fit_cones(
                     continue;
                 }
                 let r = old[k];
-                let (Endpoint::Boundary(_), Endpoint::Boundary(_)) = (r.a, r.b) else { continue };
+                let (Endpoint::Boundary(_), Endpoint::Boundary(_)) = (r.a, r.b) else {
+                    continue;
+                };
                 let [ka, kb] = rv[k];
-                let (qa, qb) = (gmesh.vertices[ka as usize].material, gmesh.vertices[kb as usize].material);
+                let (qa, qb) = (
+                    gmesh.vertices[ka as usize].material,
+                    gmesh.vertices[kb as usize].material,
+                );
                 let mid = Point2::from((qa.coords + qb.coords) * 0.5);
                 let dir = match apex_2d {
                     Ok(a2) => (mid - a2).normalize(),
                     Err(d) => d,
                 };
-                let Some([(s_lo, _), (s_hi, _)]) = ctx.pattern.clip_line(&mid, &dir) else { continue };
+                let Some([(s_lo, _), (s_hi, _)]) = ctx.pattern.clip_line(&mid, &dir) else {
+                    continue;
+                };
                 let (p_lo, p_hi) = (ctx.pattern.point_at(s_lo), ctx.pattern.point_at(s_hi));
                 // keep the sides: the new end nearer the old a end is a
-                let (sa, sb) = if (p_lo - qa).norm() + (p_hi - qb).norm() <= (p_hi - qa).norm() + (p_lo - qb).norm() {
+                let (sa, sb) = if (p_lo - qa).norm() + (p_hi - qb).norm()
+                    <= (p_hi - qa).norm() + (p_lo - qb).norm()
+                {
                     (s_lo, s_hi)
                 } else {
                     (s_hi, s_lo)
@@ -432,7 +485,9 @@ pub fn fit_cones(
                 let tol = ctx.params.min_boundary_spacing();
                 let sa = snap_to_vertex(ctx, gmesh, sa, tol, &own);
                 let sb = snap_to_vertex(ctx, gmesh, sb, tol, &own);
-                let moved_by = (ctx.pattern.point_at(sa) - qa).norm().max((ctx.pattern.point_at(sb) - qb).norm());
+                let moved_by = (ctx.pattern.point_at(sa) - qa)
+                    .norm()
+                    .max((ctx.pattern.point_at(sb) - qb).norm());
                 if moved_by < 1e-5 {
                     continue;
                 }
@@ -451,7 +506,13 @@ pub fn fit_cones(
             let (r0, r1) = (new[k], new[k + 1]);
             let p = [r0.a, r0.b, r1.a, r1.b].map(|e| layer.endpoint_material(ctx.pattern, &e));
             if super::pattern::segments_cross(&p[0], &p[1], &p[2], &p[3], 1e-9) {
-                if let (Endpoint::Boundary(sa0), Endpoint::Boundary(sa1), Endpoint::Boundary(sb0), Endpoint::Boundary(sb1)) = (r0.a, r1.a, r0.b, r1.b) {
+                if let (
+                    Endpoint::Boundary(sa0),
+                    Endpoint::Boundary(sa1),
+                    Endpoint::Boundary(sb0),
+                    Endpoint::Boundary(sb1),
+                ) = (r0.a, r1.a, r0.b, r1.b)
+                {
                     // the crossing is nearer one side: merge the ends there
                     let da = (p[0] - p[2]).norm();
                     let db = (p[1] - p[3]).norm();
@@ -487,9 +548,14 @@ pub fn fit_cones(
             proposals.push((layer.regions[ri].id, new, moved));
         }
     }
-    let moved: std::collections::BTreeMap<u64, usize> = proposals.iter().map(|(id, _, m)| (*id, *m)).collect();
+    let moved: std::collections::BTreeMap<u64, usize> =
+        proposals.iter().map(|(id, _, m)| (*id, *m)).collect();
     let before = layer.regions.clone();
-    let mesh = apply_validated(ctx, layer, proposals.into_iter().map(|(id, r, _)| (id, r)).collect());
+    let mesh = apply_validated(
+        ctx,
+        layer,
+        proposals.into_iter().map(|(id, r, _)| (id, r)).collect(),
+    );
     for (r, b) in layer.regions.iter().zip(&before) {
         if r.rulings != b.rulings {
             report.realigned += moved.get(&r.id).copied().unwrap_or(0);
@@ -515,7 +581,10 @@ mod tests {
                 let n = Vector3::new(half.cos() * phi.cos(), half.cos() * phi.sin(), half.sin());
                 assert!(n.dot(&dir).abs() < 1e-12);
                 let p = apex + 0.07 * dir;
-                TangentPlane { normal: n, offset: -n.dot(&p) }
+                TangentPlane {
+                    normal: n,
+                    offset: -n.dot(&p),
+                }
             })
             .collect();
         let fit = fit_apex(&planes, &Point3::new(0.0, 0.0, 0.0), 0.1);
@@ -537,7 +606,10 @@ mod tests {
                 let phi = 0.3 * i as f64;
                 let n = Vector3::new(phi.sin(), 0.0, phi.cos());
                 let p = Vector3::new(0.02 * phi.sin(), 0.0, 0.02 * phi.cos());
-                TangentPlane { normal: n, offset: -n.dot(&p) }
+                TangentPlane {
+                    normal: n,
+                    offset: -n.dot(&p),
+                }
             })
             .collect();
         let fit = fit_apex(&planes, &Point3::new(0.0, 0.0, 0.0), 0.1);
@@ -548,10 +620,15 @@ mod tests {
             phis.iter()
                 .map(|&phi| {
                     let half = 0.5f64;
-                    let n = Vector3::new(half.cos() * phi.cos(), half.cos() * phi.sin(), half.sin());
-                    let dir = Vector3::new(half.sin() * phi.cos(), half.sin() * phi.sin(), -half.cos());
+                    let n =
+                        Vector3::new(half.cos() * phi.cos(), half.cos() * phi.sin(), half.sin());
+                    let dir =
+                        Vector3::new(half.sin() * phi.cos(), half.sin() * phi.sin(), -half.cos());
                     let p = apex + 0.05 * dir;
-                    TangentPlane { normal: n, offset: -n.dot(&p) }
+                    TangentPlane {
+                        normal: n,
+                        offset: -n.dot(&p),
+                    }
                 })
                 .collect()
         };

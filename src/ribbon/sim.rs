@@ -54,6 +54,9 @@ pub struct RibbonSim {
     coords: Coordinates,
     frames: Frames,
     history: RimHistory,
+    /// The history before the last step (X^n, V^n): the contact stage moves from it,
+    /// and velocities are recomputed from it after a contact correction.
+    previous_history: RimHistory,
     terms: StepTerms,
     /// Which world handle drives each equality / normal guide (same order as built).
     equality_handles: Vec<Option<usize>>,
@@ -207,6 +210,7 @@ impl RibbonSim {
             layout,
             coords,
             frames,
+            previous_history: history.clone(),
             history,
             terms,
             equality_handles,
@@ -408,6 +412,7 @@ impl RibbonSim {
         } else {
             // Keep the last valid state and its multipliers; say so in the report.
             self.terms = saved_terms;
+            self.previous_history.clone_from(&self.history);
             report.constraint_violation = f64::NAN;
         }
         self.last_outcome = outcome;
@@ -441,7 +446,7 @@ impl RibbonSim {
                 *v = Vector3::zeros();
             }
         }
-        self.history = new;
+        self.previous_history = std::mem::replace(&mut self.history, new);
     }
 
     /// Energies of the current state, J.
@@ -609,5 +614,85 @@ impl RibbonSim {
             Some((&mut g, super::objective::GradientMode::Adjoint)),
             Some(&mut h),
         )
+    }
+}
+
+impl RibbonSim {
+    /// The contact mesh: one contact vertex per rim point, the two end pairs welded
+    /// when the ribbon is a loop (x_n on x_0 and y_n on y_0; crossed for a Moebius
+    /// loop), stations = crease index, topological neighbours within 2 elements.
+    pub fn contact_topology(&self) -> crate::contact::BodyTopology {
+        let n = self.strip.segments;
+        let mesh_vertices = 2 * (n + 1);
+        let mut vertex_of: Vec<u32> = (0..mesh_vertices as u32).collect();
+        let (vertices, period) = match self.params.loop_closure {
+            None => (mesh_vertices, None),
+            Some(kind) => {
+                let (b, t) = match kind {
+                    super::params::LoopKind::Orientable => (0, 1),
+                    super::params::LoopKind::NonOrientable => (1, 0),
+                };
+                vertex_of[2 * n] = b;
+                vertex_of[2 * n + 1] = t;
+                (2 * n, Some(n as f64))
+            }
+        };
+        let triangles = self
+            .mesh
+            .triangles
+            .iter()
+            .map(|t| t.map(|v| vertex_of[v as usize]))
+            .collect();
+        crate::contact::BodyTopology {
+            vertex_of,
+            vertices,
+            triangles,
+            stations: (0..vertices).map(|v| (v / 2) as f64).collect(),
+            period,
+            neighbour_skip: 2.0,
+        }
+    }
+
+    /// Mesh vertices of the state before the last step (X^n), m, in mesh order.
+    pub fn previous_mesh_vertices(&self, out: &mut Vec<Point3>) {
+        out.clear();
+        let h = &self.previous_history;
+        for (b, t) in h.x_bottom.iter().zip(&h.x_top) {
+            out.push(Point3::from(*b));
+            out.push(Point3::from(*t));
+        }
+    }
+
+    /// Replace the reconstructed mesh of the last step by the collision-free one
+    /// (Pan et al. sec. 5.2): it becomes X^{n+1} of the kinetic term, with velocities
+    /// V = (X^{n+1} - R(X̄^{n+1}, X^n)) / h from the corrected positions; the next
+    /// optimization starts from it. `h` is the step, s.
+    pub fn apply_contact_correction(&mut self, corrected: &[Point3], h: f64) {
+        let n = self.strip.segments;
+        assert_eq!(corrected.len(), 2 * (n + 1));
+        let old = &self.previous_history;
+        let new = &mut self.history;
+        let carry = self.params.kinetic != KineticModel::QuasiStatic;
+        for j in 0..=n {
+            let (xb, xt) = (corrected[2 * j].coords, corrected[2 * j + 1].coords);
+            new.x_bottom[j] = xb;
+            new.x_top[j] = xt;
+            if carry {
+                let (ob, _) =
+                    super::objective::interpolate(&old.u_bottom, &old.x_bottom, new.u_bottom[j], j);
+                let (ot, _) =
+                    super::objective::interpolate(&old.u_top, &old.x_top, new.u_top[j], j);
+                new.v_bottom[j] = (xb - ob) / h;
+                new.v_top[j] = (xt - ot) / h;
+            }
+        }
+        self.mesh.vertices.clear();
+        self.mesh.vertices.extend_from_slice(corrected);
+        for s in &mut self.singular {
+            let a = s.id as usize;
+            s.position = Point3::from(
+                (self.mesh.vertices[a].coords + self.mesh.vertices[a + 2].coords) * 0.5,
+            );
+        }
     }
 }

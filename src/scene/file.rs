@@ -53,6 +53,17 @@ pub struct SceneFile {
     /// [`super::paper_file::PaperFile`].
     #[serde(default)]
     pub paper: Option<super::paper_file::PaperFile>,
+    /// Several ribbons (instead of `ribbon:`): each entry has a `name` and the keys of
+    /// `ribbon:`. Optimized in parallel, then made collision-free together.
+    #[serde(default)]
+    pub ribbons: Vec<RibbonFile>,
+    /// Rigid obstacles (see `super::contact::ColliderFile`). Default none.
+    #[serde(default)]
+    pub colliders: Vec<super::contact::ColliderFile>,
+    /// Contact settings. A contact stage is built when the scene has colliders or this
+    /// section (ribbon-ribbon and self contact only); otherwise nothing is built.
+    #[serde(default)]
+    pub contact: Option<super::contact::ContactFile>,
     /// Handles (grippers).
     #[serde(default)]
     pub handles: Vec<HandleFile>,
@@ -131,6 +142,10 @@ impl Default for SolverFile {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RibbonFile {
+    /// Object name, required in a `ribbons:` list ([A-Za-z0-9_], unique); not used by
+    /// the single `ribbon:` section (its object is called `ribbon`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
     /// Length l, m. 1.0.
     #[serde(default = "d_length")]
     pub length: f64,
@@ -234,8 +249,9 @@ impl Default for BaseFile {
 #[derive(Clone, Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct InitialShapeFile {
-    /// `flat` (default), `helix` (every crease with the values below) or `ring`
-    /// (square creases bent by 2 pi / n: a closed polygon, the start guess of loops).
+    /// `flat` (default), `helix` (every crease with the values below), `ring`
+    /// (square creases bent by 2 pi / n: a closed polygon, the start guess of loops) or
+    /// `explicit` (every crease given: `crease_directions`, `bending_angles`).
     #[serde(default)]
     pub kind: Option<String>,
     /// Crease direction c = tan(theta) of every crease (helix). 0.
@@ -244,6 +260,13 @@ pub struct InitialShapeFile {
     /// Bending angle psi of every crease, rad (helix). 0.
     #[serde(default)]
     pub bending_angle: f64,
+    /// `explicit`: c_1 .. c_{n-1}, one per interior crease (dimensionless). Required
+    /// for `explicit`, not used otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crease_directions: Option<Vec<f64>>,
+    /// `explicit`: psi_1 .. psi_{n-1}, rad. Required for `explicit`, not used otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bending_angles: Option<Vec<f64>>,
     /// Amplitude of a seeded random perturbation of every c and psi (rad), drawn from
     /// the scene `seed`. A flat strip twisted or spun about its axis sits on a
     /// bifurcation; this breaks the symmetry as a real ribbon's imperfections do. 0.
@@ -429,7 +452,12 @@ impl Check<'_> {
         }
         Ok(Vector3::from(v))
     }
-    pub(super) fn choice<'s>(&self, key: &str, v: &'s str, allowed: &[&str]) -> Result<&'s str, SceneError> {
+    pub(super) fn choice<'s>(
+        &self,
+        key: &str,
+        v: &'s str,
+        allowed: &[&str],
+    ) -> Result<&'s str, SceneError> {
         if allowed.contains(&v) {
             Ok(v)
         } else {
@@ -444,10 +472,13 @@ impl Check<'_> {
     }
 }
 
+fn initial_kind_is_not_explicit(ribbon: &RibbonFile) -> bool {
+    ribbon.initial_shape.kind.as_deref() != Some("explicit")
+}
+
 pub(super) fn pose_from(position: Vector3, rotation: Vector3) -> Pose {
     Pose::new(position, rotation)
 }
-
 
 /// One handle's keys except its grasp point's range (checked per object kind): name,
 /// axes, orientation, trajectory, topic. Returns the spec (trajectory initial pose
@@ -501,8 +532,7 @@ pub(super) fn parse_handle(
     )? {
         "free" => OrientationMode::Free,
         "normal" => OrientationMode::Normal {
-            stiffness: ck
-                .non_negative(&format!("{key}.normal_stiffness"), h.normal_stiffness)?,
+            stiffness: ck.non_negative(&format!("{key}.normal_stiffness"), h.normal_stiffness)?,
         },
         _ => OrientationMode::Full,
     };
@@ -582,24 +612,25 @@ impl SceneFile {
         }
         let solver = self.solver_settings(&ck)?;
         if self.paper.is_some() {
-            if self.ribbon.is_some() {
+            if self.ribbon.is_some() || !self.ribbons.is_empty() {
                 return Err(ck.fail(
                     "paper",
-                    "a scene holds one object: either a `ribbon:` or a `paper:` section",
+                    "a scene holds either ribbons (`ribbon:` or `ribbons:`) or one `paper:` sheet, not both",
                 ));
             }
             return self.build_paper(file, &ck, duration, dt, gravity);
         }
-        let Some(ribbon) = &self.ribbon else {
-            return Err(ck.fail(
-                "ribbon",
-                "the scene declares no object (add a `ribbon:` or a `paper:` section)",
-            ));
-        };
-        let object_names = ["ribbon".to_string()];
+        let (entries, object_names) = self.ribbon_entries(&ck)?;
         let object_of = |key: &str, name: &Option<String>| -> Result<usize, SceneError> {
             match name {
-                None => Ok(0),
+                None if object_names.len() == 1 => Ok(0),
+                None => Err(ck.fail(
+                    key,
+                    format!(
+                        "the scene has several objects: name one ({})",
+                        object_names.join(", ")
+                    ),
+                )),
                 Some(n) => object_names.iter().position(|o| o == n).ok_or_else(|| {
                     ck.fail(
                         key,
@@ -620,6 +651,7 @@ impl SceneFile {
             let key = format!("handles.{i}");
             let object = object_of(&format!("{key}.object"), &h.object)?;
             let (spec, initial, topic) = parse_handle(&ck, &key, h, object, &mut names)?;
+            let ribbon = entries[object].1;
             let point = spec.material_point;
             if point.x < 0.0
                 || point.x > ribbon.length
@@ -647,8 +679,163 @@ impl SceneFile {
             specs.push((spec, initial));
         }
 
-        // the ribbon
-        let rk = "ribbon";
+        // the ribbons: parameters first (a probe of each places default handle targets)
+        let mut setups = Vec::new();
+        for (rk, ribbon) in &entries {
+            let (params, initial) = self.ribbon_params(&ck, rk, ribbon, gravity, solver, &specs)?;
+            let imperfection = Imperfection {
+                amplitude: ck.non_negative(
+                    &format!("{rk}.initial_shape.imperfection"),
+                    ribbon.initial_shape.imperfection,
+                )?,
+                seed: self.seed,
+            };
+            setups.push((params, initial, imperfection));
+        }
+        for (i, f) in self.forces.iter().enumerate() {
+            let key = format!("forces.{i}");
+            object_of(&format!("{key}.object"), &f.object)?;
+        }
+
+        // default handle targets: the grasp point where the initial shape puts it
+        let probes: Vec<RibbonSim> = setups
+            .iter()
+            .map(|(params, initial, imperfection)| {
+                RibbonSim::new(params.clone(), initial, *imperfection, &[], 0, &[])
+            })
+            .collect();
+        let mut handles = Vec::new();
+        for (mut spec, initial_pose) in specs {
+            spec.trajectory.initial = initial_pose
+                .unwrap_or_else(|| probes[spec.object].material_pose(&spec.material_point));
+            handles.push(spec);
+        }
+        drop(probes);
+        let mut objects = Vec::new();
+        for (index, ((rk, ribbon), (params, initial, imperfection))) in
+            entries.iter().zip(setups).enumerate()
+        {
+            let mut forces = Vec::new();
+            for (i, f) in self.forces.iter().enumerate() {
+                let key = format!("forces.{i}");
+                if object_of(&format!("{key}.object"), &f.object)? != index {
+                    continue;
+                }
+                forces.push(RibbonForce {
+                    material_point: Point2::new(
+                        ck.finite(&format!("{key}.point.0"), f.point[0])?,
+                        ck.finite(&format!("{key}.point.1"), f.point[1])?,
+                    ),
+                    force: ck.vec3(&format!("{key}.force"), f.force)?,
+                });
+            }
+            let mut sim = RibbonSim::new(params, &initial, imperfection, &forces, index, &handles);
+            if let Some(v) = &ribbon.initial_velocity {
+                sim.set_rigid_velocity(
+                    ck.vec3(&format!("{rk}.initial_velocity.angular"), v.angular)?,
+                    ck.vec3(&format!("{rk}.initial_velocity.center"), v.center)?
+                        .into(),
+                    ck.vec3(&format!("{rk}.initial_velocity.linear"), v.linear)?,
+                );
+            }
+            objects.push((
+                object_names[index].clone(),
+                SimObject::Ribbon(Box::new(sim)),
+            ));
+        }
+        let mut world = World::new(objects, handles, dt);
+        if let Some(stage) = super::contact::build_stage(&self, &ck, file, &world)? {
+            world = world.with_contact(stage);
+        }
+        let name = self.name.clone().unwrap_or_else(|| {
+            file.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "scene".into())
+        });
+        Ok(Scene {
+            name,
+            file: file.to_path_buf(),
+            duration,
+            world,
+            frame_id: self.frame_id.clone(),
+            handle_topics: topics,
+            outputs: Outputs {
+                markers: self.outputs.markers,
+                singular_points: self.outputs.singular_points,
+                status: self.outputs.status,
+                clock: self.outputs.clock,
+            },
+            source: self,
+        })
+    }
+
+    /// The ribbons declared (`ribbon:` or `ribbons:`) with their key prefixes, and the
+    /// object names.
+    #[allow(clippy::type_complexity)]
+    fn ribbon_entries(
+        &self,
+        ck: &Check,
+    ) -> Result<(Vec<(String, &RibbonFile)>, Vec<String>), SceneError> {
+        match (&self.ribbon, self.ribbons.is_empty()) {
+            (Some(_), false) => Err(ck.fail(
+                "ribbons",
+                "declare either one `ribbon:` section or a `ribbons:` list, not both",
+            )),
+            (None, true) => Err(ck.fail(
+                "ribbon",
+                "the scene declares no object (add a `ribbon:` section or a `ribbons:` list)",
+            )),
+            (Some(r), true) => {
+                if r.name.is_some() {
+                    return Err(ck.fail(
+                        "ribbon.name",
+                        "the single `ribbon:` object is called `ribbon`; use a `ribbons:` list to name objects",
+                    ));
+                }
+                Ok((vec![("ribbon".to_string(), r)], vec!["ribbon".to_string()]))
+            }
+            (None, false) => {
+                let mut entries = Vec::new();
+                let mut names: Vec<String> = Vec::new();
+                for (i, r) in self.ribbons.iter().enumerate() {
+                    let key = format!("ribbons.{i}");
+                    let Some(name) = &r.name else {
+                        return Err(
+                            ck.fail(&format!("{key}.name"), "every listed ribbon needs a name")
+                        );
+                    };
+                    if name.is_empty()
+                        || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                    {
+                        return Err(ck.fail(
+                            &format!("{key}.name"),
+                            format!("`{name}` must be non-empty [A-Za-z0-9_]"),
+                        ));
+                    }
+                    if names.contains(name) {
+                        return Err(ck.fail(
+                            &format!("{key}.name"),
+                            format!("duplicate object name `{name}`"),
+                        ));
+                    }
+                    names.push(name.clone());
+                    entries.push((key, r));
+                }
+                Ok((entries, names))
+            }
+        }
+    }
+
+    /// Validate one ribbon's keys (under `rk`) into its parameters and initial shape.
+    fn ribbon_params(
+        &self,
+        ck: &Check,
+        rk: &str,
+        ribbon: &RibbonFile,
+        gravity: Vector3,
+        solver: SolverSettings,
+        specs: &[(HandleSpec, Option<Pose>)],
+    ) -> Result<(RibbonParams, RibbonInitialShape), SceneError> {
         let length = ck.positive(&format!("{rk}.length"), ribbon.length)?;
         let width = ck.positive(&format!("{rk}.width"), ribbon.width)?;
         if width >= length {
@@ -758,13 +945,64 @@ impl SceneFile {
                     ribbon.initial_shape.bending_angle,
                 )?,
             },
+            "explicit" => {
+                let n = ribbon.segments;
+                let list = |name: &str, v: &Option<Vec<f64>>| -> Result<Vec<f64>, SceneError> {
+                    let key = format!("{rk}.initial_shape.{name}");
+                    let v = v.as_ref().ok_or_else(|| {
+                        ck.fail(&key, "required for kind `explicit` (n - 1 values)")
+                    })?;
+                    if v.len() + 1 != n {
+                        return Err(ck.fail(
+                            &key,
+                            format!(
+                                "{} values for {n} segments: expected n - 1 = {}",
+                                v.len(),
+                                n.saturating_sub(1)
+                            ),
+                        ));
+                    }
+                    for (i, x) in v.iter().enumerate() {
+                        ck.finite(&format!("{key}.{i}"), *x)?;
+                    }
+                    Ok(v.clone())
+                };
+                RibbonInitialShape::Explicit {
+                    crease_direction: list(
+                        "crease_directions",
+                        &ribbon.initial_shape.crease_directions,
+                    )?,
+                    bending_angle: list("bending_angles", &ribbon.initial_shape.bending_angles)?,
+                }
+            }
             other => {
                 return Err(ck.fail(
                     &format!("{rk}.initial_shape.kind"),
-                    format!("unknown value `{other}`, expected one of: flat, helix, ring"),
+                    format!(
+                        "unknown value `{other}`, expected one of: flat, helix, ring, explicit"
+                    ),
                 ))
             }
         };
+        if initial_kind_is_not_explicit(ribbon) {
+            for (name, present) in [
+                (
+                    "crease_directions",
+                    ribbon.initial_shape.crease_directions.is_some(),
+                ),
+                (
+                    "bending_angles",
+                    ribbon.initial_shape.bending_angles.is_some(),
+                ),
+            ] {
+                if present {
+                    return Err(ck.fail(
+                        &format!("{rk}.initial_shape.{name}"),
+                        "only used with kind: explicit",
+                    ));
+                }
+            }
+        }
         let params = RibbonParams {
             length,
             width,
@@ -794,72 +1032,7 @@ impl SceneFile {
                 ));
             }
         }
-        let mut forces = Vec::new();
-        for (i, f) in self.forces.iter().enumerate() {
-            let key = format!("forces.{i}");
-            object_of(&format!("{key}.object"), &f.object)?;
-            forces.push(RibbonForce {
-                material_point: Point2::new(
-                    ck.finite(&format!("{key}.point.0"), f.point[0])?,
-                    ck.finite(&format!("{key}.point.1"), f.point[1])?,
-                ),
-                force: ck.vec3(&format!("{key}.force"), f.force)?,
-            });
-        }
-
-        // default handle targets: the grasp point where the initial shape puts it
-        let imperfection = Imperfection {
-            amplitude: ck.non_negative(
-                &format!("{rk}.initial_shape.imperfection"),
-                ribbon.initial_shape.imperfection,
-            )?,
-            seed: self.seed,
-        };
-        let probe = RibbonSim::new(params.clone(), &initial, imperfection, &[], 0, &[]);
-        let mut handles = Vec::new();
-        for (mut spec, initial_pose) in specs {
-            spec.trajectory.initial =
-                initial_pose.unwrap_or_else(|| probe.material_pose(&spec.material_point));
-            handles.push(spec);
-        }
-        let mut sim = RibbonSim::new(params, &initial, imperfection, &forces, 0, &handles);
-        if ribbon.settle {
-            let targets: Vec<Pose> = handles.iter().map(|h| h.trajectory.pose_at(0.0)).collect();
-            sim.settle(&handles, &targets, 200);
-        }
-        if let Some(v) = &ribbon.initial_velocity {
-            sim.set_rigid_velocity(
-                ck.vec3(&format!("{rk}.initial_velocity.angular"), v.angular)?,
-                ck.vec3(&format!("{rk}.initial_velocity.center"), v.center)?
-                    .into(),
-                ck.vec3(&format!("{rk}.initial_velocity.linear"), v.linear)?,
-            );
-        }
-        let world = World::new(
-            vec![("ribbon".to_string(), SimObject::Ribbon(Box::new(sim)))],
-            handles,
-            dt,
-        );
-        let name = self.name.clone().unwrap_or_else(|| {
-            file.file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "scene".into())
-        });
-        Ok(Scene {
-            name,
-            file: file.to_path_buf(),
-            duration,
-            world,
-            frame_id: self.frame_id.clone(),
-            handle_topics: topics,
-            outputs: Outputs {
-                markers: self.outputs.markers,
-                singular_points: self.outputs.singular_points,
-                status: self.outputs.status,
-                clock: self.outputs.clock,
-            },
-            source: self,
-        })
+        Ok((params, initial))
     }
 
     fn solver_settings(&self, ck: &Check) -> Result<SolverSettings, SceneError> {

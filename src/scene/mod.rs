@@ -4,15 +4,19 @@
 //!
 //! This is an edge module: it reads files; the core never sees serde.
 
+mod contact;
 mod file;
+mod mesh_file;
 mod overrides;
 mod paper_file;
 
 use std::path::{Path, PathBuf};
 
+pub use contact::{ColliderFile, ContactFile};
 pub use file::{OutputsFile, SceneFile};
-pub use paper_file::{ColliderFile, CreaseFile, PaperFile};
+pub use mesh_file::load_mesh;
 pub use overrides::apply_override;
+pub use paper_file::{CreaseFile, PaperFile};
 
 use crate::sim::World;
 

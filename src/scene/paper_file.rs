@@ -93,7 +93,7 @@ pub struct PaperFile {
     pub imperfection: f64,
     /// Static colliders (step 1 collisions). ([])
     #[serde(default)]
-    pub colliders: Vec<ColliderFile>,
+    pub colliders: Vec<PaperColliderFile>,
     /// Pre-set creases (fig. 22). ([])
     #[serde(default)]
     pub creases: Vec<CreaseFile>,
@@ -102,7 +102,7 @@ pub struct PaperFile {
 /// A static collider.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
-pub struct ColliderFile {
+pub struct PaperColliderFile {
     /// `plane` (the half-space above `point` along `normal`) or `sphere`.
     pub kind: String,
     /// Plane: a point on it, m. ([0, 0, 0])
@@ -204,6 +204,20 @@ impl SceneFile {
         let Some(paper) = &self.paper else {
             return Err(ck.fail("paper", "missing"));
         };
+        // The contact stage (Pan et al. sec. 5) acts on ribbons; a sheet collides
+        // through its own FEM collision energy (Schreck et al. step 1).
+        if !self.colliders.is_empty() {
+            return Err(ck.fail(
+                "colliders",
+                "top-level colliders feed the ribbon contact stage; a paper sheet takes `paper.colliders` (plane, sphere)",
+            ));
+        }
+        if self.contact.is_some() {
+            return Err(ck.fail(
+                "contact",
+                "the contact stage acts on ribbons; a paper sheet collides through `paper.colliders`",
+            ));
+        }
         let pk = "paper";
         let key = |k: &str| format!("{pk}.{k}");
         let width = ck.positive(&key("size.0"), paper.size[0])?;
@@ -233,7 +247,10 @@ impl SceneFile {
         }
         let poisson = ck.finite(&key("poisson_ratio"), paper.poisson_ratio)?;
         if !(poisson > -1.0 && poisson < 0.5) {
-            return Err(ck.fail(&key("poisson_ratio"), format!("must be in (-1, 0.5), got {poisson}")));
+            return Err(ck.fail(
+                &key("poisson_ratio"),
+                format!("must be in (-1, 0.5), got {poisson}"),
+            ));
         }
         let eps_c = ck.positive(&key("compression_threshold"), paper.compression_threshold)?;
         if eps_c >= 1.0 {
@@ -248,33 +265,45 @@ impl SceneFile {
         let mut colliders = Vec::new();
         for (i, c) in paper.colliders.iter().enumerate() {
             let ckey = format!("{pk}.colliders.{i}");
-            colliders.push(match ck.choice(&format!("{ckey}.kind"), &c.kind, &["plane", "sphere"])? {
-                "plane" => {
-                    let n = ck.vec3(&format!("{ckey}.normal"), c.normal)?;
-                    if n.norm() < 1e-12 {
-                        return Err(ck.fail(&format!("{ckey}.normal"), "must be non-zero"));
+            colliders.push(
+                match ck.choice(&format!("{ckey}.kind"), &c.kind, &["plane", "sphere"])? {
+                    "plane" => {
+                        let n = ck.vec3(&format!("{ckey}.normal"), c.normal)?;
+                        if n.norm() < 1e-12 {
+                            return Err(ck.fail(&format!("{ckey}.normal"), "must be non-zero"));
+                        }
+                        Collider::Plane {
+                            point: ck.vec3(&format!("{ckey}.point"), c.point)?,
+                            normal: n.normalize(),
+                        }
                     }
-                    Collider::Plane {
-                        point: ck.vec3(&format!("{ckey}.point"), c.point)?,
-                        normal: n.normalize(),
-                    }
-                }
-                _ => Collider::Sphere {
-                    center: ck.vec3(&format!("{ckey}.center"), c.center)?,
-                    radius: ck.positive(&format!("{ckey}.radius"), c.radius)?,
+                    _ => Collider::Sphere {
+                        center: ck.vec3(&format!("{ckey}.center"), c.center)?,
+                        radius: ck.positive(&format!("{ckey}.radius"), c.radius)?,
+                    },
                 },
-            });
+            );
         }
         let on_boundary = |p: &Point2| {
-            let inside = p.x >= -1e-12 && p.x <= width + 1e-12 && p.y >= -1e-12 && p.y <= height + 1e-12;
-            let edge = p.x.abs() < 1e-9 || (p.x - width).abs() < 1e-9 || p.y.abs() < 1e-9 || (p.y - height).abs() < 1e-9;
+            let inside =
+                p.x >= -1e-12 && p.x <= width + 1e-12 && p.y >= -1e-12 && p.y <= height + 1e-12;
+            let edge = p.x.abs() < 1e-9
+                || (p.x - width).abs() < 1e-9
+                || p.y.abs() < 1e-9
+                || (p.y - height).abs() < 1e-9;
             inside && edge
         };
         let mut preset_creases = Vec::new();
         for (i, c) in paper.creases.iter().enumerate() {
             let ckey = format!("{pk}.creases.{i}");
-            let from = Point2::new(ck.finite(&format!("{ckey}.from.0"), c.from[0])?, ck.finite(&format!("{ckey}.from.1"), c.from[1])?);
-            let to = Point2::new(ck.finite(&format!("{ckey}.to.0"), c.to[0])?, ck.finite(&format!("{ckey}.to.1"), c.to[1])?);
+            let from = Point2::new(
+                ck.finite(&format!("{ckey}.from.0"), c.from[0])?,
+                ck.finite(&format!("{ckey}.from.1"), c.from[1])?,
+            );
+            let to = Point2::new(
+                ck.finite(&format!("{ckey}.to.0"), c.to[0])?,
+                ck.finite(&format!("{ckey}.to.1"), c.to[1])?,
+            );
             for (k, p) in [("from", from), ("to", to)] {
                 if !on_boundary(&p) {
                     return Err(ck.fail(
@@ -299,7 +328,10 @@ impl SceneFile {
             let hkey = format!("handles.{i}");
             if let Some(o) = &h.object {
                 if o != "paper" {
-                    return Err(ck.fail(&format!("{hkey}.object"), format!("no object named `{o}` (objects: paper)")));
+                    return Err(ck.fail(
+                        &format!("{hkey}.object"),
+                        format!("no object named `{o}` (objects: paper)"),
+                    ));
                 }
             }
             let (mut spec, initial, topic) = parse_handle(ck, &hkey, h, 0, &mut names)?;
@@ -316,7 +348,8 @@ impl SceneFile {
             if let Some(t) = h.release_at {
                 releases.push((i, ck.non_negative(&format!("{hkey}.release_at"), t)?));
             }
-            spec.trajectory.initial = initial.unwrap_or_else(|| placement * Pose::translation(p.x, p.y, 0.0));
+            spec.trajectory.initial =
+                initial.unwrap_or_else(|| placement * Pose::translation(p.x, p.y, 0.0));
             topics.push(topic);
             handles.push(spec);
         }
@@ -331,7 +364,8 @@ impl SceneFile {
             density: ck.positive(&key("density"), paper.density)?,
             stretch_stiffness: ck.positive(&key("stretch_stiffness"), paper.stretch_stiffness)?,
             poisson_ratio: poisson,
-            bending_stiffness: ck.non_negative(&key("bending_stiffness"), paper.bending_stiffness)?,
+            bending_stiffness: ck
+                .non_negative(&key("bending_stiffness"), paper.bending_stiffness)?,
             damping: ck.non_negative(&key("damping"), paper.damping)?,
             gravity,
             boundary_density: ck.positive(&key("boundary_density"), paper.boundary_density)?,
@@ -346,13 +380,16 @@ impl SceneFile {
             junction_high_angle: high,
             compression_threshold: eps_c,
             singularity_sigma: ck.positive(&key("singularity_sigma"), paper.singularity_sigma)?,
-            blaschke_tolerance: ck.positive(&key("blaschke_tolerance"), paper.blaschke_tolerance)?,
+            blaschke_tolerance: ck
+                .positive(&key("blaschke_tolerance"), paper.blaschke_tolerance)?,
             plastic_angle: ck.non_negative(&key("plastic_angle"), paper.plastic_angle)?,
             newton_max_iterations: paper.newton_max_iterations,
             newton_tolerance: ck.positive(&key("newton_tolerance"), paper.newton_tolerance)?,
             isometry_max_iterations: paper.isometry_max_iterations,
-            collision_stiffness: ck.non_negative(&key("collision_stiffness"), paper.collision_stiffness)?,
-            collision_thickness: ck.positive(&key("collision_thickness"), paper.collision_thickness)?,
+            collision_stiffness: ck
+                .non_negative(&key("collision_stiffness"), paper.collision_stiffness)?,
+            collision_thickness: ck
+                .positive(&key("collision_thickness"), paper.collision_thickness)?,
             colliders,
             preset_creases,
             imperfection: ck.non_negative(&key("imperfection"), paper.imperfection)?,
@@ -361,7 +398,11 @@ impl SceneFile {
             initial_shape: crate::paper::PaperInitialShape::Flat,
         };
         let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(pk, e.to_string()))?;
-        let world = World::new(vec![("paper".to_string(), SimObject::Paper(Box::new(sim)))], handles, dt);
+        let world = World::new(
+            vec![("paper".to_string(), SimObject::Paper(Box::new(sim)))],
+            handles,
+            dt,
+        );
         let name = self.name.clone().unwrap_or_else(|| {
             file.file_stem()
                 .map(|s| s.to_string_lossy().into_owned())

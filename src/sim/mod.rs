@@ -9,6 +9,6 @@ mod world;
 
 pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
 pub use world::{
-    Energies, NoClock, ObjectKind, ObjectStepReport, Phase, PhaseClock, SimObject,
-    SingularPoint, StepReport, World,
+    ContactStepReport, Energies, NoClock, ObjectKind, ObjectStepReport, Phase, PhaseClock,
+    SimObject, SingularPoint, StepReport, World,
 };

@@ -1,3 +1,6 @@
+use rayon::prelude::*;
+
+use crate::contact::{BodyInput, ContactReport, ContactStage};
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh};
 use crate::paper::PaperSim;
 use crate::ribbon::RibbonSim;
@@ -62,6 +65,26 @@ pub struct StepReport {
     /// Simulation time after the step, s.
     pub time: f64,
     pub objects: Vec<ObjectStepReport>,
+    /// The contact stage, when the scene has one.
+    pub contact: Option<ContactStepReport>,
+}
+
+/// What the contact stage did in a step (its wall time is measured by the caller's
+/// [`PhaseClock`], see [`World::step_with_clock`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ContactStepReport {
+    pub report: ContactReport,
+}
+
+/// The contact stage of a world and its per-step buffers.
+#[derive(Clone, Debug)]
+struct ContactState {
+    stage: ContactStage,
+    /// Object index of each contact body.
+    objects: Vec<usize>,
+    previous: Vec<Vec<Point3>>,
+    predicted: Vec<Vec<Point3>>,
+    corrected: Vec<Vec<Point3>>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -79,6 +102,14 @@ pub enum SimObject {
 }
 
 impl SimObject {
+    /// The object's energies in its current state, J.
+    pub fn energies(&self) -> Energies {
+        match self {
+            SimObject::Ribbon(r) => r.energies(),
+            SimObject::Paper(p) => p.energies(),
+        }
+    }
+
     pub fn kind(&self) -> ObjectKind {
         match self {
             SimObject::Ribbon(_) => ObjectKind::Ribbon,
@@ -87,20 +118,23 @@ impl SimObject {
     }
 }
 
-/// The phases of one paper frame (Schreck et al. fig. 3, table V): the FEM step, the
-/// remeshing of S_G, the developable and isometric tracking.
+/// The phases of a world step: each object's optimization (a ribbon's implicit step,
+/// a paper frame's FEM step, Schreck et al. fig. 3, table V), the paper's remeshing of
+/// S_G and its developable and isometric tracking, then the world's contact stage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Phase {
     Simulation,
     Remesh,
     Isometry,
+    Contact,
 }
 
 /// Runs each phase of a step; an edge that measures wall time implements it (the core
-/// never reads a clock).
-pub trait PhaseClock {
-    /// Run `work`, the phase `phase` of object `object`.
-    fn time(&mut self, object: usize, phase: Phase, work: &mut dyn FnMut());
+/// never reads a clock). Objects step in parallel, so a clock is shared between threads
+/// (`&self`, `Sync`): a timer sums the phases over objects.
+pub trait PhaseClock: Sync {
+    /// Run `work`, the phase `phase` of object `object` (`None` for the world's stages).
+    fn time(&self, object: Option<usize>, phase: Phase, work: &mut dyn FnMut());
 }
 
 /// A [`PhaseClock`] that only runs the work.
@@ -108,7 +142,7 @@ pub trait PhaseClock {
 pub struct NoClock;
 
 impl PhaseClock for NoClock {
-    fn time(&mut self, _object: usize, _phase: Phase, work: &mut dyn FnMut()) {
+    fn time(&self, _object: Option<usize>, _phase: Phase, work: &mut dyn FnMut()) {
         work()
     }
 }
@@ -123,12 +157,16 @@ pub struct World {
     dt: f64,
     time: f64,
     steps: u64,
+    contact: Option<ContactState>,
+    /// Handle targets at the end of the last step (the start of the next one).
+    last_targets: Vec<Pose>,
 }
 
 impl World {
     /// A world at t = 0. `dt` is the time step, s.
     pub fn new(objects: Vec<(String, SimObject)>, handles: Vec<HandleSpec>, dt: f64) -> World {
         let (names, objects): (Vec<_>, Vec<_>) = objects.into_iter().unzip();
+        let last_targets = handles.iter().map(|h| h.trajectory.pose_at(0.0)).collect();
         World {
             names,
             initial_objects: objects.clone(),
@@ -137,7 +175,39 @@ impl World {
             dt,
             time: 0.0,
             steps: 0,
+            contact: None,
+            last_targets,
         }
+    }
+
+    /// Add a contact stage whose bodies are the ribbons of this world, in object order
+    /// (build it from [`RibbonSim::contact_topology`]).
+    pub fn with_contact(mut self, stage: ContactStage) -> World {
+        let objects: Vec<usize> = (0..self.objects.len()).collect();
+        assert_eq!(
+            stage.body_count(),
+            objects.len(),
+            "one contact body per ribbon"
+        );
+        let empty = vec![Vec::new(); objects.len()];
+        self.contact = Some(ContactState {
+            stage,
+            objects,
+            previous: empty.clone(),
+            predicted: empty.clone(),
+            corrected: empty,
+        });
+        self
+    }
+
+    /// The contact stage, if the scene has one.
+    pub fn contact_stage(&self) -> Option<&ContactStage> {
+        self.contact.as_ref().map(|c| &c.stage)
+    }
+
+    /// Handle targets (`world_from_gripper`) at the end of the last step.
+    pub fn current_targets(&self) -> &[Pose] {
+        &self.last_targets
     }
 
     /// Simulation time, s.
@@ -176,15 +246,15 @@ impl World {
     /// target of handle `i` (`world_from_gripper` at the end of the step); missing entries
     /// follow the script.
     pub fn step(&mut self, targets: &[Option<Pose>]) -> StepReport {
-        self.step_with_clock(targets, &mut NoClock)
+        self.step_with_clock(targets, &NoClock)
     }
 
-    /// [`World::step`] with the phases of each object run inside `clock` (objects
-    /// without phases run as one [`Phase::Simulation`]).
+    /// [`World::step`] with every phase run inside `clock` (a ribbon's step is one
+    /// [`Phase::Simulation`]; only the phases the scene has run).
     pub fn step_with_clock(
         &mut self,
         targets: &[Option<Pose>],
-        clock: &mut dyn PhaseClock,
+        clock: &dyn PhaseClock,
     ) -> StepReport {
         let t_next = self.time + self.dt;
         let resolved: Vec<Pose> = (0..self.handles.len())
@@ -198,14 +268,16 @@ impl World {
             .collect();
         let dt = self.dt;
         let handles = &self.handles;
-        let reports = self
+        // Every object's optimization in parallel: each is independent and sequential
+        // inside, so the results do not depend on the thread count.
+        let mut reports: Vec<ObjectStepReport> = self
             .objects
-            .iter_mut()
+            .par_iter_mut()
             .enumerate()
             .map(|(index, object)| match object {
                 SimObject::Ribbon(r) => {
                     let mut report = ObjectStepReport::default();
-                    clock.time(index, Phase::Simulation, &mut || {
+                    clock.time(Some(index), Phase::Simulation, &mut || {
                         report = r.step(dt, t_next, index, handles, &resolved)
                     });
                     report
@@ -215,11 +287,22 @@ impl World {
                 }
             })
             .collect();
+        let objects = &mut self.objects;
+        let last_targets = &self.last_targets;
+        let contact = self.contact.as_mut().map(|c| {
+            let mut report = None;
+            clock.time(None, Phase::Contact, &mut || {
+                report = Some(c.run(objects, &mut reports, last_targets, &resolved, dt))
+            });
+            report.expect("the clock runs the contact stage")
+        });
+        self.last_targets = resolved;
         self.time = t_next;
         self.steps += 1;
         StepReport {
             time: self.time,
             objects: reports,
+            contact,
         }
     }
 
@@ -244,5 +327,61 @@ impl World {
         self.objects = self.initial_objects.clone();
         self.time = 0.0;
         self.steps = 0;
+        self.last_targets = self
+            .handles
+            .iter()
+            .map(|h| h.trajectory.pose_at(0.0))
+            .collect();
+    }
+}
+
+impl ContactState {
+    /// The contact stage on all ribbon meshes together (Pan et al. algorithm 1, line 5);
+    /// the corrected meshes become the ribbons' X^{n+1}.
+    fn run(
+        &mut self,
+        objects: &mut [SimObject],
+        reports: &mut [ObjectStepReport],
+        targets0: &[Pose],
+        targets1: &[Pose],
+        dt: f64,
+    ) -> ContactStepReport {
+        for (b, &o) in self.objects.iter().enumerate() {
+            match &objects[o] {
+                SimObject::Ribbon(r) => {
+                    r.previous_mesh_vertices(&mut self.previous[b]);
+                    self.predicted[b].clear();
+                    self.predicted[b].extend_from_slice(&r.mesh().vertices);
+                }
+                SimObject::Paper(_) => unreachable!(
+                    "contact bodies are ribbons: the scene builder rejects a contact stage with a paper sheet"
+                ),
+            }
+        }
+        let inputs: Vec<BodyInput> = self
+            .previous
+            .iter()
+            .zip(&self.predicted)
+            .map(|(p, q)| BodyInput {
+                previous: p,
+                predicted: q,
+            })
+            .collect();
+        let report = self
+            .stage
+            .resolve(&inputs, targets0, targets1, &mut self.corrected);
+        for (b, &o) in self.objects.iter().enumerate() {
+            match &mut objects[o] {
+                SimObject::Ribbon(r) => {
+                    r.apply_contact_correction(&self.corrected[b], dt);
+                    reports[o].isometry_error = r.mesh().isometry_error();
+                    reports[o].energies = r.energies();
+                }
+                SimObject::Paper(_) => unreachable!(
+                    "contact bodies are ribbons: the scene builder rejects a contact stage with a paper sheet"
+                ),
+            }
+        }
+        ContactStepReport { report }
     }
 }

@@ -1,0 +1,109 @@
+//! Criterion benchmarks of the contact stage (Pan et al. sec. 5.2):
+//! - `overhead`: one step of a free-falling 50-element ribbon without colliders (no
+//!   contact stage is built), with a ground plane far below (the stage runs, finds
+//!   nothing) and resting on the ground (contacts every step): a scene without
+//!   colliders pays nothing;
+//! - `scene`: one whole step (optimization + contact) of the falling ribbon, the double
+//!   chain and the Moebius chain mid-motion;
+//! - `closeness`: the double chain with the stiff (Pan et al.) and the plain (Harmon et
+//!   al.) closeness measure.
+//!
+//! Run: `cargo bench --bench contact` (add `-- overhead` etc. to filter).
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use developable_sim::scene::{self, Scene};
+
+fn load(name: &str, sets: &[String]) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("config/scenes")
+        .join(format!("{name}.yaml"));
+    scene::load(&path, sets).expect("scene")
+}
+
+fn warmed(mut s: Scene, warm: usize) -> Scene {
+    for _ in 0..warm {
+        s.world.step(&[]);
+    }
+    s
+}
+
+const FREE: &str = "duration: 1.0\ndt: 0.01\nribbon:\n  segments: 50\n  base: {mode: floating, position: [0, 0, 0.5]}\n";
+
+fn overhead(c: &mut Criterion) {
+    let mut group = c.benchmark_group("overhead");
+    group.sample_size(30);
+    let free = scene::load_str(FREE, Path::new("free.yaml"), &[]).expect("scene");
+    assert!(
+        free.world.contact_stage().is_none(),
+        "no colliders: no stage"
+    );
+    let far = format!("{FREE}colliders:\n  - {{kind: plane, position: [0, 0, -10]}}\n");
+    let far = scene::load_str(&far, Path::new("far.yaml"), &[]).expect("scene");
+    assert!(far.world.contact_stage().is_some());
+    let resting = FREE.replace("[0, 0, 0.5]", "[0, 0, 0.0011]")
+        + "colliders:\n  - {kind: plane}\ncontact: {thickness: 0.002}\n";
+    let resting = scene::load_str(&resting, Path::new("resting.yaml"), &[]).expect("scene");
+    for (name, base) in [
+        ("no_colliders", warmed(free, 5)),
+        ("far_ground", warmed(far, 5)),
+        ("resting", warmed(resting, 5)),
+    ] {
+        group.bench_function(name, |b| {
+            b.iter_batched(
+                || base.clone(),
+                |mut s| black_box(s.world.step(&[])),
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
+    group.finish();
+}
+
+fn scenes(c: &mut Criterion) {
+    let mut group = c.benchmark_group("scene");
+    group.sample_size(10);
+    for (name, warm) in [
+        ("ribbon_falling", 60),
+        ("ribbon_double_chain", 15),
+        ("ribbon_mobius_chain", 25),
+        ("ribbon_gripper_push", 60),
+    ] {
+        let base = warmed(load(name, &[]), warm);
+        group.bench_function(name, |b| {
+            b.iter_batched(
+                || base.clone(),
+                |mut s| black_box(s.world.step(&[])),
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
+    group.finish();
+}
+
+fn closeness(c: &mut Criterion) {
+    let mut group = c.benchmark_group("closeness");
+    group.sample_size(10);
+    for kind in ["stiff", "plain"] {
+        let base = warmed(
+            load(
+                "ribbon_double_chain",
+                &[format!("contact.closeness={kind}")],
+            ),
+            15,
+        );
+        group.bench_function(BenchmarkId::new("double_chain", kind), |b| {
+            b.iter_batched(
+                || base.clone(),
+                |mut s| black_box(s.world.step(&[])),
+                criterion::BatchSize::LargeInput,
+            )
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, overhead, scenes, closeness);
+criterion_main!(benches);

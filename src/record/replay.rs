@@ -1,0 +1,368 @@
+//! `developable_sim replay BAG`: rebuild the recorded simulation, feed it the recorded
+//! handle poses in recorded order (through the same input filter), step it whenever
+//! the recording stepped (the statuses are the ledger: `step` counts steps since the
+//! last reset, `episode` counts resets), and compare every recorded output with the
+//! recomputed one. The same build gives zero difference; otherwise the report names
+//! the largest difference per topic.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::read::{mcap_files, BagEvent, McapStream};
+use super::recorder::{SessionInfo, SESSION_RECORD};
+use super::RecordError;
+use crate::ros::cdr;
+use crate::ros::input::InputPolicy;
+use crate::ros::introspect::{compare, to_value, Value};
+use crate::ros::msgs::{Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints};
+use crate::ros::session::{Frame, FrameContent, Session};
+use crate::sim::StepReport;
+
+/// Replay settings.
+#[derive(Clone, Debug, Default)]
+pub struct ReplayOptions {
+    /// Simulate this scene file instead of the one stored in the bag.
+    pub scene: Option<PathBuf>,
+}
+
+/// Comparison of one recorded topic.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct TopicReport {
+    pub topic: String,
+    pub type_name: String,
+    /// Recorded messages compared.
+    pub compared: u64,
+    /// Messages that differ at all.
+    pub differing: u64,
+    /// Largest absolute difference of a numeric field.
+    pub max_abs_difference: f64,
+    /// Where it was: `step <n>: <field path>`.
+    pub max_at: String,
+    /// First structural difference (lengths, strings), if any.
+    pub structural: Option<String>,
+}
+
+/// The result of a replay (`replay --stats OUT.json` writes it).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct ReplayReport {
+    pub bag: String,
+    pub scene: String,
+    /// Steps re-simulated.
+    pub steps: u64,
+    /// Resets replayed.
+    pub resets: u64,
+    /// Handle poses fed (accepted or not).
+    pub inputs: u64,
+    pub topics: Vec<TopicReport>,
+    /// Largest difference over all topics.
+    pub max_abs_difference: f64,
+    /// Every recorded output was reproduced bit for bit.
+    pub identical: bool,
+    /// Why reading stopped early (a bag cut short by a crash), if it did.
+    pub truncated: Option<String>,
+    /// Wall time of the re-simulation, s.
+    pub wall_s: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Output {
+    Clock,
+    Markers(usize),
+    Singular(usize),
+    Status(usize),
+}
+
+/// Replay the bag folder `dir`.
+pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, RecordError> {
+    let bag_err = |message: String| RecordError::Bag {
+        path: dir.to_path_buf(),
+        message,
+    };
+    let start = std::time::Instant::now();
+    let files = mcap_files(dir)?;
+    let mut report = ReplayReport {
+        bag: dir.display().to_string(),
+        identical: true,
+        ..ReplayReport::default()
+    };
+    let mut session: Option<Session> = None;
+    let mut info: Option<SessionInfo> = None;
+    let mut routes: BTreeMap<String, Route> = BTreeMap::new();
+    let mut content = FrameContent {
+        markers: false,
+        singular_points: false,
+        status: true,
+    };
+    let mut current: Option<(u32, u64)> = None;
+    let mut frame: Option<Frame> = None;
+    let mut last_step: Option<(StepReport, f64)> = None;
+    let mut inputs_since_frame = false;
+    let mut per_topic: BTreeMap<String, TopicReport> = BTreeMap::new();
+    for file in &files {
+        let mut stream = McapStream::open(file)?;
+        for event in stream.by_ref() {
+            match event? {
+                BagEvent::Metadata { name, values } if name == SESSION_RECORD => {
+                    if session.is_some() {
+                        continue;
+                    }
+                    let i = SessionInfo::from_record(&values)
+                        .map_err(|m| bag_err(format!("{}: {m}", file.display())))?;
+                    let scene = match &options.scene {
+                        Some(p) => crate::scene::load(p, &[]),
+                        None => {
+                            crate::scene::load_str(&i.scene_yaml, Path::new(&i.scene_file), &[])
+                        }
+                    }
+                    .map_err(|e| bag_err(format!("cannot rebuild the scene: {e}")))?;
+                    report.scene = scene.name.clone();
+                    if scene.world.handles().len() != i.handle_topics.len()
+                        || scene.world.object_names().len() != i.object_topics.len()
+                    {
+                        return Err(bag_err(format!(
+                            "the scene has {} handles and {} objects, the bag {} and {}",
+                            scene.world.handles().len(),
+                            scene.world.object_names().len(),
+                            i.handle_topics.len(),
+                            i.object_topics.len()
+                        )));
+                    }
+                    let policy = InputPolicy {
+                        frame_id: i.frame_id.clone(),
+                        accept_empty_frame_id: i.accept_empty_frame_id,
+                    };
+                    let mut s = Session::new(scene, policy, i.handle_topics.clone());
+                    s.style.line_width = i.line_width;
+                    s.style.sphere_diameter = i.sphere_diameter;
+                    for (h, t) in i.handle_topics.iter().enumerate() {
+                        routes.insert(t.clone(), Route::Input(h));
+                    }
+                    if let Some(c) = &i.clock_topic {
+                        routes.insert(c.clone(), Route::Output(Output::Clock));
+                    }
+                    for (o, (m, sp, st)) in i.object_topics.iter().enumerate() {
+                        if let Some(m) = m {
+                            content.markers = true;
+                            routes.insert(m.clone(), Route::Output(Output::Markers(o)));
+                        }
+                        if let Some(sp) = sp {
+                            content.singular_points = true;
+                            routes.insert(sp.clone(), Route::Output(Output::Singular(o)));
+                        }
+                        routes.insert(st.clone(), Route::Output(Output::Status(o)));
+                    }
+                    session = Some(s);
+                    info = Some(i);
+                }
+                BagEvent::Metadata { .. } => {}
+                BagEvent::Message(m) => {
+                    let Some(s) = session.as_mut() else {
+                        return Err(bag_err(format!(
+                            "{}: a message comes before the {SESSION_RECORD} record: not a \
+                             developable_sim recording",
+                            file.display()
+                        )));
+                    };
+                    let Some(route) = routes.get(&m.topic).copied() else {
+                        continue;
+                    };
+                    let decode_err = |e: cdr::CdrError| {
+                        bag_err(format!("{} message on {}: {e}", m.type_name, m.topic))
+                    };
+                    match route {
+                        Route::Input(h) => {
+                            let pose: PoseStamped = cdr::decode(&m.data).map_err(decode_err)?;
+                            let _ = s.offer(h, &pose);
+                            report.inputs += 1;
+                            inputs_since_frame = true;
+                        }
+                        Route::Output(out) => {
+                            let recorded = match out {
+                                Output::Clock => {
+                                    to_value(&cdr::decode::<Clock>(&m.data).map_err(decode_err)?)
+                                }
+                                Output::Markers(_) => to_value(
+                                    &cdr::decode::<MarkerArray>(&m.data).map_err(decode_err)?,
+                                ),
+                                Output::Singular(_) => to_value(
+                                    &cdr::decode::<SingularPoints>(&m.data).map_err(decode_err)?,
+                                ),
+                                Output::Status(_) => {
+                                    let st: SimStatus = cdr::decode(&m.data).map_err(decode_err)?;
+                                    let key = (st.episode, st.step);
+                                    if current != Some(key) {
+                                        advance(
+                                            s,
+                                            current,
+                                            key,
+                                            content,
+                                            &mut frame,
+                                            &mut last_step,
+                                            &mut report,
+                                        )
+                                        .map_err(|e| {
+                                            bag_err(format!("{} at {}: {e}", m.topic, key.1))
+                                        })?;
+                                        current = Some(key);
+                                        inputs_since_frame = false;
+                                    } else if inputs_since_frame {
+                                        // the same state published again (pause toggled):
+                                        // its status carries the inputs taken since
+                                        frame = Some(s.frame(
+                                            last_step.as_ref().map(|(r, _)| r),
+                                            last_step.as_ref().map_or(0.0, |(_, d)| *d),
+                                            content,
+                                        ));
+                                        inputs_since_frame = false;
+                                    }
+                                    to_value(&st)
+                                }
+                            }
+                            .map_err(|e| bag_err(e.to_string()))?;
+                            let Some(f) = &frame else {
+                                return Err(bag_err(format!(
+                                    "{}: output before the first status",
+                                    m.topic
+                                )));
+                            };
+                            let computed = match out {
+                                Output::Clock => Some(to_value(&f.clock)),
+                                Output::Markers(o) => f.objects[o].markers.as_ref().map(to_value),
+                                Output::Singular(o) => {
+                                    f.objects[o].singular_points.as_ref().map(to_value)
+                                }
+                                Output::Status(o) => f.objects[o].status.as_ref().map(to_value),
+                            }
+                            .transpose()
+                            .map_err(|e| bag_err(e.to_string()))?;
+                            let entry =
+                                per_topic
+                                    .entry(m.topic.clone())
+                                    .or_insert_with(|| TopicReport {
+                                        topic: m.topic.clone(),
+                                        type_name: m.type_name.clone(),
+                                        ..TopicReport::default()
+                                    });
+                            entry.compared += 1;
+                            let step = current.map(|c| c.1).unwrap_or(0);
+                            match computed {
+                                None => {
+                                    entry.differing += 1;
+                                    entry.structural.get_or_insert_with(|| {
+                                        format!(
+                                            "step {step}: recorded but not produced by the replay"
+                                        )
+                                    });
+                                }
+                                Some(mut c) => {
+                                    let mut r = recorded;
+                                    if matches!(out, Output::Status(_)) {
+                                        for f in WALL_CLOCK_STATUS_FIELDS {
+                                            r.zero_field(f);
+                                            c.zero_field(f);
+                                        }
+                                    }
+                                    let d = compare(&r, &c);
+                                    if !d.is_zero() {
+                                        entry.differing += 1;
+                                    }
+                                    if d.max_abs > entry.max_abs_difference {
+                                        entry.max_abs_difference = d.max_abs;
+                                        entry.max_at = format!("step {step}: {}", d.max_path);
+                                    }
+                                    if let Some(sd) = d.structural {
+                                        entry
+                                            .structural
+                                            .get_or_insert_with(|| format!("step {step}: {sd}"));
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        if let Some(t) = &stream.truncated {
+            report.truncated = Some(format!("{}: {t}", file.display()));
+        }
+    }
+    if info.is_none() {
+        return Err(bag_err(format!(
+            "no {SESSION_RECORD} metadata record: not a developable_sim recording"
+        )));
+    }
+    report.topics = per_topic.into_values().collect();
+    report.max_abs_difference = report
+        .topics
+        .iter()
+        .map(|t| t.max_abs_difference)
+        .fold(0.0, f64::max);
+    report.identical = report
+        .topics
+        .iter()
+        .all(|t| t.differing == 0 && t.structural.is_none());
+    report.wall_s = start.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// Status fields that depend on the wall clock or on the node's run state, not on the
+/// simulation: not compared.
+pub const WALL_CLOCK_STATUS_FIELDS: &[&str] = &["step_duration", "overrun_ticks", "paused"];
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Route {
+    Input(usize),
+    Output(Output),
+}
+
+/// Bring the session to the recorded state `key` = (episode, step).
+fn advance(
+    s: &mut Session,
+    current: Option<(u32, u64)>,
+    key: (u32, u64),
+    content: FrameContent,
+    frame: &mut Option<Frame>,
+    last_step: &mut Option<(StepReport, f64)>,
+    report: &mut ReplayReport,
+) -> Result<(), String> {
+    let (episode, step) = key;
+    match current {
+        None if step == 0 => {
+            *frame = Some(s.frame(None, 0.0, content));
+        }
+        None => {
+            return Err(format!(
+                "the recording starts at step {step}, not at the initial state"
+            ))
+        }
+        Some((cur_episode, cur_step)) => {
+            if step == 0 && episode > cur_episode {
+                s.reset();
+                while s.episode < episode {
+                    s.episode += 1;
+                }
+                report.resets += 1;
+                *last_step = None;
+                *frame = Some(s.frame(None, 0.0, content));
+            } else if episode == cur_episode && step == cur_step + 1 {
+                let (r, d) = s.step();
+                report.steps += 1;
+                *frame = Some(s.frame(Some(&r), d, content));
+                *last_step = Some((r, d));
+            } else {
+                return Err(format!(
+                    "status (episode {episode}, step {step}) follows (episode {cur_episode}, step \
+                     {cur_step}): messages are missing from the bag"
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A [`Value`] for tests and tools.
+pub fn value_of<M: Serialize>(m: &M) -> Option<Value> {
+    to_value(m).ok()
+}

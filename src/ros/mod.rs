@@ -1,0 +1,17 @@
+//! The ROS 2 edge: message structs mirroring `msg/*.msg` and the standard interfaces,
+//! their CDR encoding and schemas, names, parameters, the handle-input filter, the
+//! session (frames of messages per simulation state) and the DDS node itself.
+//!
+//! The only module that knows ROS. The simulation core never imports it; conversions
+//! from core types happen here ([`convert`], [`session`]).
+
+pub mod cdr;
+pub mod convert;
+pub mod input;
+pub mod introspect;
+pub mod msgs;
+pub mod names;
+pub mod node;
+pub mod params;
+pub mod schema;
+pub mod session;

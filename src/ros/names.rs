@@ -1,0 +1,215 @@
+//! Topic and service names of the node, resolved as ROS 2 resolves them: relative names
+//! live in the node's namespace, `~/x` under the node, absolute names stay; then
+//! `-r from:=to` remaps apply.
+//!
+//! Defaults: handle inputs `handles/<handle>` (relative, so `-r __ns:=/robot1` moves
+//! them to `/robot1/handles/<handle>`; a `topic:` given in the scene is absolute and
+//! stays), outputs `<object>/markers`, `<object>/singular_points`, `<object>/status`
+//! (relative), `/clock` (absolute), services `~/reset`, `~/set_paused`, `~/step`.
+
+use crate::scene::Scene;
+
+/// Why a name is not acceptable.
+#[derive(Debug, thiserror::Error)]
+#[error("invalid ROS name `{name}`: {reason}")]
+pub struct NameError {
+    pub name: String,
+    pub reason: String,
+}
+
+/// Every resolved name of a node.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NodeNames {
+    /// Node base name, e.g. `developable_sim`.
+    pub node: String,
+    /// Namespace, `/` or `/a/b`.
+    pub namespace: String,
+    /// Input topic of each handle (scene order).
+    pub handles: Vec<String>,
+    /// Per object: (markers, singular_points, status).
+    pub objects: Vec<ObjectTopics>,
+    pub clock: String,
+    pub reset: String,
+    pub set_paused: String,
+    pub step: String,
+}
+
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ObjectTopics {
+    pub markers: String,
+    pub singular_points: String,
+    pub status: String,
+}
+
+impl NodeNames {
+    /// Fully qualified node name, e.g. `/robot1/developable_sim`.
+    pub fn fqn(&self) -> String {
+        join(&self.namespace, &self.node)
+    }
+
+    /// Resolve the names of `scene` for node `node` in `namespace`, then apply `remaps`
+    /// (`from`, `to`), each resolved the same way.
+    pub fn resolve(
+        scene: &Scene,
+        node: &str,
+        namespace: &str,
+        remaps: &[(String, String)],
+    ) -> Result<NodeNames, NameError> {
+        check_token(node, node)?;
+        let namespace = normalize_namespace(namespace)?;
+        let fqn = join(&namespace, node);
+        let resolve = |name: &str| -> Result<String, NameError> {
+            let full = expand(name, &namespace, &fqn)?;
+            let mut out = full.clone();
+            for (from, to) in remaps {
+                if expand(from, &namespace, &fqn)? == full {
+                    out = expand(to, &namespace, &fqn)?;
+                }
+            }
+            Ok(out)
+        };
+        let handles = scene
+            .world
+            .handles()
+            .iter()
+            .enumerate()
+            .map(|(i, h)| {
+                let explicit = scene.source.handles.get(i).and_then(|f| f.topic.clone());
+                resolve(&explicit.unwrap_or_else(|| format!("handles/{}", h.name)))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let objects = scene
+            .world
+            .object_names()
+            .iter()
+            .map(|o| {
+                Ok(ObjectTopics {
+                    markers: resolve(&format!("{o}/markers"))?,
+                    singular_points: resolve(&format!("{o}/singular_points"))?,
+                    status: resolve(&format!("{o}/status"))?,
+                })
+            })
+            .collect::<Result<Vec<_>, NameError>>()?;
+        Ok(NodeNames {
+            node: node.to_string(),
+            clock: resolve("/clock")?,
+            reset: resolve("~/reset")?,
+            set_paused: resolve("~/set_paused")?,
+            step: resolve("~/step")?,
+            namespace,
+            handles,
+            objects,
+        })
+    }
+}
+
+fn join(namespace: &str, name: &str) -> String {
+    if namespace == "/" {
+        format!("/{name}")
+    } else {
+        format!("{namespace}/{name}")
+    }
+}
+
+fn check_token(token: &str, whole: &str) -> Result<(), NameError> {
+    let bad = |reason: &str| NameError {
+        name: whole.to_string(),
+        reason: reason.to_string(),
+    };
+    if token.is_empty() {
+        return Err(bad("empty name component (`//` or a trailing `/`)"));
+    }
+    if !token.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+        return Err(bad("only [A-Za-z0-9_] may appear between slashes"));
+    }
+    if token.starts_with(|c: char| c.is_ascii_digit()) {
+        return Err(bad("a name component must not start with a digit"));
+    }
+    if token.contains("__") {
+        return Err(bad("`__` is not allowed in ROS names"));
+    }
+    Ok(())
+}
+
+/// `""`, `/`, `robot1`, `/robot1/` -> `/` or `/robot1`.
+pub fn normalize_namespace(ns: &str) -> Result<String, NameError> {
+    let trimmed = ns.trim_matches('/');
+    if trimmed.is_empty() {
+        return Ok("/".into());
+    }
+    for t in trimmed.split('/') {
+        check_token(t, ns)?;
+    }
+    Ok(format!("/{trimmed}"))
+}
+
+/// Expand a topic or service name to an absolute one.
+pub fn expand(name: &str, namespace: &str, fqn: &str) -> Result<String, NameError> {
+    let full = if let Some(rest) = name.strip_prefix("~/") {
+        format!("{fqn}/{rest}")
+    } else if name == "~" {
+        fqn.to_string()
+    } else if name.starts_with('/') {
+        name.to_string()
+    } else {
+        join(namespace, name)
+    };
+    if full.ends_with('/') || full.len() < 2 {
+        return Err(NameError {
+            name: name.into(),
+            reason: "must not be empty or end with `/`".into(),
+        });
+    }
+    for t in full[1..].split('/') {
+        check_token(t, name)?;
+    }
+    Ok(full)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn expands_relative_private_and_absolute_names() {
+        assert_eq!(expand("a/b", "/", "/n").unwrap(), "/a/b");
+        assert_eq!(expand("a/b", "/r1", "/r1/n").unwrap(), "/r1/a/b");
+        assert_eq!(expand("/clock", "/r1", "/r1/n").unwrap(), "/clock");
+        assert_eq!(expand("~/reset", "/r1", "/r1/n").unwrap(), "/r1/n/reset");
+        assert!(expand("a//b", "/", "/n").is_err());
+        assert!(expand("a/1b", "/", "/n").is_err());
+        assert!(expand("a/b/", "/", "/n").is_err());
+        assert_eq!(normalize_namespace("robot1/").unwrap(), "/robot1");
+        assert_eq!(normalize_namespace("").unwrap(), "/");
+        assert!(normalize_namespace("/a b").is_err());
+    }
+
+    #[test]
+    fn resolves_scene_names_with_namespace_and_remaps() {
+        let scene = crate::scene::load(
+            std::path::Path::new(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/config/scenes/ribbon_extreme_torsion.yaml"
+            )),
+            &[],
+        )
+        .unwrap();
+        let n = NodeNames::resolve(&scene, "developable_sim", "/", &[]).unwrap();
+        assert_eq!(n.handles, ["/handles/twist_end"]);
+        assert_eq!(n.objects[0].markers, "/ribbon/markers");
+        assert_eq!(n.reset, "/developable_sim/reset");
+        let n = NodeNames::resolve(
+            &scene,
+            "sim",
+            "/robot1",
+            &[("handles/twist_end".into(), "/gripper/pose".into())],
+        )
+        .unwrap();
+        assert_eq!(n.handles, ["/gripper/pose"]);
+        assert_eq!(n.objects[0].status, "/robot1/ribbon/status");
+        assert_eq!(n.clock, "/clock");
+        assert_eq!(n.step, "/robot1/sim/step");
+        assert_eq!(n.fqn(), "/robot1/sim");
+        assert!(NodeNames::resolve(&scene, "bad name", "/", &[]).is_err());
+    }
+}

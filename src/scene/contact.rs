@@ -1,0 +1,340 @@
+//! The `colliders:` and `contact:` sections of a scene file, and the contact stage
+//! built from them. A scene with neither builds no stage.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::file::{pose_from, Check, SceneFile};
+use super::mesh_file::load_mesh;
+use super::SceneError;
+use crate::contact::{Closeness, Collider, ColliderShape, ContactSettings, ContactStage};
+use crate::geometry::{Point3, Vector3};
+use crate::sim::{SimObject, World};
+
+fn d_friction() -> f64 {
+    0.5
+}
+fn d_thickness() -> f64 {
+    1e-3
+}
+fn d_stiffness() -> f64 {
+    1e2
+}
+fn d_closeness() -> String {
+    "stiff".into()
+}
+fn d_max_iterations() -> u32 {
+    50
+}
+fn d_max_qp_iterations() -> u32 {
+    10_000
+}
+fn d_tolerance() -> f64 {
+    1e-6
+}
+fn d_true() -> bool {
+    true
+}
+
+/// A rigid obstacle.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ColliderFile {
+    /// Name ([A-Za-z0-9_], unique). Default `collider_<index>`.
+    #[serde(default)]
+    pub name: Option<String>,
+    /// `plane` (the half-space below the plane z = 0 of its frame: the ground), `box`,
+    /// `sphere`, `capsule` or `mesh`.
+    pub kind: String,
+    /// Origin of the collider frame, m (box, sphere: the centre; capsule: the middle of
+    /// its axis; plane: a point of the plane). Default [0, 0, 0].
+    #[serde(default)]
+    pub position: [f64; 3],
+    /// Rotation vector of the collider frame, rad (plane: turns its +z normal; capsule:
+    /// its axis is the frame's z). Default [0, 0, 0].
+    #[serde(default)]
+    pub rotation: [f64; 3],
+    /// box: full edge lengths along the frame's x, y, z, m (> 0). Required for a box.
+    #[serde(default)]
+    pub size: Option<[f64; 3]>,
+    /// sphere, capsule: radius, m (> 0). Required for them.
+    #[serde(default)]
+    pub radius: Option<f64>,
+    /// capsule: length of its axis segment (between the centres of the end caps), m
+    /// (>= 0). Required for a capsule.
+    #[serde(default)]
+    pub length: Option<f64>,
+    /// mesh: an OBJ or STL file (ASCII or binary), path relative to the scene file. The
+    /// mesh is a surface: ribbons keep `contact.thickness / 2` from either side.
+    #[serde(default)]
+    pub file: Option<String>,
+    /// mesh: scale applied to the file's coordinates (0.001 for a file in mm). Default 1.
+    #[serde(default)]
+    pub scale: Option<f64>,
+    /// Coulomb friction coefficient μ against ribbons (>= 0). Default 0.5.
+    #[serde(default = "d_friction")]
+    pub friction: f64,
+    /// Handle whose target pose carries the collider (a gripper body that pushes);
+    /// `position` / `rotation` are then relative to the gripper frame. Default none
+    /// (static).
+    #[serde(default)]
+    pub handle: Option<String>,
+}
+
+/// Contact settings (Pan et al. sec. 5.2).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactFile {
+    /// Ribbon thickness h, m (> 0): a mid-surface stays h/2 from colliders and h from
+    /// other ribbons. Default 0.001.
+    #[serde(default = "d_thickness")]
+    pub thickness: f64,
+    /// Artificial edge stiffness K of the closeness measure (dimensionless, >= 0; the
+    /// paper: 1e2). Default 100.
+    #[serde(default = "d_stiffness")]
+    pub stiffness: f64,
+    /// `stiff` (closeness with the edge stiffness K, the paper's) or `plain` (Harmon et
+    /// al., no stiffness: the paper's fig. 6 baseline). Default `stiff`.
+    #[serde(default = "d_closeness")]
+    pub closeness: String,
+    /// Detection/response rounds per step (>= 1). Default 50.
+    #[serde(default = "d_max_iterations")]
+    pub max_iterations: u32,
+    /// Active-set changes per QP (>= 1). Default 10000.
+    #[serde(default = "d_max_qp_iterations")]
+    pub max_qp_iterations: u32,
+    /// Accepted violation of a contact distance, m (> 0). Default 1e-6.
+    #[serde(default = "d_tolerance")]
+    pub tolerance: f64,
+    /// Contact between non-neighbouring parts of one ribbon. Default true.
+    #[serde(default = "d_true")]
+    pub self_contact: bool,
+}
+
+impl Default for ContactFile {
+    fn default() -> Self {
+        ContactFile {
+            thickness: d_thickness(),
+            stiffness: d_stiffness(),
+            closeness: d_closeness(),
+            max_iterations: d_max_iterations(),
+            max_qp_iterations: d_max_qp_iterations(),
+            tolerance: d_tolerance(),
+            self_contact: true,
+        }
+    }
+}
+
+/// The contact stage of a scene, or `None` when it declares neither colliders nor a
+/// `contact:` section.
+pub(super) fn build_stage(
+    scene: &SceneFile,
+    ck: &Check,
+    file: &Path,
+    world: &World,
+) -> Result<Option<ContactStage>, SceneError> {
+    if scene.colliders.is_empty() && scene.contact.is_none() {
+        return Ok(None);
+    }
+    let defaults = ContactFile::default();
+    let c = scene.contact.as_ref().unwrap_or(&defaults);
+    let settings = ContactSettings {
+        thickness: ck.positive("contact.thickness", c.thickness)?,
+        stiffness: ck.non_negative("contact.stiffness", c.stiffness)?,
+        closeness: match ck.choice("contact.closeness", &c.closeness, &["stiff", "plain"])? {
+            "plain" => Closeness::Plain,
+            _ => Closeness::Stiff,
+        },
+        max_iterations: at_least_one(ck, "contact.max_iterations", c.max_iterations)?,
+        max_qp_iterations: at_least_one(ck, "contact.max_qp_iterations", c.max_qp_iterations)?,
+        tolerance: ck.positive("contact.tolerance", c.tolerance)?,
+        self_contact: c.self_contact,
+    };
+    let mut colliders = Vec::new();
+    let mut names: Vec<String> = Vec::new();
+    for (i, cf) in scene.colliders.iter().enumerate() {
+        let key = format!("colliders.{i}");
+        let name = cf.name.clone().unwrap_or_else(|| format!("collider_{i}"));
+        if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+            return Err(ck.fail(
+                &format!("{key}.name"),
+                format!("`{name}` must be non-empty [A-Za-z0-9_]"),
+            ));
+        }
+        if names.contains(&name) {
+            return Err(ck.fail(
+                &format!("{key}.name"),
+                format!("duplicate collider name `{name}`"),
+            ));
+        }
+        names.push(name);
+        colliders.push(collider(ck, &key, cf, file, world)?);
+    }
+    let topologies = world
+        .objects()
+        .iter()
+        .map(|o| match o {
+            SimObject::Ribbon(r) => Ok(r.contact_topology()),
+            SimObject::Paper(_) => Err(ck.fail(
+                "contact",
+                "the contact stage acts on ribbons; a paper sheet collides through `paper.colliders`",
+            )),
+        })
+        .collect::<Result<_, _>>()?;
+    let mut stage = ContactStage::new(settings, topologies, colliders)
+        .map_err(|e| ck.fail("contact", e.to_string()))?;
+    // A ribbon must start outside every solid (the continuous detection keeps it
+    // there; it cannot tell which side a vertex that starts inside belongs to).
+    let half = 0.5 * settings.thickness;
+    for k in 0..stage.colliders().len() {
+        for (o, name) in world.object_names().iter().enumerate() {
+            for v in &world.mesh(o).vertices {
+                if let Some((sd, _)) =
+                    stage.collider_signed_distance(k, world.current_targets(), &v.coords)
+                {
+                    if sd < half - settings.tolerance {
+                        return Err(ck.fail(
+                            &format!("colliders.{k}"),
+                            format!(
+                                "ribbon `{name}` starts inside or closer than thickness/2 = {half} m (a vertex at [{:.4}, {:.4}, {:.4}] is at {sd:.4} m)",
+                                v.x, v.y, v.z
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    // ... and the ribbons must not start intersecting each other or themselves.
+    let meshes: Vec<&[Point3]> = (0..world.objects().len())
+        .map(|o| world.mesh(o).vertices.as_slice())
+        .collect();
+    let (overlap, pair) = stage.overlap(&meshes, world.current_targets());
+    if overlap > settings.tolerance {
+        let names = world.object_names();
+        let pair = names.iter().enumerate().fold(pair, |p, (i, n)| {
+            p.replace(&format!("body {i}"), &format!("ribbon `{n}`"))
+        });
+        return Err(ck.fail(
+            "contact",
+            format!(
+                "the scene starts with overlapping surfaces ({pair}: {overlap:.4} m closer than the contact distance); move the ribbons apart or reduce contact.thickness"
+            ),
+        ));
+    }
+    Ok(Some(stage))
+}
+
+fn at_least_one(ck: &Check, key: &str, v: u32) -> Result<u32, SceneError> {
+    if v == 0 {
+        Err(ck.fail(key, "must be at least 1"))
+    } else {
+        Ok(v)
+    }
+}
+
+fn collider(
+    ck: &Check,
+    key: &str,
+    cf: &ColliderFile,
+    scene_file: &Path,
+    world: &World,
+) -> Result<Collider, SceneError> {
+    let kind = ck.choice(
+        &format!("{key}.kind"),
+        &cf.kind,
+        &["plane", "box", "sphere", "capsule", "mesh"],
+    )?;
+    // keys used by each kind; any other is an error naming it
+    let used: &[&str] = match kind {
+        "plane" => &[],
+        "box" => &["size"],
+        "sphere" => &["radius"],
+        "capsule" => &["radius", "length"],
+        _ => &["file", "scale"],
+    };
+    for (k, present) in [
+        ("size", cf.size.is_some()),
+        ("radius", cf.radius.is_some()),
+        ("length", cf.length.is_some()),
+        ("file", cf.file.is_some()),
+        ("scale", cf.scale.is_some()),
+    ] {
+        if present && !used.contains(&k) {
+            return Err(ck.fail(
+                &format!("{key}.{k}"),
+                format!("not used by a collider of kind `{kind}`"),
+            ));
+        }
+    }
+    let required = |k: &str, v: Option<f64>| {
+        v.ok_or_else(|| ck.fail(&format!("{key}.{k}"), format!("required for kind `{kind}`")))
+    };
+    let shape = match kind {
+        "plane" => ColliderShape::HalfSpace,
+        "box" => {
+            let size = cf
+                .size
+                .ok_or_else(|| ck.fail(&format!("{key}.size"), "required for kind `box`"))?;
+            let mut half = Vector3::zeros();
+            for i in 0..3 {
+                half[i] = 0.5 * ck.positive(&format!("{key}.size.{i}"), size[i])?;
+            }
+            ColliderShape::Cuboid { half_extents: half }
+        }
+        "sphere" => ColliderShape::Ball {
+            radius: ck.positive(&format!("{key}.radius"), required("radius", cf.radius)?)?,
+        },
+        "capsule" => ColliderShape::Capsule {
+            half_height: 0.5
+                * ck.non_negative(&format!("{key}.length"), required("length", cf.length)?)?,
+            radius: ck.positive(&format!("{key}.radius"), required("radius", cf.radius)?)?,
+        },
+        _ => {
+            let rel = cf
+                .file
+                .as_ref()
+                .ok_or_else(|| ck.fail(&format!("{key}.file"), "required for kind `mesh`"))?;
+            let scale = ck.positive(&format!("{key}.scale"), cf.scale.unwrap_or(1.0))?;
+            let path = scene_file.parent().unwrap_or(Path::new(".")).join(rel);
+            let (vertices, triangles) =
+                load_mesh(&path).map_err(|m| ck.fail(&format!("{key}.file"), m))?;
+            if triangles.is_empty() {
+                return Err(ck.fail(
+                    &format!("{key}.file"),
+                    format!("{} has no triangles", path.display()),
+                ));
+            }
+            ColliderShape::TriMesh {
+                vertices: vertices
+                    .into_iter()
+                    .map(|p| Point3::from(p.coords * scale))
+                    .collect(),
+                triangles,
+            }
+        }
+    };
+    let friction = ck.non_negative(&format!("{key}.friction"), cf.friction)?;
+    let attached_to = match &cf.handle {
+        None => None,
+        Some(h) => Some(
+            world
+                .handles()
+                .iter()
+                .position(|s| &s.name == h)
+                .ok_or_else(|| {
+                    ck.fail(&format!("{key}.handle"), format!("no handle named `{h}`"))
+                })?,
+        ),
+    };
+    Ok(Collider {
+        shape,
+        pose: pose_from(
+            ck.vec3(&format!("{key}.position"), cf.position)?,
+            ck.vec3(&format!("{key}.rotation"), cf.rotation)?,
+        ),
+        friction,
+        attached_to,
+    })
+}

@@ -1,0 +1,175 @@
+//! Bad parameters and arguments fail before the node joins DDS, with a message that
+//! names the file (or the command line) and the key, and exit code 2.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_developable_sim");
+const SCENE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/config/scenes/ribbon_extreme_torsion.yaml"
+);
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("node_cli_{name}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Run the binary; returns (exit code, stderr).
+fn run(args: &[&str], env: &[(&str, &str)]) -> (i32, String) {
+    let out = Command::new(BIN)
+        .args(args)
+        .envs(env.iter().copied())
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn check(args: &[&str], env: &[(&str, &str)], expected: &[&str]) {
+    let (code, err) = run(args, env);
+    assert_eq!(code, 2, "{args:?}: {err}");
+    for e in expected {
+        assert!(err.contains(e), "{args:?}: `{e}` not in: {err}");
+    }
+}
+
+#[test]
+fn bad_params_files_name_the_file_and_the_key() {
+    let dir = scratch("params");
+    let cases = [
+        (
+            "unknown.yaml",
+            "developable_sim:\n  ros__parameters:\n    real_time_factr: 2.0\n",
+            vec![
+                "developable_sim.ros__parameters.real_time_factr",
+                "unknown parameter",
+            ],
+        ),
+        (
+            "type.yaml",
+            "/**:\n  ros__parameters:\n    as_fast_as_possible: 1\n",
+            vec![
+                "/**.ros__parameters.as_fast_as_possible",
+                "expected a bool, got the integer 1",
+            ],
+        ),
+        (
+            "range.yaml",
+            "developable_sim:\n  ros__parameters:\n    real_time_factor: -1.0\n",
+            vec![
+                "developable_sim.ros__parameters.real_time_factor",
+                "must be > 0",
+            ],
+        ),
+        (
+            "nested.yaml",
+            "developable_sim:\n  ros__parameters:\n    marker:\n      line_width: wide\n",
+            vec![
+                "developable_sim.ros__parameters.marker.line_width",
+                "expected a double",
+            ],
+        ),
+        (
+            "format.yaml",
+            "developable_sim:\n  params:\n    duration: 1.0\n",
+            vec!["ros__parameters"],
+        ),
+        (
+            "lockstep.yaml",
+            "developable_sim:\n  ros__parameters:\n    lockstep: nosuch\n",
+            vec!["ros__parameters.lockstep", "twist_end"],
+        ),
+    ];
+    for (name, text, expected) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        let p = path.to_str().unwrap();
+        let mut expected = expected.clone();
+        expected.push(p);
+        check(&["node", SCENE, "--params", p], &[], &expected);
+        check(
+            &["node", SCENE, "--ros-args", "--params-file", p],
+            &[],
+            &expected,
+        );
+    }
+    check(
+        &["node", SCENE, "--params", "/nonexistent/params.yaml"],
+        &[],
+        &["/nonexistent/params.yaml", "cannot read"],
+    );
+}
+
+#[test]
+fn bad_command_line_values_are_explained() {
+    check(
+        &["node", SCENE, "--lockstep", "nosuch"],
+        &[],
+        &["--lockstep", "twist_end"],
+    );
+    check(
+        &["node", SCENE, "--ros-args", "-p", "lockstep:=nosuch"],
+        &[],
+        &["command line (-p)", "lockstep"],
+    );
+    check(
+        &["node", SCENE, "--ros-args", "-p", "duration"],
+        &[],
+        &["NAME:=VALUE"],
+    );
+    check(
+        &["node", SCENE, "--ros-args", "--bogus"],
+        &[],
+        &["unknown ROS argument"],
+    );
+    check(
+        &["node", SCENE],
+        &[("ROS_DOMAIN_ID", "abc")],
+        &["ROS_DOMAIN_ID"],
+    );
+    check(
+        &["node", SCENE, "--domain-id", "300"],
+        &[],
+        &["out of range"],
+    );
+    check(
+        &["node", SCENE, "--namespace", "/a b"],
+        &[],
+        &["invalid ROS name"],
+    );
+    check(&["node"], &[], &["no scene"]);
+    check(
+        &["run", SCENE, "--ros-args", "-p", "a:=1"],
+        &[],
+        &["--ros-args"],
+    );
+    check(
+        &["node", SCENE, "--set", "ribbon.segments=1"],
+        &[],
+        &["ribbon.segments"],
+    );
+}
+
+#[test]
+fn a_bag_folder_in_use_is_refused() {
+    let dir = scratch("bag_in_use");
+    std::fs::write(dir.join("something"), "x").unwrap();
+    check(
+        &[
+            "run",
+            SCENE,
+            "--duration",
+            "0.02",
+            "--record",
+            dir.to_str().unwrap(),
+        ],
+        &[],
+        &["already exists"],
+    );
+}

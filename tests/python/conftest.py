@@ -1,0 +1,256 @@
+"""Shared helpers of the interop tests: start the real node binary on a random ROS domain,
+talk to it over DDS with the PyPI `cyclonedds` package (ROS 2 names: topic `rt/...`,
+type `pkg::msg::dds_::Type_`, services on the rmw_cyclonedds wire format)."""
+
+from __future__ import annotations
+
+import math
+import os
+import random
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from cyclonedds.core import Policy, Qos
+from cyclonedds.domain import DomainParticipant
+from cyclonedds.pub import DataWriter
+from cyclonedds.sub import DataReader
+from cyclonedds.topic import Topic
+from cyclonedds.util import duration
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import ros_types as rt  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[2]
+BIN = Path(os.environ.get("DEVELOPABLE_SIM_BIN", ROOT / "target" / "release" / "developable_sim"))
+SCENES = ROOT / "config" / "scenes"
+TEST_SCENES = Path(__file__).resolve().parent / "scenes"
+
+# Every wait in these tests is bounded; these are generous on a loaded 2-core machine.
+READY_TIMEOUT = 20.0
+DISCOVERY_TIMEOUT = 10.0
+
+
+def _cdr1(*policies):
+    # ROS 2 speaks XCDR1 (encapsulation 00 01); ask Cyclone for it explicitly
+    return Qos(*policies, Policy.DataRepresentation(use_cdrv0_representation=True))
+
+
+SENSOR_QOS = _cdr1(
+    Policy.Reliability.BestEffort,
+    Policy.History.KeepLast(5),
+    Policy.Durability.Volatile,
+)
+
+
+def reliable_qos(depth: int = 10, transient_local: bool = False) -> Qos:
+    return _cdr1(
+        Policy.Reliability.Reliable(duration(seconds=1)),
+        Policy.History.KeepLast(depth),
+        Policy.Durability.TransientLocal if transient_local else Policy.Durability.Volatile,
+    )
+
+
+_used_domains: set[int] = set()
+
+
+@pytest.fixture
+def domain_id() -> int:
+    """A random ROS domain per test, so tests (and parallel runs) never see each other."""
+    rng = random.SystemRandom()
+    while True:
+        d = rng.randint(1, 200)
+        if d not in _used_domains:
+            _used_domains.add(d)
+            return d
+
+
+class NodeProcess:
+    """The real node binary, started with `args`, logging to a file."""
+
+    def __init__(self, tmp_path: Path, domain: int, args: list[str], name: str = "node"):
+        self.log_path = tmp_path / f"{name}.log"
+        self._log = open(self.log_path, "w")
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+        self.proc = subprocess.Popen(
+            [str(BIN), *args],
+            cwd=ROOT,
+            env=env,
+            stdout=self._log,
+            stderr=subprocess.STDOUT,
+        )
+
+    def log(self) -> str:
+        if not self._log.closed:
+            self._log.flush()
+        return self.log_path.read_text()
+
+    def wait_ready(self, timeout: float = READY_TIMEOUT) -> None:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if "[developable_sim] ready" in self.log():
+                return
+            if self.proc.poll() is not None:
+                raise AssertionError(f"node exited with {self.proc.returncode}:\n{self.log()}")
+            time.sleep(0.05)
+        raise AssertionError(f"node not ready after {timeout} s:\n{self.log()}")
+
+    def running(self) -> bool:
+        return self.proc.poll() is None
+
+    def stop(self, sig: int = signal.SIGINT, timeout: float = 15.0) -> int:
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            rc = self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+            raise AssertionError(f"node did not stop within {timeout} s:\n{self.log()}")
+        self._log.close()
+        return rc
+
+    def wait_exit(self, timeout: float) -> int:
+        try:
+            return self.proc.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            raise AssertionError(f"node still running after {timeout} s:\n{self.log()}")
+
+
+@pytest.fixture
+def start_node(tmp_path):
+    """start_node(domain, *args) -> a ready NodeProcess; stopped at test end."""
+    started: list[NodeProcess] = []
+
+    def start(domain: int, *args: str, wait: bool = True, name: str = "node") -> NodeProcess:
+        n = NodeProcess(tmp_path, domain, ["node", *args], name=name)
+        started.append(n)
+        if wait:
+            n.wait_ready()
+        return n
+
+    yield start
+    for n in started:
+        if n.running():
+            n.stop(signal.SIGKILL)
+
+
+class Ros:
+    """A Cyclone DDS participant speaking ROS 2 names."""
+
+    def __init__(self, domain: int):
+        self.dp = DomainParticipant(domain)
+        self._topics: dict[str, Topic] = {}
+        self._seq = 0
+        self.guid = random.getrandbits(63)
+
+    def topic(self, name: str, typ, prefix: str = "rt") -> Topic:
+        key = f"{prefix}{name}"
+        if key not in self._topics:
+            self._topics[key] = Topic(self.dp, key, typ)
+        return self._topics[key]
+
+    def reader(self, name: str, typ, qos: Qos | None = None) -> DataReader:
+        return DataReader(self.dp, self.topic(name, typ), qos=qos or reliable_qos())
+
+    def writer(self, name: str, typ, qos: Qos | None = None) -> DataWriter:
+        return DataWriter(self.dp, self.topic(name, typ), qos=qos or SENSOR_QOS)
+
+    @staticmethod
+    def wait_matched(endpoint, timeout: float = DISCOVERY_TIMEOUT) -> None:
+        deadline = time.monotonic() + timeout
+        getter = (
+            endpoint.get_matched_subscriptions
+            if isinstance(endpoint, DataWriter)
+            else endpoint.get_matched_publications
+        )
+        while time.monotonic() < deadline:
+            if getter():
+                return
+            time.sleep(0.02)
+        raise AssertionError(f"no DDS match for {endpoint.topic.name} within {timeout} s")
+
+    @staticmethod
+    def take(reader: DataReader, timeout: float, until=None, max_samples: int = 100000):
+        """Samples taken until `until(sample)` is true (returned last) or the timeout."""
+        out = []
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            for s in reader.take(N=256):
+                if s is None or not hasattr(s, "__dataclass_fields__"):
+                    continue
+                out.append(s)
+                if until is not None and until(s):
+                    return out
+                if len(out) >= max_samples:
+                    return out
+            time.sleep(0.005)
+        if until is not None:
+            raise AssertionError(f"condition not met within {timeout} s ({len(out)} samples)")
+        return out
+
+    def service(self, name: str, req_type, resp_type):
+        w = DataWriter(
+            self.dp,
+            Topic(self.dp, f"rq{name}Request", req_type),
+            qos=reliable_qos(),
+        )
+        r = DataReader(
+            self.dp,
+            Topic(self.dp, f"rr{name}Reply", resp_type),
+            qos=reliable_qos(),
+        )
+        self.wait_matched(w)
+        self.wait_matched(r)
+        return w, r
+
+    def call(self, name: str, req_type, resp_type, timeout: float = 10.0, **fields):
+        """Call a ROS 2 service the way rmw_cyclonedds does."""
+        w, r = self.service(name, req_type, resp_type)
+        self._seq += 1
+        seq = self._seq
+        w.write(req_type(client_guid=self.guid, sequence_number=seq, **fields))
+        replies = self.take(
+            r,
+            timeout,
+            until=lambda s: s.client_guid == self.guid and s.sequence_number == seq,
+        )
+        return replies[-1]
+
+
+@pytest.fixture
+def ros(domain_id):
+    r = Ros(domain_id)
+    yield r
+
+
+def pose_msg(x, y, z, q=(0.0, 0.0, 0.0, 1.0), frame="world", sec=0, nanosec=0):
+    return rt.PoseStamped(
+        header=rt.Header(stamp=rt.Time(sec=sec, nanosec=nanosec), frame_id=frame),
+        pose=rt.Pose(
+            position=rt.Point(x=x, y=y, z=z),
+            orientation=rt.Quaternion(x=q[0], y=q[1], z=q[2], w=q[3]),
+        ),
+    )
+
+
+def finite(*values) -> bool:
+    return all(math.isfinite(v) for v in values)
+
+
+def markers_finite(ma) -> bool:
+    for m in ma.markers:
+        for p in m.points:
+            if not finite(p.x, p.y, p.z):
+                return False
+        for c in m.colors:
+            if not finite(c.r, c.g, c.b, c.a):
+                return False
+        if not finite(m.scale.x, m.scale.y, m.scale.z, m.pose.position.x):
+            return False
+    return True

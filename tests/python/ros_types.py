@@ -1,0 +1,212 @@
+"""ROS 2 message types for the PyPI `cyclonedds` package, named as ROS 2 names them on
+DDS (`pkg::msg::dds_::Type_`), so a Cyclone participant talks to the node exactly as an
+rclpy node on rmw_cyclonedds would. Field order follows the .msg definitions."""
+
+
+from dataclasses import dataclass, field
+
+from cyclonedds.idl import IdlStruct
+from cyclonedds.idl import types as t
+
+
+@dataclass
+class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
+    sec: t.int32 = 0
+    nanosec: t.uint32 = 0
+
+
+@dataclass
+class Duration(IdlStruct, typename="builtin_interfaces::msg::dds_::Duration_"):
+    sec: t.int32 = 0
+    nanosec: t.uint32 = 0
+
+
+@dataclass
+class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
+    stamp: Time = field(default_factory=Time)
+    frame_id: str = ""
+
+
+@dataclass
+class ColorRGBA(IdlStruct, typename="std_msgs::msg::dds_::ColorRGBA_"):
+    r: t.float32 = 0.0
+    g: t.float32 = 0.0
+    b: t.float32 = 0.0
+    a: t.float32 = 0.0
+
+
+@dataclass
+class Point(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
+    x: t.float64 = 0.0
+    y: t.float64 = 0.0
+    z: t.float64 = 0.0
+
+
+@dataclass
+class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
+    x: t.float64 = 0.0
+    y: t.float64 = 0.0
+    z: t.float64 = 0.0
+
+
+@dataclass
+class Quaternion(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
+    x: t.float64 = 0.0
+    y: t.float64 = 0.0
+    z: t.float64 = 0.0
+    w: t.float64 = 1.0
+
+
+@dataclass
+class Pose(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
+    position: Point = field(default_factory=Point)
+    orientation: Quaternion = field(default_factory=Quaternion)
+
+
+@dataclass
+class PoseStamped(IdlStruct, typename="geometry_msgs::msg::dds_::PoseStamped_"):
+    header: Header = field(default_factory=Header)
+    pose: Pose = field(default_factory=Pose)
+
+
+@dataclass
+class CompressedImage(IdlStruct, typename="sensor_msgs::msg::dds_::CompressedImage_"):
+    header: Header = field(default_factory=Header)
+    format: str = ""
+    data: t.sequence[t.uint8] = field(default_factory=list)
+
+
+@dataclass
+class UVCoordinate(IdlStruct, typename="visualization_msgs::msg::dds_::UVCoordinate_"):
+    u: t.float32 = 0.0
+    v: t.float32 = 0.0
+
+
+@dataclass
+class MeshFile(IdlStruct, typename="visualization_msgs::msg::dds_::MeshFile_"):
+    filename: str = ""
+    data: t.sequence[t.uint8] = field(default_factory=list)
+
+
+@dataclass
+class Marker(IdlStruct, typename="visualization_msgs::msg::dds_::Marker_"):
+    header: Header = field(default_factory=Header)
+    ns: str = ""
+    id: t.int32 = 0
+    type: t.int32 = 0
+    action: t.int32 = 0
+    pose: Pose = field(default_factory=Pose)
+    scale: Vector3 = field(default_factory=Vector3)
+    color: ColorRGBA = field(default_factory=ColorRGBA)
+    lifetime: Duration = field(default_factory=Duration)
+    frame_locked: bool = False
+    points: t.sequence[Point] = field(default_factory=list)
+    colors: t.sequence[ColorRGBA] = field(default_factory=list)
+    texture_resource: str = ""
+    texture: CompressedImage = field(default_factory=CompressedImage)
+    uv_coordinates: t.sequence[UVCoordinate] = field(default_factory=list)
+    text: str = ""
+    mesh_resource: str = ""
+    mesh_file: MeshFile = field(default_factory=MeshFile)
+    mesh_use_embedded_materials: bool = False
+
+
+@dataclass
+class MarkerArray(IdlStruct, typename="visualization_msgs::msg::dds_::MarkerArray_"):
+    markers: t.sequence[Marker] = field(default_factory=list)
+
+
+@dataclass
+class Clock(IdlStruct, typename="rosgraph_msgs::msg::dds_::Clock_"):
+    clock: Time = field(default_factory=Time)
+
+
+@dataclass
+class SingularPoint(IdlStruct, typename="developable_sim::msg::dds_::SingularPoint_"):
+    id: t.uint64 = 0
+    position: Point = field(default_factory=Point)
+    material: t.array[t.float64, 2] = field(default_factory=lambda: [0.0, 0.0])
+
+
+@dataclass
+class SingularPoints(IdlStruct, typename="developable_sim::msg::dds_::SingularPoints_"):
+    header: Header = field(default_factory=Header)
+    object_name: str = ""
+    points: t.sequence[SingularPoint] = field(default_factory=list)
+
+
+@dataclass
+class HandleStatus(IdlStruct, typename="developable_sim::msg::dds_::HandleStatus_"):
+    name: str = ""
+    topic: str = ""
+    external: bool = False
+    target: Pose = field(default_factory=Pose)
+    last_stamp: Time = field(default_factory=Time)
+    accepted: t.uint64 = 0
+    normalized: t.uint64 = 0
+    rejected_non_finite: t.uint64 = 0
+    rejected_zero_quaternion: t.uint64 = 0
+    rejected_stale_stamp: t.uint64 = 0
+    rejected_unknown_frame: t.uint64 = 0
+
+
+@dataclass
+class SimStatus(IdlStruct, typename="developable_sim::msg::dds_::SimStatus_"):
+    header: Header = field(default_factory=Header)
+    object_name: str = ""
+    scene_name: str = ""
+    sim_time: t.float64 = 0.0
+    step: t.uint64 = 0
+    episode: t.uint32 = 0
+    dt: t.float64 = 0.0
+    paused: bool = False
+    step_duration: t.float64 = 0.0
+    solver_iterations: t.uint32 = 0
+    outer_iterations: t.uint32 = 0
+    converged: bool = False
+    kept_previous_state: bool = False
+    kinetic_energy: t.float64 = 0.0
+    elastic_energy: t.float64 = 0.0
+    gravity_energy: t.float64 = 0.0
+    external_energy: t.float64 = 0.0
+    total_energy: t.float64 = 0.0
+    isometry_error: t.float64 = 0.0
+    constraint_violation: t.float64 = 0.0
+    singular_point_count: t.uint32 = 0
+    overrun_ticks: t.uint64 = 0
+    rejected_inputs: t.uint64 = 0
+    handles: t.sequence[HandleStatus] = field(default_factory=list)
+
+
+# Services on the rmw_cyclonedds wire format: every request and reply starts with a
+# header {client guid (8 bytes), sequence number (int64)}.
+
+
+@dataclass
+class TriggerRequest(IdlStruct, typename="std_srvs::srv::dds_::Trigger_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    structure_needs_at_least_one_member: t.uint8 = 0
+
+
+@dataclass
+class TriggerResponse(IdlStruct, typename="std_srvs::srv::dds_::Trigger_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    success: bool = False
+    message: str = ""
+
+
+@dataclass
+class SetBoolRequest(IdlStruct, typename="std_srvs::srv::dds_::SetBool_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    data: bool = False
+
+
+@dataclass
+class SetBoolResponse(IdlStruct, typename="std_srvs::srv::dds_::SetBool_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    success: bool = False
+    message: str = ""

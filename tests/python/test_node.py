@@ -1,0 +1,225 @@
+"""The node over real DDS, driven by a Cyclone DDS participant as an rclpy script would."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import ros_types as rt
+from conftest import SCENES, SENSOR_QOS, Ros, markers_finite, pose_msg, reliable_qos
+
+GRIPPER = str(SCENES / "ribbon_gripper.yaml")
+TORSION = str(SCENES / "ribbon_extreme_torsion.yaml")
+
+# The handle constraint is hard (augmented Lagrangian, stopped at |dq| < 1e-4), so a
+# reachable target is met to well under a millimetre; 5 mm is the issue's bar.
+GRASP_TOLERANCE = 0.005
+
+
+def grasp_point(markers: rt.MarkerArray):
+    """Centre of the ribbon's far end (material [l, 0]) from the TRIANGLE_LIST: the mesh
+    lists two triangles per element, element by element, the first of the last element
+    being (bottom_{n-1}, bottom_n, top_n)."""
+    surface = next(m for m in markers.markers if m.ns == "ribbon/surface")
+    b, t = surface.points[-5], surface.points[-4]
+    return ((b.x + t.x) / 2, (b.y + t.y) / 2, (b.z + t.z) / 2)
+
+
+def test_published_pose_moves_the_grasp_point_to_the_target(start_node, ros, domain_id):
+    start_node(domain_id, GRIPPER)
+    markers = ros.reader("/ribbon/markers", rt.MarkerArray, reliable_qos(1, transient_local=True))
+    status = ros.reader("/ribbon/status", rt.SimStatus)
+    pose = ros.writer("/handles/gripper", rt.PoseStamped, SENSOR_QOS)
+    ros.wait_matched(pose)
+    target = (0.7, 0.15, 0.35)  # 0.79 m from the clamp: reachable by a 1 m ribbon
+    deadline = time.monotonic() + 10.0
+    sec = 1
+    close = 0
+    last = None
+    while time.monotonic() < deadline and close < 5:
+        pose.write(pose_msg(*target, sec=sec))
+        sec += 1
+        for st in status.take(N=64):
+            if hasattr(st, "handles") and st.handles and st.handles[0].external:
+                last = st
+        for m in markers.take(N=64):
+            if not hasattr(m, "markers") or last is None:
+                continue
+            assert markers_finite(m)
+            g = grasp_point(m)
+            if math.dist(g, target) < GRASP_TOLERANCE:
+                close += 1
+        time.sleep(0.02)
+    assert last is not None, "no status ever reported the handle as externally driven"
+    assert last.handles[0].name == "gripper"
+    assert last.handles[0].topic == "/handles/gripper"
+    assert close >= 5, f"grasp point never within {GRASP_TOLERANCE} m of {target}"
+    assert last.constraint_violation < GRASP_TOLERANCE
+
+
+def test_every_output_decodes_and_is_well_formed(start_node, ros, domain_id):
+    start_node(domain_id, TORSION, "--as-fast-as-possible", "--duration", "30")
+    readers = {
+        "markers": ros.reader("/ribbon/markers", rt.MarkerArray, reliable_qos(1, True)),
+        "singular": ros.reader("/ribbon/singular_points", rt.SingularPoints),
+        "status": ros.reader("/ribbon/status", rt.SimStatus),
+        "clock": ros.reader("/clock", rt.Clock, SENSOR_QOS),
+    }
+    got = {k: [] for k in readers}
+    deadline = time.monotonic() + 15.0
+    while time.monotonic() < deadline:
+        for k, r in readers.items():
+            got[k].extend(s for s in r.take(N=256) if hasattr(s, "__dataclass_fields__"))
+        enough = all(len(v) >= 5 for v in got.values())
+        # extreme torsion creates singular points once twisted far enough
+        if enough and any(s.points for s in got["singular"]):
+            break
+        time.sleep(0.01)
+    for k, v in got.items():
+        assert len(v) >= 5, f"too few {k} messages: {len(v)}"
+
+    for ma in got["markers"]:
+        assert markers_finite(ma)
+        assert [m.ns for m in ma.markers] == [
+            "ribbon/surface",
+            "ribbon/rulings",
+            "ribbon/singular_points",
+        ]
+        assert [m.id for m in ma.markers] == [0, 0, 0]
+        surface, rulings, spheres = ma.markers
+        assert surface.type == 11 and rulings.type == 5 and spheres.type == 7
+        assert all(m.action == 0 and m.header.frame_id == "world" for m in ma.markers)
+        assert len(surface.points) > 0 and len(surface.points) % 3 == 0
+        assert len(surface.colors) == len(surface.points)
+        assert (surface.scale.x, surface.scale.y, surface.scale.z) == (1.0, 1.0, 1.0)
+        assert all(c.a == 1.0 for c in surface.colors)
+        assert len(rulings.points) % 2 == 0 and rulings.scale.x > 0
+        assert surface.pose.orientation.w == 1.0
+    stamps = [s.header.stamp.sec + 1e-9 * s.header.stamp.nanosec for s in got["status"]]
+    assert stamps == sorted(stamps)
+    for s in got["status"]:
+        assert s.object_name == "ribbon" and s.scene_name == "ribbon_extreme_torsion"
+        assert abs(s.sim_time - (s.header.stamp.sec + 1e-9 * s.header.stamp.nanosec)) < 1e-6
+        assert s.dt == 0.01 and s.step >= 0
+        assert math.isclose(
+            s.total_energy,
+            s.kinetic_energy + s.elastic_energy + s.gravity_energy + s.external_energy,
+            rel_tol=1e-9,
+            abs_tol=1e-12,
+        )
+        assert s.handles[0].name == "twist_end" and not s.handles[0].external
+    with_points = [s for s in got["singular"] if s.points]
+    assert with_points, "the extreme torsion never produced a singular point"
+    for s in with_points:
+        assert s.object_name == "ribbon" and s.header.frame_id == "world"
+        for p in s.points:
+            assert 0.0 <= p.material[0] <= 1.0 and abs(p.material[1]) <= 0.025 + 1e-9
+            assert math.isfinite(p.position.x)
+    ticks = [c.clock.sec + 1e-9 * c.clock.nanosec for c in got["clock"]]
+    assert ticks == sorted(ticks) and ticks[-1] > 0
+
+
+def _status_after(ros: Ros, reader, pred, timeout=10.0):
+    return ros.take(reader, timeout, until=lambda s: pred(s))[-1]
+
+
+def test_services_reset_pause_and_step_answer_on_the_cyclone_mapping(start_node, ros, domain_id):
+    start_node(domain_id, GRIPPER)
+    status = ros.reader("/ribbon/status", rt.SimStatus)
+    _status_after(ros, status, lambda s: s.step >= 3)
+
+    r = ros.call("/developable_sim/set_paused", rt.SetBoolRequest, rt.SetBoolResponse, data=True)
+    assert r.success and "paused" in r.message
+    paused = _status_after(ros, status, lambda s: s.paused)
+    time.sleep(0.3)
+    later = [s for s in status.take(N=256) if hasattr(s, "step")]
+    assert all(s.step == paused.step for s in later), "the simulation advanced while paused"
+
+    r = ros.call("/developable_sim/step", rt.TriggerRequest, rt.TriggerResponse)
+    assert r.success, r.message
+    stepped = _status_after(ros, status, lambda s: s.step == paused.step + 1)
+    assert stepped.paused
+    r = ros.call("/developable_sim/step", rt.TriggerRequest, rt.TriggerResponse)
+    assert r.success
+    _status_after(ros, status, lambda s: s.step == paused.step + 2)
+
+    r = ros.call("/developable_sim/set_paused", rt.SetBoolRequest, rt.SetBoolResponse, data=False)
+    assert r.success and "running" in r.message
+    _status_after(ros, status, lambda s: s.step >= paused.step + 10)
+    r = ros.call("/developable_sim/step", rt.TriggerRequest, rt.TriggerResponse)
+    assert not r.success and "pause" in r.message
+
+    r = ros.call("/developable_sim/reset", rt.TriggerRequest, rt.TriggerResponse)
+    assert r.success and "episode 1" in r.message
+    first = _status_after(ros, status, lambda s: s.episode == 1)
+    assert first.step == 0 and first.sim_time == 0.0
+    _status_after(ros, status, lambda s: s.episode == 1 and s.step >= 3)
+
+
+def test_bad_poses_are_rejected_counted_and_never_reach_the_mesh(start_node, ros, domain_id):
+    node = start_node(domain_id, GRIPPER)
+    status = ros.reader("/ribbon/status", rt.SimStatus)
+    markers = ros.reader("/ribbon/markers", rt.MarkerArray, reliable_qos(1, True))
+    pose = ros.writer("/handles/gripper", rt.PoseStamped, SENSOR_QOS)
+    ros.wait_matched(pose)
+    nan, inf = float("nan"), float("inf")
+    sequence = [
+        pose_msg(0.7, 0.0, 0.3, sec=10),  # accepted
+        pose_msg(nan, 0.0, 0.3, sec=11),  # non-finite position
+        pose_msg(0.7, 0.0, 0.3, q=(0.0, inf, 0.0, 1.0), sec=12),  # non-finite quaternion
+        pose_msg(0.7, 0.0, 0.3, q=(0.0, 0.0, 0.0, 0.0), sec=13),  # zero quaternion
+        pose_msg(0.7, 0.0, 0.3, sec=5),  # stamp older than the accepted one
+        pose_msg(0.7, 0.0, 0.3, frame="map", sec=14),  # unknown frame
+        pose_msg(0.7, 0.0, 0.3, frame="", sec=15),  # empty frame (rejected by default)
+        pose_msg(0.7, 0.0, 0.3, q=(0.0, 0.0, 0.0, 2.0), sec=16),  # accepted, normalized
+    ]
+    expected = dict(
+        accepted=2,
+        normalized=1,
+        rejected_non_finite=2,
+        rejected_zero_quaternion=1,
+        rejected_stale_stamp=1,
+        rejected_unknown_frame=2,
+    )
+    # best effort: resend the whole sequence (with fresh stamps) until every sample got
+    # through once; counters only ever grow, so wait for the exact totals of one pass
+    for msg in sequence:
+        pose.write(msg)
+        time.sleep(0.03)
+
+    def done(s):
+        h = s.handles[0]
+        return all(getattr(h, k) >= v for k, v in expected.items())
+
+    last = _status_after(ros, status, done, timeout=10.0)
+    h = last.handles[0]
+    for k, v in expected.items():
+        assert getattr(h, k) == v, f"{k}: {getattr(h, k)} != {v}"
+    assert last.rejected_inputs == 6
+    assert h.external and h.last_stamp.sec == 16
+    q = h.target.orientation
+    assert abs(math.sqrt(q.x**2 + q.y**2 + q.z**2 + q.w**2) - 1.0) < 1e-12
+    # the node keeps running and every mesh it publishes is finite
+    _status_after(ros, status, lambda s: s.step >= last.step + 20)
+    got = [m for m in markers.take(N=1000) if hasattr(m, "markers")]
+    assert got and all(markers_finite(m) for m in got)
+    assert node.running()
+
+
+def test_lockstep_on_a_handle_steps_once_per_accepted_pose(start_node, ros, domain_id):
+    start_node(domain_id, GRIPPER, "--lockstep", "gripper")
+    status = ros.reader("/ribbon/status", rt.SimStatus)
+    pose = ros.writer("/handles/gripper", rt.PoseStamped, SENSOR_QOS)
+    ros.wait_matched(pose)
+    time.sleep(0.5)  # nothing must happen without input
+    assert all(s.step == 0 for s in status.take(N=64) if hasattr(s, "step"))
+    n = 15
+    for i in range(n):
+        pose.write(pose_msg(0.8, 0.0, 0.2 + 0.005 * i, sec=100 + i))
+        time.sleep(0.03)
+    pose.write(pose_msg(0.8, 0.0, 0.2, sec=1))  # stale: rejected, no step
+    last = _status_after(ros, status, lambda s: s.step == n)
+    time.sleep(0.3)
+    later = [s.step for s in status.take(N=64) if hasattr(s, "step")]
+    assert all(s <= n for s in later), later
+    assert last.handles[0].accepted == n
