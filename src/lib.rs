@@ -5,6 +5,7 @@
 //! messages), `record` (bags, replay) and the CLI are the edges around it. See
 //! ARCHITECTURE.md.
 
+pub mod baseline;
 pub mod contact;
 pub mod geometry;
 pub mod metrics;
@@ -12,6 +13,7 @@ pub mod optim;
 pub mod paper;
 pub mod record;
 pub mod render;
+pub mod report;
 pub mod ribbon;
 pub mod ros;
 pub mod runner;

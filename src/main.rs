@@ -139,6 +139,22 @@ enum Command {
     },
     /// Same as `bag reindex`.
     Reindex { bag: PathBuf },
+    /// Error against run time: sweep dt, resolution, tolerance and methods per scene,
+    /// compare with a converged reference; writes report.csv, <scene>.png, summary.md.
+    Report {
+        /// Scene file-name glob in --scene-dir (`*`, `?`); default: extreme torsion,
+        /// helix unrolling, paper cylinder then bend.
+        #[arg(long, value_name = "GLOB")]
+        scenes: Option<String>,
+        /// Short durations, 3 time steps, a small reference (CI; under 2 minutes).
+        #[arg(long)]
+        quick: bool,
+        /// Output directory.
+        #[arg(long, value_name = "DIR")]
+        out: PathBuf,
+        #[arg(long, value_name = "DIR", default_value = "config/scenes")]
+        scene_dir: PathBuf,
+    },
 }
 
 #[derive(Subcommand)]
@@ -306,6 +322,12 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             command: BagCommand::Reindex { bag },
         }
         | Command::Reindex { bag } => reindex_command(&bag),
+        Command::Report {
+            scenes,
+            quick,
+            out,
+            scene_dir,
+        } => report_command(scenes, quick, out, scene_dir),
         Command::Bag {
             command: BagCommand::Info { bag },
         } => {
@@ -791,4 +813,25 @@ fn banner(
     if let Some(r) = record {
         eprintln!("[developable_sim]   recording into {}", r.display());
     }
+}
+
+fn report_command(
+    scenes: Option<String>,
+    quick: bool,
+    out: PathBuf,
+    scene_dir: PathBuf,
+) -> anyhow::Result<()> {
+    use std::io::IsTerminal;
+    let options = developable_sim::report::ReportOptions {
+        scene_dir,
+        scenes,
+        quick,
+        out: out.clone(),
+        progress: std::io::stderr().is_terminal(),
+    };
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let command = format!("developable_sim {}", args.join(" "));
+    developable_sim::report::run_report(&options, &command)?;
+    println!("wrote {}", out.join("summary.md").display());
+    Ok(())
 }

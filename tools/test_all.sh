@@ -9,6 +9,9 @@ echo "== cargo test =="
 cargo test --release --lib --bins --tests -- --test-threads=2
 # benchmarks must keep compiling (criterion's own runner does not take test flags)
 cargo build --release --benches
+# error against run time on short scenes (issue 6): the binary `cargo test` built
+echo "== report --quick =="
+./target/release/developable_sim report --quick --out target/report
 
 if [ -d tests/python ] && ls tests/python/test_*.py >/dev/null 2>&1; then
   echo "== python interop tests =="

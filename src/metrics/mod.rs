@@ -63,3 +63,37 @@ pub fn rms_distance(a: &SurfaceMesh, b: &SurfaceMesh, samples: &[Point2]) -> Opt
     }
     Some((sum / samples.len().max(1) as f64).sqrt())
 }
+
+/// Like [`rms_distance`] but skipping the samples outside either pattern (a remeshed
+/// paper pattern need not cover every grid point): the RMS distance (m) over the
+/// samples both meshes cover and how many those are; None if none is covered.
+pub fn rms_distance_where_defined(
+    a: &SurfaceMesh,
+    b: &SurfaceMesh,
+    samples: &[Point2],
+) -> Option<(f64, usize)> {
+    let mut sum = 0.0;
+    let mut used = 0;
+    for s in samples {
+        if let (Some(pa), Some(pb)) = (world_at_material(a, s), world_at_material(b, s)) {
+            sum += (pa - pb).norm_squared();
+            used += 1;
+        }
+    }
+    (used > 0).then(|| ((sum / used as f64).sqrt(), used))
+}
+
+/// Material sample points on an `along` x `across` grid inside the rectangle
+/// [lo, hi] (m), inset by `inset` (m) so boundary points resolve after remeshing.
+pub fn grid_samples(lo: Point2, hi: Point2, along: usize, across: usize, inset: f64) -> Vec<Point2> {
+    let mut out = Vec::with_capacity(along * across);
+    let span = |a: f64, b: f64, i: usize, n: usize| {
+        a + inset + (b - a - 2.0 * inset) * i as f64 / (n - 1).max(1) as f64
+    };
+    for i in 0..along {
+        for j in 0..across {
+            out.push(Point2::new(span(lo.x, hi.x, i, along), span(lo.y, hi.y, j, across)));
+        }
+    }
+    out
+}

@@ -24,7 +24,7 @@ pub mod params;
 pub mod pattern;
 pub mod physical;
 mod sim;
-mod sparse;
+pub(crate) mod sparse;
 pub mod tracking;
 
 pub use params::{Collider, PaperError, PaperInitialShape, PaperParams, PresetCrease};

@@ -148,6 +148,17 @@ impl BlockSpd {
         }
     }
 
+    /// The stored lower triangle as (row, column, value) (tests densify with it).
+    #[cfg(test)]
+    pub(crate) fn lower_entries(&self) -> Vec<(usize, usize, f64)> {
+        let col_ptr = self.symbolic.col_ptr();
+        let row_idx = self.symbolic.row_idx();
+        (0..self.dim())
+            .flat_map(|c| (col_ptr[c]..col_ptr[c + 1]).map(move |s| (row_idx[s], c, s)))
+            .map(|(r, c, s)| (r, c, self.values[s]))
+            .collect()
+    }
+
     /// Factorize and solve A x = rhs in place (one or more right-hand sides).
     pub fn solve_in_place(&mut self, rhs: MatMut<'_, f64>) -> Result<(), FactorError> {
         let mat = SparseColMatRef::new(self.symbolic.as_ref(), &self.values);

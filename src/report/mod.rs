@@ -1,0 +1,255 @@
+//! `developable_sim report`: error against run time (issue 6).
+//!
+//! For each scene a converged reference run (much smaller dt, finer or equal
+//! resolution, tight tolerance) and sweeps of time step, resolution and tolerance for
+//! each method: the ribbon with our Gauss-Newton, the paper's L-BFGS-B and the lumped
+//! kinetic model, the conforming-FEM baseline ([`crate::baseline`]), and the paper
+//! simulator on paper scenes. Every run is sampled at the same fixed times and compared
+//! with the reference at matched material points.
+//!
+//! `plan` and `errors` are pure; `exec` (loads scenes, measures wall time) and
+//! `output` (CSV, PNG, markdown) are edges, driven by [`run_report`].
+
+pub mod errors;
+pub mod exec;
+pub mod output;
+pub mod plan;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+
+use crate::geometry::Point2;
+use crate::metrics::grid_samples;
+use crate::sim::SimObject;
+use errors::{error_against, log_log_slope};
+use output::{Row, SceneReport};
+use plan::{Method, SceneKind, Sweep};
+
+/// What `report` is asked to do.
+#[derive(Clone, Debug)]
+pub struct ReportOptions {
+    /// Directory of the scene files.
+    pub scene_dir: PathBuf,
+    /// File-name glob (`*`, `?`) selecting scenes in `scene_dir`; default: the report's
+    /// scenes (extreme torsion, helix unrolling, paper cylinder then bend).
+    pub scenes: Option<String>,
+    /// Short durations, 3 time steps, small references (CI).
+    pub quick: bool,
+    pub out: PathBuf,
+    /// Draw a progress bar on stderr.
+    pub progress: bool,
+}
+
+/// The scenes reported by default and their `--quick` durations, s (long enough for
+/// the motion to start: a quarter turn of the twist, the first unrolling, the start of
+/// the paper's roll).
+pub const DEFAULT_SCENES: [(&str, f64); 3] = [
+    ("ribbon_extreme_torsion", 0.4),
+    ("ribbon_helix_unrolling", 0.3),
+    ("paper_cylinder_then_bend", 0.6),
+];
+
+/// `*` and `?` file-name matching.
+pub fn glob_match(pattern: &str, name: &str) -> bool {
+    fn rec(p: &[u8], n: &[u8]) -> bool {
+        match (p.first(), n.first()) {
+            (None, None) => true,
+            (Some(b'*'), _) => rec(&p[1..], n) || (!n.is_empty() && rec(p, &n[1..])),
+            (Some(b'?'), Some(_)) => rec(&p[1..], &n[1..]),
+            (Some(a), Some(b)) if a == b => rec(&p[1..], &n[1..]),
+            _ => false,
+        }
+    }
+    rec(pattern.as_bytes(), name.as_bytes())
+}
+
+fn select_scenes(opts: &ReportOptions) -> anyhow::Result<Vec<PathBuf>> {
+    let Some(pattern) = &opts.scenes else {
+        return Ok(DEFAULT_SCENES
+            .iter()
+            .map(|(n, _)| opts.scene_dir.join(format!("{n}.yaml")))
+            .collect());
+    };
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&opts.scene_dir)
+        .with_context(|| format!("cannot list {}", opts.scene_dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| glob_match(pattern, n) || glob_match(pattern, n.trim_end_matches(".yaml")))
+        })
+        .collect();
+    files.sort();
+    anyhow::ensure!(
+        !files.is_empty(),
+        "--scenes {pattern}: no scene in {} matches",
+        opts.scene_dir.display()
+    );
+    Ok(files)
+}
+
+/// The material points compared: a grid on the ribbon's strip or inside the sheet.
+fn material_points(file: &Path, kind: SceneKind) -> anyhow::Result<Vec<Point2>> {
+    let scene = crate::scene::load(file, &[])?;
+    Ok(match (&scene.world.objects()[0], kind) {
+        (SimObject::Ribbon(r), _) => {
+            let (l, w) = (r.params.length, r.params.width);
+            // inset by a micrometre so the strip's boundary resolves in any remeshing
+            grid_samples(
+                Point2::new(0.0, -0.5 * w),
+                Point2::new(l, 0.5 * w),
+                41,
+                5,
+                1e-6,
+            )
+        }
+        (SimObject::Paper(_), _) => {
+            let size = scene
+                .source
+                .paper
+                .as_ref()
+                .map_or([0.1, 0.1], |p| p.size);
+            grid_samples(
+                Point2::new(0.0, 0.0),
+                Point2::new(size[0], size[1]),
+                11,
+                11,
+                0.01 * size[0].min(size[1]),
+            )
+        }
+    })
+}
+
+/// Run the report and write `report.csv`, `<scene>.png` and `summary.md` into
+/// `opts.out`. `command` is quoted in summary.md.
+pub fn run_report(opts: &ReportOptions, command: &str) -> anyhow::Result<Vec<SceneReport>> {
+    let started = Instant::now();
+    std::fs::create_dir_all(&opts.out)
+        .with_context(|| format!("cannot create {}", opts.out.display()))?;
+    let files = select_scenes(opts)?;
+    let mut plans = Vec::new();
+    for file in &files {
+        let stem = file
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("scene")
+            .to_string();
+        let quick_duration = opts.quick.then(|| {
+            DEFAULT_SCENES
+                .iter()
+                .find(|(n, _)| *n == stem)
+                .map_or(0.4, |(_, d)| *d)
+        });
+        let defaults = exec::scene_defaults(file, quick_duration)?;
+        let duration = match quick_duration {
+            Some(q) => q.min(defaults.duration),
+            None => defaults.duration,
+        };
+        let defaults = plan::SceneDefaults { duration, ..defaults };
+        plans.push((file.clone(), stem, plan::plan(defaults, opts.quick)));
+    }
+    let total: usize = plans.iter().map(|(_, _, p)| p.runs.len() + 1).sum();
+    let bar = if opts.progress {
+        indicatif::ProgressBar::new(total as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let mut reports = Vec::new();
+    for (file, name, plan) in plans {
+        let kind = plan.defaults.kind;
+        let duration = plan.defaults.duration;
+        let points = material_points(&file, kind)?;
+        let describe = |r: &plan::RunSpec| {
+            format!(
+                "{name}: {} {} dt={} res={}",
+                r.method.name(),
+                r.sweep.name(),
+                r.dt,
+                r.resolution
+            )
+        };
+        bar.set_message(describe(&plan.reference));
+        let reference = exec::execute(&file, kind, duration, &plan.reference, &plan.sample_times)?;
+        bar.inc(1);
+        anyhow::ensure!(
+            reference.samples.len() == plan.sample_times.len() && reference.finite,
+            "{name}: the reference run did not produce every sample"
+        );
+        let mut rows = Vec::new();
+        for spec in &plan.runs {
+            bar.set_message(describe(spec));
+            let run = exec::execute(&file, kind, duration, spec, &plan.sample_times)
+                .with_context(|| describe(spec))?;
+            let error = error_against(&run.samples, &reference.samples, &points);
+            rows.push(Row { run, error });
+            bar.inc(1);
+        }
+        // order from successive halvings of the fast method's dt sweep
+        let fast = match kind {
+            SceneKind::Ribbon => Method::GaussNewton,
+            SceneKind::Paper => Method::Paper,
+        };
+        let mut sweep: Vec<&Row> = rows
+            .iter()
+            .filter(|r| r.run.spec.method == fast && r.run.spec.sweep == Sweep::TimeStep)
+            .collect();
+        sweep.sort_by(|a, b| b.run.spec.dt.total_cmp(&a.run.spec.dt));
+        let differences: Vec<(f64, f64)> = sweep
+            .windows(2)
+            .filter_map(|w| {
+                error_against(&w[0].run.samples, &w[1].run.samples, &points)
+                    .map(|e| (w[0].run.spec.dt, e.rms_over_time))
+            })
+            .collect();
+        let self_convergence_order = log_log_slope(&differences);
+        // the samples are not needed any more: keep memory flat on long reports
+        for r in &mut rows {
+            r.run.samples = Vec::new();
+        }
+        let mut reference = Row {
+            run: reference,
+            error: None,
+        };
+        reference.run.samples = Vec::new();
+        reports.push(SceneReport {
+            name,
+            plan,
+            reference,
+            rows,
+            points_total: points.len(),
+            self_convergence_order,
+        });
+    }
+    bar.finish_and_clear();
+    output::write_csv(&opts.out.join("report.csv"), &reports)?;
+    for s in &reports {
+        output::write_plot(&opts.out.join(format!("{}.png", s.name)), s)?;
+    }
+    output::write_summary(
+        &opts.out.join("summary.md"),
+        &reports,
+        opts.quick,
+        command,
+        started.elapsed().as_secs_f64(),
+    )?;
+    Ok(reports)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::glob_match;
+
+    #[test]
+    fn globs_match_scene_names() {
+        assert!(glob_match("ribbon_*", "ribbon_helix_unrolling.yaml"));
+        assert!(glob_match("*torsion*", "ribbon_extreme_torsion.yaml"));
+        assert!(glob_match("paper_?ylinder*", "paper_cylinder_then_bend.yaml"));
+        assert!(!glob_match("ribbon_*", "paper_crumple.yaml"));
+    }
+}

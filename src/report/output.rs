@@ -1,0 +1,439 @@
+//! The report's files: `report.csv`, `<scene>.png` work-precision plots, `summary.md`.
+//! An edge (writes files); the numbers come from [`super::errors`].
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::Path;
+
+use anyhow::Context;
+use plotters::prelude::*;
+
+use super::errors::{best_within, log_log_slope, pareto_front, RunError};
+use super::exec::RunOutput;
+use super::plan::{Method, ScenePlan, SceneKind, Sweep};
+
+/// One row of the CSV: a run and its error against the reference (None for the
+/// reference itself, or when it could not be compared).
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub run: RunOutput,
+    pub error: Option<RunError>,
+}
+
+/// Everything measured on one scene.
+#[derive(Clone, Debug)]
+pub struct SceneReport {
+    pub name: String,
+    pub plan: ScenePlan,
+    pub reference: Row,
+    pub rows: Vec<Row>,
+    /// Material points compared at each sample time.
+    pub points_total: usize,
+    /// The order in time of the fast method from successive halvings of dt (distance
+    /// of each run to the next finer one), free of the reference's spatial error.
+    pub self_convergence_order: Option<f64>,
+}
+
+impl SceneReport {
+    /// The method whose dt sweep gives the order in time.
+    pub fn fast_method(&self) -> Method {
+        match self.plan.defaults.kind {
+            SceneKind::Ribbon => Method::GaussNewton,
+            SceneKind::Paper => Method::Paper,
+        }
+    }
+
+    /// (dt, RMS error over time) of `method`'s dt sweep, coarse to fine.
+    pub fn dt_sweep(&self, method: Method) -> Vec<(f64, f64)> {
+        let mut v: Vec<(f64, f64)> = self
+            .rows
+            .iter()
+            .filter(|r| r.run.spec.method == method && r.run.spec.sweep == Sweep::TimeStep)
+            .filter_map(|r| r.error.map(|e| (r.run.spec.dt, e.rms_over_time)))
+            .collect();
+        v.sort_by(|a, b| b.0.total_cmp(&a.0));
+        v
+    }
+
+    /// Slope of ln(error against the reference) over ln(dt), the fast method.
+    pub fn order_against_reference(&self) -> Option<f64> {
+        log_log_slope(&self.dt_sweep(self.fast_method()))
+    }
+
+    fn methods(&self) -> Vec<Method> {
+        let mut m: Vec<Method> = self.rows.iter().map(|r| r.run.spec.method).collect();
+        m.sort();
+        m.dedup();
+        m
+    }
+}
+
+pub const CSV_HEADER: &str = "scene,method,sweep,dt_s,resolution,tolerance,steps,error_rms_m,error_end_m,points_compared,isometry_error_max,constraint_violation_max_m,wall_s,wall_per_simulated_s,step_ms_median,iterations_median,unconverged_steps,finite";
+
+pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
+    let mut out = String::from(CSV_HEADER);
+    out.push('\n');
+    for s in scenes {
+        for row in std::iter::once(&s.reference).chain(&s.rows) {
+            let r = &row.run;
+            let (e_rms, e_end, used) = match row.error {
+                Some(e) => (
+                    format!("{:.6e}", e.rms_over_time),
+                    format!("{:.6e}", e.at_end),
+                    e.points_used_min.to_string(),
+                ),
+                None => (String::new(), String::new(), String::new()),
+            };
+            writeln!(
+                out,
+                "{},{},{},{},{},{:e},{},{},{},{},{:.6e},{:.6e},{:.6},{:.6},{:.6},{},{},{}",
+                s.name,
+                r.spec.method.name(),
+                r.spec.sweep.name(),
+                r.spec.dt,
+                r.spec.resolution,
+                r.spec.tolerance,
+                r.steps,
+                e_rms,
+                e_end,
+                used,
+                r.isometry_error_max,
+                r.constraint_violation_max,
+                r.wall_s,
+                r.wall_s / s.plan.defaults.duration,
+                r.step_ms_median,
+                r.iterations_median,
+                r.unconverged_steps,
+                r.finite
+            )?;
+        }
+    }
+    std::fs::write(path, out).with_context(|| format!("cannot write {}", path.display()))
+}
+
+fn color(method: Method) -> RGBColor {
+    match method {
+        Method::GaussNewton => RGBColor(31, 119, 180),
+        Method::Lbfgsb => RGBColor(255, 127, 14),
+        Method::Lumped => RGBColor(44, 160, 44),
+        Method::ConformingFem => RGBColor(214, 39, 40),
+        Method::Paper => RGBColor(148, 103, 189),
+    }
+}
+
+static FONT: std::sync::Once = std::sync::Once::new();
+
+/// Plot labels use DejaVu Sans Mono embedded in the binary (assets/fonts): no
+/// fontconfig or system fonts needed.
+fn register_font() {
+    FONT.call_once(|| {
+        let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
+        // a font that does not parse leaves text undrawn; the plot itself still renders
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, bytes);
+    });
+}
+
+/// Log-log error (RMS over time) against run time, one line per method (its dt
+/// sweep), the other sweeps as hollow markers.
+pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
+    register_font();
+    let (w, h) = (900u32, 600u32);
+    let pts: Vec<(f64, f64)> = s
+        .rows
+        .iter()
+        .filter_map(|r| r.error.map(|e| (r.run.wall_s, e.rms_over_time)))
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
+        .collect();
+    anyhow::ensure!(!pts.is_empty(), "{}: no run to plot", s.name);
+    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+    for (x, y) in &pts {
+        x0 = x0.min(*x);
+        x1 = x1.max(*x);
+        y0 = y0.min(*y);
+        y1 = y1.max(*y);
+    }
+    let (x0, x1, y0, y1) = (x0 / 1.5, x1 * 1.5, y0 / 1.5, y1 * 1.5);
+    let mut buf = vec![255u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(
+                format!("{}: error vs run time", s.name),
+                ("sans-serif", 20),
+            )
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(80)
+            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
+            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        chart
+            .configure_mesh()
+            .x_desc("run time (wall), s")
+            .y_desc("RMS error over time, m")
+            .x_label_formatter(&|v| format!("{v:.2e}"))
+            .y_label_formatter(&|v| format!("{v:.0e}"))
+            .draw()
+            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        for method in s.methods() {
+            let c = color(method);
+            let mut line: Vec<(f64, f64)> = s
+                .rows
+                .iter()
+                .filter(|r| r.run.spec.method == method && r.run.spec.sweep == Sweep::TimeStep)
+                .filter_map(|r| r.error.map(|e| (r.run.wall_s, e.rms_over_time)))
+                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+                .collect();
+            line.sort_by(|a, b| a.0.total_cmp(&b.0));
+            chart
+                .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
+                .map_err(|e| anyhow::anyhow!("{e:?}"))?
+                .label(format!("{} (dt sweep)", method.name()))
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+            chart
+                .draw_series(line.iter().map(|p| Circle::new(*p, 4, c.filled())))
+                .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+            let others: Vec<(f64, f64)> = s
+                .rows
+                .iter()
+                .filter(|r| r.run.spec.method == method && r.run.spec.sweep != Sweep::TimeStep)
+                .filter_map(|r| r.error.map(|e| (r.run.wall_s, e.rms_over_time)))
+                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+                .collect();
+            chart
+                .draw_series(others.iter().map(|p| Circle::new(*p, 6, c.stroke_width(2))))
+                .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        root.present().map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    }
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(&buf)?;
+    writer.finish()?;
+    Ok(())
+}
+
+fn sci(v: f64) -> String {
+    format!("{v:.2e}")
+}
+
+/// `summary.md`: per scene the reference, a table of the runs, the order in time, the
+/// Pareto front and the error each method reaches within the fast method's run time.
+pub fn write_summary(
+    path: &Path,
+    scenes: &[SceneReport],
+    quick: bool,
+    command: &str,
+    wall_s: f64,
+) -> anyhow::Result<()> {
+    let mut md = String::new();
+    writeln!(md, "# Error against run time\n")?;
+    writeln!(
+        md,
+        "Generated by `{command}` ({} report, {:.0} s wall). Errors are RMS distances (m) \
+         between a run's surface and the reference's at matched material points (the ribbon \
+         remeshes in material space, so surfaces are resampled, never compared by vertex \
+         index), at fixed sample times; `error_rms` is sqrt(mean over sample times of the \
+         squared distance), `error_end` the distance at the last sample time. Run time is \
+         wall time on this machine, one thread per run. Every run and its columns are in \
+         `report.csv`; the plots are `<scene>.png` (lines: each method's dt sweep; hollow \
+         markers: its resolution and tolerance sweeps).\n",
+        if quick { "quick" } else { "full" },
+        wall_s
+    )?;
+    writeln!(
+        md,
+        "Methods: `gauss_newton` (ribbon, ours, full kinetic), `lbfgsb` (ribbon, the \
+         paper's solver), `gauss_newton_lumped` (ribbon, mass lumped on the centerline), \
+         `conforming_fem` (the conventional baseline of Pan et al. table 1: a triangle \
+         mesh n x 10, Green-strain stretching with stiffness 1e8 N, discrete-shell \
+         bending with the ribbon's alpha, handles eliminated as hard constraints; see \
+         src/baseline/conforming_fem.rs), `paper_newton` (Schreck et al.'s simulator). \
+         Resolution: ribbon elements along (FEM: quads along, 10 across); paper: \
+         boundary sample density, samples/m.\n"
+    )?;
+    for s in scenes {
+        let d = &s.plan.defaults;
+        let r = &s.reference.run.spec;
+        writeln!(md, "## {}\n", s.name)?;
+        writeln!(
+            md,
+            "Simulated {} s, compared at {} times ({}) on {} material points. Reference: \
+             `{}`, dt = {} s (the swept dt divided by up to {}), resolution {} (default \
+             {}), tolerance {:e}; its run took {:.2} s.\n",
+            d.duration,
+            s.plan.sample_times.len(),
+            s.plan
+                .sample_times
+                .iter()
+                .map(|t| format!("{t:.3}"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            s.points_total,
+            r.method.name(),
+            r.dt,
+            (s.plan.sample_times[0] / r.dt).round(),
+            r.resolution,
+            d.resolution,
+            r.tolerance,
+            s.reference.run.wall_s
+        )?;
+        if d.kind == SceneKind::Paper {
+            let used_min = s
+                .rows
+                .iter()
+                .filter_map(|r| r.error.map(|e| e.points_used_min))
+                .min()
+                .unwrap_or(0);
+            writeln!(
+                md,
+                "The paper pattern is remeshed while it runs, so the comparison uses a \
+                 grid of {} points inside the sheet (inset 1 % of its size) and skips the \
+                 points that fall outside either run's pattern at a sample time; the \
+                 fewest compared at any sample time in any run: {used_min}.\n",
+                s.points_total
+            )?;
+        }
+        writeln!(
+            md,
+            "| method | sweep | dt s | resolution | tolerance | error_rms m | error_end m | isometry max | constraint max m | run time s | s per sim. s | step ms (median) | iterations (median) | unconverged |"
+        )?;
+        writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
+        for row in std::iter::once(&s.reference).chain(&s.rows) {
+            let r = &row.run;
+            let (e, e_end) = row
+                .error
+                .map(|e| (sci(e.rms_over_time), sci(e.at_end)))
+                .unwrap_or(("-".into(), "-".into()));
+            writeln!(
+                md,
+                "| {} | {} | {:.5} | {} | {:e} | {e} | {e_end} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} |",
+                r.spec.method.name(),
+                r.spec.sweep.name(),
+                r.spec.dt,
+                r.spec.resolution,
+                r.spec.tolerance,
+                sci(r.isometry_error_max),
+                sci(r.constraint_violation_max),
+                r.wall_s,
+                r.wall_s / d.duration,
+                r.step_ms_median,
+                r.iterations_median,
+                r.unconverged_steps
+            )?;
+        }
+        let fast = s.fast_method();
+        writeln!(md)?;
+        writeln!(
+            md,
+            "**Order in time** (implicit Euler, `{}`): slope of ln(error) against ln(dt) \
+             over its dt sweep {}; from successive halvings (each run against the next \
+             finer one, which cancels the reference's spatial error) {}.\n",
+            fast.name(),
+            s.order_against_reference()
+                .map_or("n/a".into(), |p| format!("**{p:.2}**")),
+            s.self_convergence_order
+                .map_or("n/a".into(), |p| format!("**{p:.2}**"))
+        )?;
+        let points: Vec<(f64, f64)> = s
+            .rows
+            .iter()
+            .map(|r| {
+                (
+                    r.run.wall_s,
+                    r.error.map_or(f64::INFINITY, |e| e.rms_over_time),
+                )
+            })
+            .collect();
+        writeln!(md, "**Pareto front** (no other run is both faster and more accurate):\n")?;
+        for i in pareto_front(&points) {
+            let r = &s.rows[i].run;
+            writeln!(
+                md,
+                "- `{}` {} dt = {} s, resolution {}, tolerance {:e}: {} m in {:.3} s",
+                r.spec.method.name(),
+                r.spec.sweep.name(),
+                r.spec.dt,
+                r.spec.resolution,
+                r.spec.tolerance,
+                sci(points[i].1),
+                points[i].0
+            )?;
+        }
+        writeln!(md)?;
+        if let Some(budget) = equal_time_budget(s) {
+            writeln!(
+                md,
+                "**At equal run time** (budget {budget:.3} s: the run time of the middle \
+                 run of the `{}` dt sweep): the best error each method reaches \
+                 within it, and what its cheapest run costs.\n",
+                fast.name()
+            )?;
+            writeln!(md, "| method | best error within budget, m | ratio to `{}` | cheapest run: s, error m |", fast.name())?;
+            writeln!(md, "|---|---|---|---|")?;
+            let fast_err = best_error(s, fast, budget);
+            for m in s.methods() {
+                let best = best_error(s, m, budget);
+                let cheapest = s
+                    .rows
+                    .iter()
+                    .filter(|r| r.run.spec.method == m && r.error.is_some())
+                    .min_by(|a, b| a.run.wall_s.total_cmp(&b.run.wall_s));
+                writeln!(
+                    md,
+                    "| `{}` | {} | {} | {} |",
+                    m.name(),
+                    best.map_or("none within budget".into(), sci),
+                    match (best, fast_err) {
+                        (Some(b), Some(f)) if f > 0.0 => format!("{:.2}", b / f),
+                        _ => "-".into(),
+                    },
+                    cheapest.map_or("-".into(), |r| format!(
+                        "{:.3} s, {}",
+                        r.run.wall_s,
+                        sci(r.error.map_or(f64::NAN, |e| e.rms_over_time))
+                    ))
+                )?;
+            }
+            writeln!(md)?;
+        }
+    }
+    let mut f =
+        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
+    f.write_all(md.as_bytes())?;
+    Ok(())
+}
+
+/// The run-time budget of the equal-time comparison: the run time of the middle run of
+/// the fast method's dt sweep.
+pub fn equal_time_budget(s: &SceneReport) -> Option<f64> {
+    let mut runs: Vec<&Row> = s
+        .rows
+        .iter()
+        .filter(|r| r.run.spec.method == s.fast_method() && r.run.spec.sweep == Sweep::TimeStep)
+        .collect();
+    runs.sort_by(|a, b| b.run.spec.dt.total_cmp(&a.run.spec.dt));
+    runs.get(runs.len() / 2).map(|r| r.run.wall_s)
+}
+
+/// The smallest error `method` reaches with a run of at most `budget` s.
+pub fn best_error(s: &SceneReport, method: Method, budget: f64) -> Option<f64> {
+    let pts: Vec<(f64, f64)> = s
+        .rows
+        .iter()
+        .filter(|r| r.run.spec.method == method)
+        .filter_map(|r| r.error.map(|e| (r.run.wall_s, e.rms_over_time)))
+        .collect();
+    best_within(&pts, budget).map(|i| pts[i].1)
+}

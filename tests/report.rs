@@ -1,0 +1,105 @@
+//! `developable_sim report --quick` on one tiny scene, in process: the CSV's rows and
+//! columns, finite positive errors, the fast solver's error falling with dt, the FEM
+//! baseline's row, valid PNG plots and the summary.
+
+use std::path::PathBuf;
+
+use developable_sim::report::{output::CSV_HEADER, run_report, ReportOptions};
+
+/// A short helix unrolling on a coarse ribbon (the quick plan: reference at dt/16 of
+/// the sample interval, three time steps of the fast solver, one run of L-BFGS-B, the
+/// lumped model and the conforming FEM).
+const TINY_HELIX: &str = "\
+name: tiny_helix
+duration: 0.2
+dt: 0.01
+gravity: [0.0, 0.0, 0.0]
+solver: {kind: gauss_newton, tolerance: 1.0e-6}
+ribbon:
+  length: 0.5
+  width: 0.05
+  segments: 12
+  density: 0.1
+  bending_stiffness: 0.1
+  crease_regularizer: 0.1
+  kinetic: full
+  base: {mode: fixed}
+  initial_shape: {kind: helix, crease_direction: 0.3, bending_angle: 0.25}
+";
+
+#[test]
+fn quick_report_on_a_tiny_helix() {
+    let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("report_test");
+    let scenes = root.join("scenes");
+    let out = root.join("out");
+    let _ = std::fs::remove_dir_all(&root);
+    std::fs::create_dir_all(&scenes).unwrap();
+    std::fs::write(scenes.join("tiny_helix.yaml"), TINY_HELIX).unwrap();
+    let opts = ReportOptions {
+        scene_dir: scenes,
+        scenes: Some("tiny_helix".into()),
+        quick: true,
+        out: out.clone(),
+        progress: false,
+    };
+    run_report(&opts, "test").expect("report");
+
+    let csv = std::fs::read_to_string(out.join("report.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(lines.next(), Some(CSV_HEADER));
+    let columns: Vec<&str> = CSV_HEADER.split(',').collect();
+    let col = |name: &str| columns.iter().position(|c| *c == name).unwrap();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    for r in &rows {
+        assert_eq!(r.len(), columns.len(), "{r:?}");
+    }
+    // reference + 3 gauss_newton + lbfgsb + lumped + conforming_fem
+    assert_eq!(rows.len(), 7, "{csv}");
+    assert_eq!(rows[0][col("sweep")], "reference");
+    for r in &rows[1..] {
+        let e: f64 = r[col("error_rms_m")].parse().expect("error_rms_m");
+        let end: f64 = r[col("error_end_m")].parse().expect("error_end_m");
+        assert!(e.is_finite() && e > 0.0, "{r:?}");
+        assert!(end.is_finite() && end > 0.0, "{r:?}");
+        let wall: f64 = r[col("wall_s")].parse().unwrap();
+        assert!(wall > 0.0, "{r:?}");
+        assert_eq!(r[col("finite")], "true", "{r:?}");
+    }
+    // implicit Euler converges: halving dt must lower the error against the reference
+    let mut fast: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r[col("method")] == "gauss_newton" && r[col("sweep")] == "dt")
+        .map(|r| {
+            (
+                r[col("dt_s")].parse().unwrap(),
+                r[col("error_rms_m")].parse().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(fast.len(), 3);
+    fast.sort_by(|a, b| b.0.total_cmp(&a.0));
+    for w in fast.windows(2) {
+        assert!(
+            w[1].1 < w[0].1,
+            "error does not fall with dt: {:?} then {:?}",
+            w[0],
+            w[1]
+        );
+    }
+    assert!(
+        rows.iter().any(|r| r[col("method")] == "conforming_fem"),
+        "no FEM baseline row"
+    );
+
+    let png_path = out.join("tiny_helix.png");
+    let decoder = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(&png_path).expect("plot written"),
+    ));
+    let reader = decoder.read_info().expect("a valid PNG");
+    let info = reader.info();
+    assert_eq!((info.width, info.height), (900, 600));
+
+    let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(summary.contains("## tiny_helix"), "{summary}");
+    assert!(summary.contains("Order in time"), "{summary}");
+}
