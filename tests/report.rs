@@ -6,38 +6,42 @@ use std::path::PathBuf;
 
 use developable_sim::report::{output::CSV_HEADER, run_report, ReportOptions};
 
-/// A short helix unrolling on a coarse ribbon (the quick plan: reference at dt/16 of
-/// the sample interval, three time steps of the fast solver, one run of L-BFGS-B, the
-/// lumped model and the conforming FEM).
-const TINY_HELIX: &str = "\
-name: tiny_helix
+/// A short cantilever: a coarse ribbon held at one end swings down under gravity (the
+/// quick plan: a reference at 1/16 of the sample interval, three time steps of the
+/// fast solver, one run each of L-BFGS-B, the lumped model and the conforming FEM).
+/// A smooth motion, so implicit Euler's error must fall with dt. (A twisted flat strip
+/// buckles, a bifurcation seeded by a 1e-6 rad imperfection, and the helix unrolling
+/// whips within hundredths of a second: at the quick time steps neither error is
+/// guaranteed monotone in dt.)
+const TINY_CANTILEVER: &str = "\
+name: tiny_cantilever
 duration: 0.2
 dt: 0.01
-gravity: [0.0, 0.0, 0.0]
+gravity: [0.0, 0.0, -9.81]
 solver: {kind: gauss_newton, tolerance: 1.0e-6}
 ribbon:
   length: 0.5
   width: 0.05
   segments: 12
   density: 0.1
-  bending_stiffness: 0.1
+  bending_stiffness: 0.01
   crease_regularizer: 0.1
   kinetic: full
   base: {mode: fixed}
-  initial_shape: {kind: helix, crease_direction: 0.3, bending_angle: 0.25}
+  initial_shape: {kind: flat}
 ";
 
 #[test]
-fn quick_report_on_a_tiny_helix() {
+fn quick_report_on_a_tiny_cantilever() {
     let root = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("report_test");
     let scenes = root.join("scenes");
     let out = root.join("out");
     let _ = std::fs::remove_dir_all(&root);
     std::fs::create_dir_all(&scenes).unwrap();
-    std::fs::write(scenes.join("tiny_helix.yaml"), TINY_HELIX).unwrap();
+    std::fs::write(scenes.join("tiny_cantilever.yaml"), TINY_CANTILEVER).unwrap();
     let opts = ReportOptions {
         scene_dir: scenes,
-        scenes: Some("tiny_helix".into()),
+        scenes: Some("tiny_cantilever".into()),
         quick: true,
         out: out.clone(),
         progress: false,
@@ -91,7 +95,7 @@ fn quick_report_on_a_tiny_helix() {
         "no FEM baseline row"
     );
 
-    let png_path = out.join("tiny_helix.png");
+    let png_path = out.join("tiny_cantilever.png");
     let decoder = png::Decoder::new(std::io::BufReader::new(
         std::fs::File::open(&png_path).expect("plot written"),
     ));
@@ -100,6 +104,6 @@ fn quick_report_on_a_tiny_helix() {
     assert_eq!((info.width, info.height), (900, 600));
 
     let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
-    assert!(summary.contains("## tiny_helix"), "{summary}");
+    assert!(summary.contains("## tiny_cantilever"), "{summary}");
     assert!(summary.contains("Order in time"), "{summary}");
 }

@@ -66,8 +66,8 @@ impl Default for ConformingFemParams {
             along: 50,
             across: 10,
             stretch_stiffness: 1e8,
-            newton_tolerance: 1e-8,
-            max_newton_iterations: 50,
+            newton_tolerance: 1e-6,
+            max_newton_iterations: 100,
         }
     }
 }

@@ -142,7 +142,7 @@ pub fn run_report(opts: &ReportOptions, command: &str) -> anyhow::Result<Vec<Sce
                 .find(|(n, _)| *n == stem)
                 .map_or(0.4, |(_, d)| *d)
         });
-        let defaults = exec::scene_defaults(file, quick_duration)?;
+        let defaults = exec::scene_defaults(file, None)?;
         let duration = match quick_duration {
             Some(q) => q.min(defaults.duration),
             None => defaults.duration,

@@ -132,13 +132,13 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
                 runs.push(spec(Method::Lumped, Sweep::TimeStep, dt, d.resolution, d.tolerance));
             }
             for dt in dts(interval, &others) {
-                runs.push(spec(Method::ConformingFem, Sweep::TimeStep, dt, d.resolution, 1e-8));
+                runs.push(spec(Method::ConformingFem, Sweep::TimeStep, dt, d.resolution, 1e-6));
             }
             if !quick {
                 let dt = interval / 8.0;
                 for r in [0.5 * d.resolution, 2.0 * d.resolution] {
                     runs.push(spec(Method::GaussNewton, Sweep::Resolution, dt, r.round(), d.tolerance));
-                    runs.push(spec(Method::ConformingFem, Sweep::Resolution, dt, r.round(), 1e-8));
+                    runs.push(spec(Method::ConformingFem, Sweep::Resolution, dt, r.round(), 1e-6));
                 }
                 for tol in [1e-3, 1e-9] {
                     runs.push(spec(Method::GaussNewton, Sweep::Tolerance, dt, d.resolution, tol));
