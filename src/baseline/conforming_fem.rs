@@ -202,15 +202,19 @@ impl ConformingFem {
                 m.x.clamp(1e-9 * l, l * (1.0 - 1e-9)),
                 m.y.clamp(-0.5 * w * (1.0 - 1e-9), 0.5 * w * (1.0 - 1e-9)),
             );
-            let p = world_at_material(ribbon_mesh, &inside)
-                .ok_or(BaselineError::Unsupported("a ribbon mesh not covering its strip"))?;
+            let p = world_at_material(ribbon_mesh, &inside).ok_or(BaselineError::Unsupported(
+                "a ribbon mesh not covering its strip",
+            ))?;
             vertices.push(p);
         }
         let n = vertices.len();
         let mut mass = vec![0.0; n];
         for t in &triangles {
             let [a, b, c] = t.map(|i| i as usize);
-            let area = 0.5 * (material[b] - material[a]).perp(&(material[c] - material[a])).abs();
+            let area = 0.5
+                * (material[b] - material[a])
+                    .perp(&(material[c] - material[a]))
+                    .abs();
             for v in [a, b, c] {
                 mass[v] += rp.density * area / 3.0;
             }
@@ -263,14 +267,21 @@ impl ConformingFem {
             if matches!(rp.base, BaseMode::Prescribed { driven_by: Some(d), .. } if d == h_index) {
                 continue; // the base already follows it
             }
-            let column = ((h.material_point.x / l) * na as f64).round().clamp(0.0, na as f64) as usize;
+            let column = ((h.material_point.x / l) * na as f64)
+                .round()
+                .clamp(0.0, na as f64) as usize;
             match h.orientation {
                 OrientationMode::Free => {
                     let row = ((h.material_point.y / w + 0.5) * nc as f64)
                         .round()
                         .clamp(0.0, nc as f64) as usize;
                     if h.position_axes.iter().any(|&a| a) {
-                        hold(index(column, row), h.position_axes, Driver::Handle(h_index), &mut held);
+                        hold(
+                            index(column, row),
+                            h.position_axes,
+                            Driver::Handle(h_index),
+                            &mut held,
+                        );
                     }
                 }
                 OrientationMode::Normal { .. } | OrientationMode::Full => {
@@ -463,7 +474,9 @@ impl ConformingFem {
             .zip(&targets)
             .flat_map(|(hv, p)| {
                 let x = self.mesh.vertices[hv.vertex];
-                (0..3).filter(move |&a| hv.axes[a]).map(move |a| (x[a] - p[a]).abs())
+                (0..3)
+                    .filter(move |&a| hv.axes[a])
+                    .map(move |a| (x[a] - p[a]).abs())
             })
             .fold(0.0, f64::max);
         report
@@ -595,7 +608,10 @@ fn hinges(mesh: &SurfaceMesh, alpha: f64) -> Vec<Hinge> {
     for (t, tri) in mesh.triangles.iter().enumerate() {
         for k in 0..3 {
             let (a, b, c) = (tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]);
-            by_edge.entry((a.min(b), a.max(b))).or_default().push((t, c));
+            by_edge
+                .entry((a.min(b), a.max(b)))
+                .or_default()
+                .push((t, c));
         }
     }
     let m = &mesh.material;
@@ -810,8 +826,8 @@ mod tests {
     #[test]
     fn a_strip_held_at_one_end_sags_under_gravity_without_stretching() {
         let world = strip_world(20);
-        let mut fem = ConformingFem::from_world(&world, ConformingFemParams::default())
-            .expect("baseline");
+        let mut fem =
+            ConformingFem::from_world(&world, ConformingFemParams::default()).expect("baseline");
         let mut last = FemStepReport::default();
         for _ in 0..20 {
             last = fem.step();
@@ -833,8 +849,8 @@ mod tests {
                 bending_angle: 0.25,
             },
         );
-        let mut fem = ConformingFem::from_world(&world, ConformingFemParams::default())
-            .expect("baseline");
+        let mut fem =
+            ConformingFem::from_world(&world, ConformingFemParams::default()).expect("baseline");
         let before = fem.mesh.isometry_error();
         // interpolating the ruled helix between its inclined creases shortens edges
         assert!(before > 1e-4, "{before}");

@@ -85,14 +85,23 @@ pub fn rms_distance_where_defined(
 
 /// Material sample points on an `along` x `across` grid inside the rectangle
 /// [lo, hi] (m), inset by `inset` (m) so boundary points resolve after remeshing.
-pub fn grid_samples(lo: Point2, hi: Point2, along: usize, across: usize, inset: f64) -> Vec<Point2> {
+pub fn grid_samples(
+    lo: Point2,
+    hi: Point2,
+    along: usize,
+    across: usize,
+    inset: f64,
+) -> Vec<Point2> {
     let mut out = Vec::with_capacity(along * across);
     let span = |a: f64, b: f64, i: usize, n: usize| {
         a + inset + (b - a - 2.0 * inset) * i as f64 / (n - 1).max(1) as f64
     };
     for i in 0..along {
         for j in 0..across {
-            out.push(Point2::new(span(lo.x, hi.x, i, along), span(lo.y, hi.y, j, across)));
+            out.push(Point2::new(
+                span(lo.x, hi.x, i, along),
+                span(lo.y, hi.y, j, across),
+            ));
         }
     }
     out

@@ -69,7 +69,12 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..points.len())
         .filter(|&i| points[i].0.is_finite() && points[i].1.is_finite())
         .collect();
-    idx.sort_by(|&a, &b| points[a].0.total_cmp(&points[b].0).then(points[a].1.total_cmp(&points[b].1)));
+    idx.sort_by(|&a, &b| {
+        points[a]
+            .0
+            .total_cmp(&points[b].0)
+            .then(points[a].1.total_cmp(&points[b].1))
+    });
     let mut front = Vec::new();
     let mut best = f64::INFINITY;
     for i in idx {
@@ -95,7 +100,10 @@ mod tests {
 
     #[test]
     fn slope_of_a_power_law_is_its_exponent() {
-        let p: Vec<(f64, f64)> = [0.1, 0.05, 0.025].iter().map(|&h| (h, 3.0 * h * h)).collect();
+        let p: Vec<(f64, f64)> = [0.1, 0.05, 0.025]
+            .iter()
+            .map(|&h| (h, 3.0 * h * h))
+            .collect();
         assert!((log_log_slope(&p).unwrap() - 2.0).abs() < 1e-12);
         assert_eq!(log_log_slope(&p[..1]), None);
     }

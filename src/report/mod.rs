@@ -76,9 +76,9 @@ fn select_scenes(opts: &ReportOptions) -> anyhow::Result<Vec<PathBuf>> {
         .with_context(|| format!("cannot list {}", opts.scene_dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| glob_match(pattern, n) || glob_match(pattern, n.trim_end_matches(".yaml")))
+            p.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
+                glob_match(pattern, n) || glob_match(pattern, n.trim_end_matches(".yaml"))
+            })
         })
         .collect();
     files.sort();
@@ -106,11 +106,7 @@ fn material_points(file: &Path, kind: SceneKind) -> anyhow::Result<Vec<Point2>> 
             )
         }
         (SimObject::Paper(_), _) => {
-            let size = scene
-                .source
-                .paper
-                .as_ref()
-                .map_or([0.1, 0.1], |p| p.size);
+            let size = scene.source.paper.as_ref().map_or([0.1, 0.1], |p| p.size);
             grid_samples(
                 Point2::new(0.0, 0.0),
                 Point2::new(size[0], size[1]),
@@ -147,7 +143,10 @@ pub fn run_report(opts: &ReportOptions, command: &str) -> anyhow::Result<Vec<Sce
             Some(q) => q.min(defaults.duration),
             None => defaults.duration,
         };
-        let defaults = plan::SceneDefaults { duration, ..defaults };
+        let defaults = plan::SceneDefaults {
+            duration,
+            ..defaults
+        };
         plans.push((file.clone(), stem, plan::plan(defaults, opts.quick)));
     }
     let total: usize = plans.iter().map(|(_, _, p)| p.runs.len() + 1).sum();
@@ -249,7 +248,10 @@ mod tests {
     fn globs_match_scene_names() {
         assert!(glob_match("ribbon_*", "ribbon_helix_unrolling.yaml"));
         assert!(glob_match("*torsion*", "ribbon_extreme_torsion.yaml"));
-        assert!(glob_match("paper_?ylinder*", "paper_cylinder_then_bend.yaml"));
+        assert!(glob_match(
+            "paper_?ylinder*",
+            "paper_cylinder_then_bend.yaml"
+        ));
         assert!(!glob_match("ribbon_*", "paper_crumple.yaml"));
     }
 }

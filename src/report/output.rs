@@ -10,7 +10,7 @@ use plotters::prelude::*;
 
 use super::errors::{best_within, log_log_slope, pareto_front, RunError};
 use super::exec::RunOutput;
-use super::plan::{Method, ScenePlan, SceneKind, Sweep};
+use super::plan::{Method, SceneKind, ScenePlan, Sweep};
 
 /// One row of the CSV: a run and its error against the reference (None for the
 /// reference itself, or when it could not be compared).
@@ -158,10 +158,7 @@ pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e:?}"))?;
         let mut chart = ChartBuilder::on(&root)
-            .caption(
-                format!("{}: error vs run time", s.name),
-                ("sans-serif", 20),
-            )
+            .caption(format!("{}: error vs run time", s.name), ("sans-serif", 20))
             .margin(12)
             .x_label_area_size(45)
             .y_label_area_size(80)
@@ -189,7 +186,9 @@ pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
                 .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
                 .map_err(|e| anyhow::anyhow!("{e:?}"))?
                 .label(format!("{} (dt sweep)", method.name()))
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                });
             chart
                 .draw_series(line.iter().map(|p| Circle::new(*p, 4, c.filled())))
                 .map_err(|e| anyhow::anyhow!("{e:?}"))?;
@@ -309,7 +308,10 @@ pub fn write_summary(
             md,
             "| method | sweep | dt s | resolution | tolerance | error_rms m | error_end m | isometry max | constraint max m | run time s | s per sim. s | step ms (median) | iterations (median) | unconverged |"
         )?;
-        writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")?;
+        writeln!(
+            md,
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        )?;
         for row in std::iter::once(&s.reference).chain(&s.rows) {
             let r = &row.run;
             let (e, e_end) = row
@@ -356,7 +358,10 @@ pub fn write_summary(
                 )
             })
             .collect();
-        writeln!(md, "**Pareto front** (no other run is both faster and more accurate):\n")?;
+        writeln!(
+            md,
+            "**Pareto front** (no other run is both faster and more accurate):\n"
+        )?;
         for i in pareto_front(&points) {
             let r = &s.rows[i].run;
             writeln!(

@@ -120,30 +120,77 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
             let (main, others, reference_div, ref_resolution) = if quick {
                 (vec![2, 4, 8], vec![4], 16, d.resolution)
             } else {
-                (vec![2, 4, 8, 16, 32], vec![2, 4, 8, 16], 64, 2.0 * d.resolution)
+                (
+                    vec![2, 4, 8, 16, 32],
+                    vec![2, 4, 8, 16],
+                    64,
+                    2.0 * d.resolution,
+                )
             };
             for dt in dts(interval, &main) {
-                runs.push(spec(Method::GaussNewton, Sweep::TimeStep, dt, d.resolution, d.tolerance));
+                runs.push(spec(
+                    Method::GaussNewton,
+                    Sweep::TimeStep,
+                    dt,
+                    d.resolution,
+                    d.tolerance,
+                ));
             }
             for dt in dts(interval, &others) {
-                runs.push(spec(Method::Lbfgsb, Sweep::TimeStep, dt, d.resolution, d.tolerance));
+                runs.push(spec(
+                    Method::Lbfgsb,
+                    Sweep::TimeStep,
+                    dt,
+                    d.resolution,
+                    d.tolerance,
+                ));
             }
             for dt in dts(interval, if quick { &others } else { &main }) {
-                runs.push(spec(Method::Lumped, Sweep::TimeStep, dt, d.resolution, d.tolerance));
+                runs.push(spec(
+                    Method::Lumped,
+                    Sweep::TimeStep,
+                    dt,
+                    d.resolution,
+                    d.tolerance,
+                ));
             }
             // the FEM costs ~100x a ribbon step: three time steps in the full report
             let fem_dts = if quick { vec![4] } else { vec![2, 4, 8] };
             for dt in dts(interval, &fem_dts) {
-                runs.push(spec(Method::ConformingFem, Sweep::TimeStep, dt, d.resolution, 1e-6));
+                runs.push(spec(
+                    Method::ConformingFem,
+                    Sweep::TimeStep,
+                    dt,
+                    d.resolution,
+                    1e-6,
+                ));
             }
             if !quick {
                 let dt = interval / 8.0;
                 for r in [0.5 * d.resolution, 2.0 * d.resolution] {
-                    runs.push(spec(Method::GaussNewton, Sweep::Resolution, dt, r.round(), d.tolerance));
-                    runs.push(spec(Method::ConformingFem, Sweep::Resolution, dt, r.round(), 1e-6));
+                    runs.push(spec(
+                        Method::GaussNewton,
+                        Sweep::Resolution,
+                        dt,
+                        r.round(),
+                        d.tolerance,
+                    ));
+                    runs.push(spec(
+                        Method::ConformingFem,
+                        Sweep::Resolution,
+                        dt,
+                        r.round(),
+                        1e-6,
+                    ));
                 }
                 for tol in [1e-3, 1e-9] {
-                    runs.push(spec(Method::GaussNewton, Sweep::Tolerance, dt, d.resolution, tol));
+                    runs.push(spec(
+                        Method::GaussNewton,
+                        Sweep::Tolerance,
+                        dt,
+                        d.resolution,
+                        tol,
+                    ));
                 }
             }
             ScenePlan {
@@ -166,7 +213,13 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
                 (vec![3, 6, 9, 18], 36, 2.0 * d.resolution)
             };
             for dt in dts(interval, &main) {
-                runs.push(spec(Method::Paper, Sweep::TimeStep, dt, d.resolution, d.tolerance));
+                runs.push(spec(
+                    Method::Paper,
+                    Sweep::TimeStep,
+                    dt,
+                    d.resolution,
+                    d.tolerance,
+                ));
             }
             if !quick {
                 let dt = interval / 9.0;
@@ -198,7 +251,10 @@ pub fn overrides(kind: SceneKind, duration: f64, run: &RunSpec) -> Vec<String> {
     match kind {
         SceneKind::Ribbon => {
             if run.method != Method::ConformingFem {
-                o.push(format!("ribbon.segments={}", run.resolution.round() as usize));
+                o.push(format!(
+                    "ribbon.segments={}",
+                    run.resolution.round() as usize
+                ));
                 o.push(format!("solver.tolerance={}", run.tolerance));
             }
             match run.method {
