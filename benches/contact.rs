@@ -36,7 +36,10 @@ fn overhead(c: &mut Criterion) {
     let mut group = c.benchmark_group("overhead");
     group.sample_size(30);
     let free = scene::load_str(FREE, Path::new("free.yaml"), &[]).expect("scene");
-    assert!(free.world.contact_stage().is_none(), "no colliders: no stage");
+    assert!(
+        free.world.contact_stage().is_none(),
+        "no colliders: no stage"
+    );
     let far = format!("{FREE}colliders:\n  - {{kind: plane, position: [0, 0, -10]}}\n");
     let far = scene::load_str(&far, Path::new("far.yaml"), &[]).expect("scene");
     assert!(far.world.contact_stage().is_some());
@@ -85,7 +88,10 @@ fn closeness(c: &mut Criterion) {
     group.sample_size(10);
     for kind in ["stiff", "plain"] {
         let base = warmed(
-            load("ribbon_double_chain", &[format!("contact.closeness={kind}")]),
+            load(
+                "ribbon_double_chain",
+                &[format!("contact.closeness={kind}")],
+            ),
             15,
         );
         group.bench_function(BenchmarkId::new("double_chain", kind), |b| {

@@ -32,7 +32,10 @@ fn no_colliders_builds_no_contact_stage_and_reports_zero() {
     assert_eq!(stats.contact_ms.median, 0.0);
     assert_eq!(stats.penetration_max, 0.0);
     let json = serde_json::to_value(&stats).unwrap();
-    assert!(json.get("contact").is_none(), "no contact details without a stage");
+    assert!(
+        json.get("contact").is_none(),
+        "no contact details without a stage"
+    );
     assert!(json["contact_ms"]["median"].is_number());
     assert!(json["penetration_max"].is_number());
 }

@@ -9,6 +9,6 @@ mod world;
 
 pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
 pub use world::{
-    ContactStepReport, Energies, ObjectKind, ObjectStepReport, SimObject, SingularPoint,
-    StepPhase, StepReport, World,
+    ContactStepReport, Energies, ObjectKind, ObjectStepReport, SimObject, SingularPoint, StepPhase,
+    StepReport, World,
 };
