@@ -151,6 +151,12 @@ enum Command {
         /// Only the cases whose name contains this.
         #[arg(long)]
         only: Option<String>,
+        /// Only this time step, s.
+        #[arg(long)]
+        dt: Option<f64>,
+        /// Replace every case's limit on the number of steps.
+        #[arg(long)]
+        max_steps: Option<usize>,
         /// The repository's config folder (scenes/ and stress/).
         #[arg(long, value_name = "DIR", default_value = "config")]
         config: PathBuf,
@@ -326,10 +332,17 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             out,
             quick,
             only,
+            dt,
+            max_steps,
             config,
         } => {
-            let report =
-                developable_sim::stress::run_suite(&config, &out, quick, only.as_deref())?;
+            let options = developable_sim::stress::SuiteOptions {
+                quick,
+                only,
+                dt,
+                max_steps,
+            };
+            let report = developable_sim::stress::run_suite(&config, &out, &options)?;
             println!(
                 "{} of {} runs passed in {:.1} s; table in {}",
                 report.passed,

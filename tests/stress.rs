@@ -22,7 +22,7 @@ fn case(name: &str) -> StressCase {
 /// Run `name` at `dt` (quick length) and assert the suite's criteria one by one, so a
 /// failure names the one that broke.
 fn check(name: &str, dt: f64) -> CaseResult {
-    let r = stress::run_case(&case(name), dt, true, &config()).unwrap();
+    let r = stress::run_case(&case(name), dt, true, None, &config()).unwrap();
     assert!(r.steps >= 3, "{r:#?}");
     assert!(r.finite, "{name} dt {dt}: a state was not finite: {r:#?}");
     assert!(
