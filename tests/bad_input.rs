@@ -47,7 +47,12 @@ fn malformed_yaml_and_wrong_types_name_line_and_column() {
     let e = load_err(
         "duration: 0.05\ndt: 0.01\nribbon:\n  length: 1.0\n  width: 0.05\n  segments: many\n",
     );
-    for part in ["bad.yaml", "ribbon.segments", "invalid type", "line 6 column 13"] {
+    for part in [
+        "bad.yaml",
+        "ribbon.segments",
+        "invalid type",
+        "line 6 column 13",
+    ] {
         assert!(e.contains(part), "`{e}` lacks `{part}`");
     }
     // a tab where YAML wants spaces
@@ -101,7 +106,10 @@ fn a_full_disk_while_recording_ends_the_run_clearly_and_keeps_the_bag_readable()
         TORSION,
         bag.display()
     );
-    let out = Command::new("/bin/sh").args(["-c", &script]).output().unwrap();
+    let out = Command::new("/bin/sh")
+        .args(["-c", &script])
+        .output()
+        .unwrap();
     let e = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{e}");
     assert!(!e.contains("panicked"), "{e}");
@@ -121,8 +129,7 @@ fn a_full_disk_while_recording_ends_the_run_clearly_and_keeps_the_bag_readable()
     assert!(after.complete, "reindex writes a complete file");
     assert_eq!(after.message_count(), before.message_count());
     let meta: developable_sim::record::metadata::MetadataFile =
-        serde_yaml::from_str(&std::fs::read_to_string(bag.join("metadata.yaml")).unwrap())
-            .unwrap();
+        serde_yaml::from_str(&std::fs::read_to_string(bag.join("metadata.yaml")).unwrap()).unwrap();
     assert_eq!(
         meta.rosbag2_bagfile_information.message_count,
         after.message_count()

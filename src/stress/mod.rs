@@ -335,7 +335,12 @@ pub fn run_case(
     let path = config.join(case.scene);
     let mut scene = scene::load(&path, &sets)
         .with_context(|| format!("stress case {} (dt {dt} s)", case.name))?;
-    let initial: f64 = scene.world.objects().iter().map(|o| o.energies().total()).sum();
+    let initial: f64 = scene
+        .world
+        .objects()
+        .iter()
+        .map(|o| o.energies().total())
+        .sum();
     let mut watch = EnergyWatch {
         initial,
         work: 0.0,
@@ -410,7 +415,11 @@ pub fn run_suite(
     let wall = Instant::now();
     let mut results = Vec::new();
     for case in cases() {
-        if options.only.as_ref().is_some_and(|f| !case.name.contains(f.as_str())) {
+        if options
+            .only
+            .as_ref()
+            .is_some_and(|f| !case.name.contains(f.as_str()))
+        {
             continue;
         }
         let dts: Vec<f64> = match options.dt {
@@ -504,7 +513,10 @@ pub fn markdown(report: &StressReport) -> String {
     }
     s.push_str("\nCases:\n\n");
     for c in cases() {
-        s.push_str(&format!("- `{}`: {} (`config/{}`)\n", c.name, c.description, c.scene));
+        s.push_str(&format!(
+            "- `{}`: {} (`config/{}`)\n",
+            c.name, c.description, c.scene
+        ));
     }
     s
 }
