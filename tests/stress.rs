@@ -103,6 +103,42 @@ fn unconverged_steps_are_counted_not_hidden() {
 }
 
 #[test]
+fn the_node_status_counts_unconverged_steps() {
+    use developable_sim::ros::input::InputPolicy;
+    use developable_sim::ros::session::{FrameContent, Session};
+    let path = config().join("scenes/ribbon_two_grippers.yaml");
+    let s = scene::load(
+        &path,
+        &[
+            "solver.max_iterations=1".into(),
+            "solver.max_outer_iterations=1".into(),
+        ],
+    )
+    .unwrap();
+    let policy = InputPolicy {
+        frame_id: s.frame_id.clone(),
+        accept_empty_frame_id: false,
+    };
+    let topics = s.handle_topics.clone();
+    let mut session = Session::new(s, policy, topics);
+    let content = FrameContent {
+        markers: false,
+        singular_points: false,
+        status: true,
+    };
+    let mut last = None;
+    for _ in 0..3 {
+        let (report, ms) = session.step();
+        last = session.frame(Some(&report), ms, content).objects[0]
+            .status
+            .clone();
+    }
+    let status = last.expect("status asked for");
+    assert!(!status.converged);
+    assert_eq!((status.unconverged_steps, status.rejected_steps), (3, 0));
+}
+
+#[test]
 fn the_suite_table_lists_every_run_with_its_verdict() {
     let results = vec![check("handle_jump", 0.1)];
     let report = stress::StressReport {
