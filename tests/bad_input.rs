@@ -55,6 +55,7 @@ fn malformed_yaml_and_wrong_types_name_line_and_column() {
     ] {
         assert!(e.contains(part), "`{e}` lacks `{part}`");
     }
+    assert_eq!(e.matches("ribbon.segments").count(), 1, "the key once: {e}");
     // a tab where YAML wants spaces
     let e = load_err("duration: 0.05\ndt: 0.01\nribbon:\n\tlength: 1.0\n");
     assert!(e.contains("line 4 column"), "{e}");
