@@ -84,6 +84,14 @@ fn over_stretched_handles_saturate_and_report_the_violation() {
 }
 
 #[test]
+fn paper_crumpling_and_compression_stay_finite_and_bounded() {
+    for dt in [0.001, 0.1] {
+        check("paper_crumple", dt);
+        check("paper_compression_50", dt);
+    }
+}
+
+#[test]
 fn unconverged_steps_are_counted_not_hidden() {
     // one inner iteration per step cannot converge: every step must be counted
     let path = config().join("scenes/ribbon_two_grippers.yaml");
@@ -144,6 +152,7 @@ fn the_suite_table_lists_every_run_with_its_verdict() {
     let report = stress::StressReport {
         quick: true,
         energy_relative_tolerance: stress::ENERGY_RELATIVE_TOLERANCE,
+        paper_energy_relative_tolerance: stress::PAPER_ENERGY_RELATIVE_TOLERANCE,
         energy_absolute_tolerance_j: stress::ENERGY_ABSOLUTE_TOLERANCE,
         passed: 1,
         failed: 0,
