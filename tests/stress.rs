@@ -111,6 +111,37 @@ fn unconverged_steps_are_counted_not_hidden() {
 }
 
 #[test]
+fn an_absurd_force_never_yields_a_corrupt_state() {
+    // 1e300 N overflows the objective: no step is accepted, the solver says so, and
+    // the state stays the last valid (finite) one
+    let path = config().join("scenes/ribbon_extreme_dragging.yaml");
+    let mut s = scene::load(
+        &path,
+        &[
+            "duration=0.03".into(),
+            "forces.0.force=[1.0e300, 0.0, 0.0]".into(),
+        ],
+    )
+    .unwrap();
+    let before = s.world.mesh(0).vertices.clone();
+    let stats = developable_sim::runner::run(&mut s, &mut (), &|| false).unwrap();
+    assert!(stats.finite);
+    assert_eq!(
+        stats.solver.unconverged_steps + stats.solver.rejected_steps,
+        3
+    );
+    assert!(stats.energy.last.is_finite());
+    let moved = s
+        .world
+        .mesh(0)
+        .vertices
+        .iter()
+        .zip(&before)
+        .map(|(a, b)| (a - b).norm());
+    assert!(moved.fold(0.0, f64::max) < 1e-6, "the state was kept");
+}
+
+#[test]
 fn the_node_status_counts_unconverged_steps() {
     use developable_sim::ros::input::InputPolicy;
     use developable_sim::ros::session::{FrameContent, Session};
