@@ -10,6 +10,10 @@ cargo test --release --lib --bins --tests -- --test-threads=2
 # benchmarks must keep compiling (criterion's own runner does not take test flags)
 cargo build --release --benches
 
+echo "== stress suite (quick) =="
+# the binary `cargo test --release` built; exits non-zero if any run fails
+./target/release/developable_sim stress --quick --out target/stress
+
 if [ -d tests/python ] && ls tests/python/test_*.py >/dev/null 2>&1; then
   echo "== python interop tests =="
   bash tools/python_env.sh

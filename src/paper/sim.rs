@@ -272,6 +272,7 @@ impl PaperSim {
             isometry_error: self.mesh.isometry_error(),
             constraint_violation: violation,
             singular_points: self.singular.len(),
+            work_bound: fem.handle_work,
         }
     }
 
