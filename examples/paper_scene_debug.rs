@@ -8,6 +8,9 @@ fn main() {
     let mut sc = scene::load(Path::new(&args[1]), &sets).unwrap();
     let steps = (sc.duration / sc.world.dt()).round() as usize;
     for k in 1..=steps {
+        if std::env::var("DUMP").is_ok() && k % 10 == 1 {
+            final_dump(&sc);
+        }
         let r = sc.world.step(&[]);
         let SimObject::Paper(p) = &sc.world.objects()[0] else {
             panic!()
@@ -41,6 +44,34 @@ fn main() {
         }
         for e in &f.crumple_events {
             println!("    {e:?}");
+        }
+    }
+}
+
+#[allow(dead_code)]
+fn final_dump(sc: &developable_sim::scene::Scene) {
+    let SimObject::Paper(p) = &sc.world.objects()[0] else {
+        panic!()
+    };
+    println!("creases {:?}", p.geometric_layer().creases);
+    let layer = p.geometric_layer();
+    for r in &layer.regions {
+        let rs: Vec<String> = r
+            .rulings
+            .iter()
+            .map(|ru| {
+                let a = layer.endpoint_material(p.pattern(), &ru.a);
+                let b = layer.endpoint_material(p.pattern(), &ru.b);
+                format!("({:.4},{:.4})-({:.4},{:.4})", a.x, a.y, b.x, b.y)
+            })
+            .collect();
+        println!("region {}: {}", r.id, rs.join(" "));
+    }
+    let sp = p.physical_mesh();
+    for h in &sp.hinges {
+        let (a, b) = (sp.material[h.v[0] as usize], sp.material[h.v[1] as usize]);
+        if (a.x - 0.05).abs() < 1e-3 && (b.x - 0.05).abs() < 1e-3 {
+            println!("hinge {:?} {:?} rest {}", a, b, h.rest_angle);
         }
     }
 }

@@ -20,3 +20,4 @@ pub mod runner;
 pub mod scene;
 pub mod sim;
 pub mod stats;
+pub mod stress;

@@ -155,6 +155,28 @@ enum Command {
         #[arg(long, value_name = "DIR", default_value = "config/scenes")]
         scene_dir: PathBuf,
     },
+    /// Stiff and extreme cases over time steps 0.001-0.1 s: a pass/fail table in
+    /// OUT/stress.md and OUT/stress.json; exits non-zero if any run fails.
+    Stress {
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "target/stress")]
+        out: PathBuf,
+        /// Shorter runs and fewer time steps (CI).
+        #[arg(long)]
+        quick: bool,
+        /// Only the cases whose name contains this.
+        #[arg(long)]
+        only: Option<String>,
+        /// Only this time step, s.
+        #[arg(long)]
+        dt: Option<f64>,
+        /// Replace every case's limit on the number of steps.
+        #[arg(long)]
+        max_steps: Option<usize>,
+        /// The repository's config folder (scenes/ and stress/).
+        #[arg(long, value_name = "DIR", default_value = "config")]
+        config: PathBuf,
+    },
 }
 
 #[derive(Subcommand)]
@@ -328,6 +350,33 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             out,
             scene_dir,
         } => report_command(scenes, quick, out, scene_dir),
+        Command::Stress {
+            out,
+            quick,
+            only,
+            dt,
+            max_steps,
+            config,
+        } => {
+            let options = developable_sim::stress::SuiteOptions {
+                quick,
+                only,
+                dt,
+                max_steps,
+            };
+            let report = developable_sim::stress::run_suite(&config, &out, &options)?;
+            println!(
+                "{} of {} runs passed in {:.1} s; table in {}",
+                report.passed,
+                report.results.len(),
+                report.wall_s,
+                out.join("stress.md").display()
+            );
+            if report.failed > 0 {
+                bail!("{} stress run(s) failed", report.failed);
+            }
+            Ok(())
+        }
         Command::Bag {
             command: BagCommand::Info { bag },
         } => {

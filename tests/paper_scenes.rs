@@ -168,15 +168,46 @@ fn the_preset_crease_folds_the_sheet() {
     let p = paper(&s);
     let sp = p.physical_mesh();
     // the hinges along the crease (u = 0.05) are folded towards their rest angle
+    // and they are a straight chain of S_P edges covering the whole crease, each with
+    // the preset rest angle (a curved face of S_G must not swallow the crease)
     let mut folded = Vec::new();
+    let mut covered = 0.0;
     for h in &sp.hinges {
         let (a, b) = (sp.material[h.v[0] as usize], sp.material[h.v[1] as usize]);
         if (a.x - 0.05).abs() < 1e-9 && (b.x - 0.05).abs() < 1e-9 {
+            assert_eq!(h.rest_angle, 1.2, "hinge {a:?}-{b:?}");
+            covered += (a - b).norm();
             let x = h.v.map(|i| sp.position[i as usize].coords);
             folded.push(developable_sim::paper::physical::signed_dihedral(&x).abs());
         }
     }
-    assert!(!folded.is_empty());
+    assert!(
+        (covered - 0.1).abs() < 1e-9,
+        "crease hinges cover {covered} m of 0.1 m"
+    );
+    // no ruling crosses the crease nor ends on its interior
+    let layer = p.geometric_layer();
+    for r in layer.regions.iter().flat_map(|r| &r.rulings) {
+        let a = layer.endpoint_material(p.pattern(), &r.a);
+        let b = layer.endpoint_material(p.pattern(), &r.b);
+        let side = |m: &developable_sim::geometry::Point2| {
+            if (m.x - 0.05).abs() < 1e-9 {
+                0.0
+            } else {
+                (m.x - 0.05).signum()
+            }
+        };
+        assert!(
+            side(&a) * side(&b) >= 0.0,
+            "ruling {a:?}-{b:?} crosses the crease"
+        );
+        for m in [a, b] {
+            assert!(
+                side(&m) != 0.0 || m.y.abs() < 1e-9 || (m.y - 0.1).abs() < 1e-9,
+                "ruling ends on the crease at {m:?}"
+            );
+        }
+    }
     let mean = folded.iter().sum::<f64>() / folded.len() as f64;
     assert!(
         mean > 0.3,

@@ -13,6 +13,10 @@ cargo build --release --benches
 echo "== report --quick =="
 ./target/release/developable_sim report --quick --out target/report
 
+echo "== stress suite (quick) =="
+# the binary `cargo test --release` built; exits non-zero if any run fails
+./target/release/developable_sim stress --quick --out target/stress
+
 if [ -d tests/python ] && ls tests/python/test_*.py >/dev/null 2>&1; then
   echo "== python interop tests =="
   bash tools/python_env.sh

@@ -684,12 +684,35 @@ fn insert_in_curved(
     dprop: &Vector2<f64>,
     rng: &mut impl Rng,
 ) -> Option<(u64, bool)> {
-    let params = ctx.params;
     let ri = layer.regions.iter().position(|r| r.id == region_id)?;
-    if let Some(apex) = layer.regions[ri].singular_apex() {
-        // already a cone: its apex attracts the new rulings
-        return Some((apex, false));
+    let apex = layer.regions[ri].singular_apex();
+    // sec. 5.2 / appendix A, fig. 6(d): a ruling of C in conflict with the new rulings
+    // gets a new singular point inside C, also when C is already a cone (a d-cone
+    // meets the new bend further out: crumpling makes singular points progressively,
+    // fig. 22). Only when no new point fits there, the apex of a cone C attracts the
+    // new rulings (appendix B, fig. 24b, c).
+    if let Some(found) = insert_new_singular(ctx, layer, gmesh, band, ri, ruling, f_ref, dprop, rng)
+    {
+        return Some(found);
     }
+    apex.map(|a| (a, false))
+}
+
+/// [`insert_in_curved`]'s new singular point inside region `ri` near the ruling in
+/// conflict; `None` (structure untouched) when none fits.
+#[allow(clippy::too_many_arguments)]
+fn insert_new_singular(
+    ctx: &CrumpleContext,
+    layer: &mut GeometricLayer,
+    gmesh: &GeometricMesh,
+    band: &Band,
+    ri: usize,
+    ruling: usize,
+    f_ref: &Point2,
+    dprop: &Vector2<f64>,
+    rng: &mut impl Rng,
+) -> Option<(u64, bool)> {
+    let params = ctx.params;
     let rv = gmesh.ruling_vertices.get(ri)?.clone();
     let m = rv.len();
     if ruling >= m || m < 2 {

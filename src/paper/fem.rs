@@ -56,6 +56,11 @@ pub struct FemReport {
     /// The factorization failed or the state became non-finite; positions kept.
     pub failed: bool,
     pub energies: FemEnergies,
+    /// Upper bound on the work the handles (Dirichlet vertices) did over the step, J:
+    /// sum over held coordinates of |reaction| |Δx|, the reaction being the gradient of
+    /// the incremental potential there (the force the handle must supply) at the last
+    /// Newton iterate. The anchors of springs (normal-guided handles) are not counted.
+    pub handle_work: f64,
 }
 
 /// The solver state of one S_P topology (rest data, sparse pattern, buffers).
@@ -459,6 +464,11 @@ pub fn implicit_step(
     }
     parts.kinetic = kinetic;
     report.energies = parts;
+    report.handle_work = (0..n)
+        .flat_map(|i| (0..3).map(move |a| (i, a)))
+        .filter(|&(i, a)| fixed[3 * i + a])
+        .map(|(i, a)| grad[i][a].abs() * (x[i][a] - x_prev[i][a]).abs())
+        .sum();
     report
 }
 

@@ -523,6 +523,20 @@ impl GeometricMesh {
                     .collect()
             })
             .collect();
+        // a curved face is one developable strip between two consecutive rulings: no
+        // other ruling nor crease may run through it (a preset crease as a diagonal of
+        // a face, its ends both on the face's boundary chains, would be fanned away in
+        // S_P and lose its rest angle)
+        for (k, poly) in curved_mats.iter().enumerate() {
+            for (i, [p, q]) in seg_pts.iter().enumerate() {
+                let mid = Point2::from((p.coords + q.coords) * 0.5);
+                if in_convex_polygon(poly, &mid, 1e-9) {
+                    return Err(MeshError::Crossing(format!(
+                        "segment {i} runs through curved face {k}"
+                    )));
+                }
+            }
+        }
         let mut covered = vec![0.0; curved_polys.len()];
         let mut flat = Vec::new();
         for f in cdt.inner_faces() {
@@ -761,6 +775,29 @@ mod tests {
             kind: CreaseKind::Plastic,
         });
         assert!(GeometricMesh::build(&layer, &pattern, &flat_position).is_err());
+    }
+
+    #[test]
+    fn a_curved_face_straddling_a_crease_is_rejected() {
+        // the preset crease u = 0.05 and a region whose last ruling leaves its top end
+        // towards the other side: the face between the rulings has the crease as a
+        // diagonal (no segment crosses another, the faces still tile the sheet)
+        let pattern = Pattern::rectangle(0.1, 0.1);
+        let mut layer = GeometricLayer::default();
+        layer.creases.push(Crease {
+            a: Endpoint::Boundary(0.05),
+            b: Endpoint::Boundary(0.25),
+            kind: CreaseKind::Preset { rest_angle: 1.2 },
+        });
+        let ruling = |bottom: f64, top_u: f64| Ruling {
+            a: Endpoint::Boundary(bottom),
+            b: Endpoint::Boundary(0.3 - top_u),
+        };
+        layer.add_region(vec![ruling(0.07, 0.07), ruling(0.06, 0.06)]);
+        assert!(GeometricMesh::build(&layer, &pattern, &flat_position).is_ok());
+        layer.regions[0].rulings.push(ruling(0.04, 0.05));
+        let err = GeometricMesh::build(&layer, &pattern, &flat_position).unwrap_err();
+        assert!(matches!(err, MeshError::Crossing(_)), "{err}");
     }
 
     #[test]

@@ -272,6 +272,7 @@ impl PaperSim {
             isometry_error: self.mesh.isometry_error(),
             constraint_violation: violation,
             singular_points: self.singular.len(),
+            work_bound: fem.handle_work,
         }
     }
 
@@ -694,11 +695,48 @@ mod tests {
             "a curved region appears: {:?}",
             sim.frame_stats()
         );
-        // the rulings of a sheet bent about y run along y (v_perp of the compression)
-        let r = &layer.regions[0].rulings[0];
-        let p = layer.endpoint_material(sim.pattern(), &r.a);
-        let q = layer.endpoint_material(sim.pattern(), &r.b);
-        let d = (q - p).normalize();
-        assert!(d.y.abs() > 0.95, "ruling direction {d:?}");
+        // The rulings of a sheet bent about y run along y (v_perp of the compression)
+        // where the sheet bends as a cylinder: in the middle, away from the handles.
+        // Not every ruling does: the first compression analysis measures the strain of
+        // a coarse S_G triangle between both handle anchors and a corner (sec. 5.1,
+        // "standard method based on stretch tensors" on the triangles of F), whose
+        // v_perp leans ~20 deg; the next frames' rulings near the pinched handles
+        // conflict with that band and make singular vertices (sec. 5.2), and the
+        // border rulings of the band then end at the d-cones' fans (a band ruling
+        // shares its end with a cone ruling, fig. 6d): those legitimately lean (up to
+        // ~27 deg here). So: the ruling passing nearest the sheet's centre, and the
+        // median of its region's rulings, run along y.
+        let centre = Point2::new(0.05, 0.05);
+        let ends = |r: &super::super::geometric::Ruling| {
+            [r.a, r.b].map(|e| layer.endpoint_material(sim.pattern(), &e))
+        };
+        let direction = |r: &super::super::geometric::Ruling| {
+            let [p, q] = ends(r);
+            (q - p).normalize()
+        };
+        let distance = |r: &super::super::geometric::Ruling| {
+            let [p, q] = ends(r);
+            super::super::pattern::point_segment(&centre, &p, &q).0
+        };
+        let (region, ruling) = layer
+            .regions
+            .iter()
+            .flat_map(|g| g.rulings.iter().map(move |r| (g, r)))
+            .min_by(|a, b| distance(a.1).total_cmp(&distance(b.1)))
+            .unwrap();
+        assert!(distance(ruling) < 0.01, "a ruling crosses the middle");
+        let d = direction(ruling);
+        assert!(d.y.abs() > 0.95, "middle ruling direction {d:?}");
+        let mut dy: Vec<f64> = region
+            .rulings
+            .iter()
+            .map(|r| direction(r).y.abs())
+            .collect();
+        dy.sort_by(f64::total_cmp);
+        let median = 0.5 * (dy[(dy.len() - 1) / 2] + dy[dy.len() / 2]);
+        assert!(
+            median > 0.95,
+            "|d.y| of the middle region's rulings: {dy:?}"
+        );
     }
 }

@@ -69,6 +69,8 @@ pub struct RibbonSim {
     last_outcome: SolveOutcome,
     /// q at the end minus q at the start of the last step (extrapolation).
     q_delta: Vec<f64>,
+    /// Frames of the loaded material points at the start of a step (for the work bound).
+    loaded_before: Vec<Pose>,
 }
 
 impl RibbonSim {
@@ -222,6 +224,7 @@ impl RibbonSim {
             last_targets: vec![None; handles.len()],
             last_outcome: SolveOutcome::default(),
             q_delta: Vec::new(),
+            loaded_before: Vec::new(),
         };
         sim.rebuild_outputs();
         sim
@@ -383,6 +386,8 @@ impl RibbonSim {
             self.coords.base = base;
         }
         let saved_terms = self.terms.clone();
+        let mut loaded_before = std::mem::take(&mut self.loaded_before);
+        self.loaded_poses(&mut loaded_before);
         let outcome = self.solver.solve(
             self.strip,
             self.layout.floating,
@@ -409,12 +414,14 @@ impl RibbonSim {
             self.layout.unpack(&self.q, &base, &mut self.coords);
             reconstruct(&self.strip, &self.coords, &mut self.frames);
             self.update_history(dt);
+            report.work_bound = self.work_bound(&loaded_before);
         } else {
             // Keep the last valid state and its multipliers; say so in the report.
             self.terms = saved_terms;
             self.previous_history.clone_from(&self.history);
             report.constraint_violation = f64::NAN;
         }
+        self.loaded_before = loaded_before;
         self.last_outcome = outcome;
         self.rebuild_outputs();
         report.energies = self.energies();
@@ -555,6 +562,82 @@ impl RibbonSim {
 }
 
 impl RibbonSim {
+    /// The frames of the points where handles and point forces act, in the order
+    /// equalities (a loop gets a placeholder), normal guides, point forces.
+    fn loaded_poses(&self, out: &mut Vec<Pose>) {
+        out.clear();
+        for eq in &self.terms.equalities {
+            out.push(match eq {
+                Equality::Position { material_point, .. }
+                | Equality::Orientation { material_point, .. } => {
+                    self.material_pose(material_point)
+                }
+                Equality::Loop(_) => Pose::identity(),
+            });
+        }
+        for guide in &self.terms.normal_guides {
+            out.push(self.material_pose(&guide.material_point));
+        }
+        for force in &self.terms.forces {
+            out.push(self.material_pose(&force.material_point));
+        }
+    }
+
+    /// Upper bound on the work done on the ribbon over the step just taken by the
+    /// handles and point forces, J (see [`ObjectStepReport::work_bound`]): the force
+    /// at the end of the step times the displacement of the point it acts on, with
+    /// |F . Δx| <= |F| |Δx| where only the force's norm is known. A handle's
+    /// constraint force is its updated augmented-Lagrangian multiplier (the objective
+    /// holds -λ.C + μ/2 |C|^2, so the force is λ - μ C = the new λ); a rotation
+    /// constraint's generalized force is λ (J) against the change of the frame matrix.
+    /// A driven base moves the ribbon kinematically and is not counted.
+    fn work_bound(&self, before: &[Pose]) -> f64 {
+        let mut after = Vec::with_capacity(before.len());
+        self.loaded_poses(&mut after);
+        if after.len() != before.len() {
+            return 0.0;
+        }
+        let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let mut work = 0.0;
+        let mut i = 0;
+        for (eq, lambda) in self.terms.equalities.iter().zip(&self.terms.multipliers) {
+            let (a, b) = (&before[i], &after[i]);
+            work += match eq {
+                Equality::Position { axes, .. } => {
+                    let d = b.translation.vector - a.translation.vector;
+                    let mut dd = 0.0;
+                    for k in 0..3 {
+                        if axes[k] {
+                            dd += d[k] * d[k];
+                        }
+                    }
+                    norm(lambda) * dd.sqrt()
+                }
+                Equality::Orientation { .. } => {
+                    let d = b.rotation.to_rotation_matrix().into_inner()
+                        - a.rotation.to_rotation_matrix().into_inner();
+                    norm(lambda) * d.norm()
+                }
+                // a loop joins the ribbon to itself: internal forces do no net work
+                Equality::Loop(_) => 0.0,
+            };
+            i += 1;
+        }
+        for guide in &self.terms.normal_guides {
+            // the guide's force on the normal: -K (n - n_target)
+            let n0 = before[i].rotation * Vector3::z();
+            let n1 = after[i].rotation * Vector3::z();
+            work += guide.stiffness * (n1 - guide.target).norm() * (n1 - n0).norm();
+            i += 1;
+        }
+        for force in &self.terms.forces {
+            let d = after[i].translation.vector - before[i].translation.vector;
+            work += force.force.dot(&d).abs();
+            i += 1;
+        }
+        work
+    }
+
     /// `world_from_material_point`: the frame of the element under material point
     /// `m` (m), translated to the point.
     pub fn material_pose(&self, m: &Point2) -> Pose {

@@ -353,10 +353,12 @@ pub struct SimStatus {
     pub singular_point_count: u32,
     pub overrun_ticks: u64,
     pub rejected_inputs: u64,
+    pub unconverged_steps: u64,
+    pub rejected_steps: u64,
     pub handles: Vec<HandleStatus>,
 }
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_5021964430cf07349946c40277a2bc0178d69fba2e5ddcda56948576e3caccda"
+    "RIHS01_62704785775ed881206ce41580e278c76d6b1ca02c08daf6e2ba33b49b469e03"
 );

@@ -197,6 +197,40 @@ pub struct SimNode {
     started: Instant,
 }
 
+/// A topic for one of the node's writers whose history is bounded by its QoS depth.
+///
+/// RustDDS keeps every sample a reliable writer published until all matched readers
+/// acknowledged it, and with no reader matched it keeps them up to its 8192-sample
+/// backstop (rustdds 0.15 `remove_all_acked_changes_but_keep_depth`): 8192 meshes of
+/// ~20 kB each, memory that grows for minutes. A `KeepLast(depth)` writer owes nobody
+/// more than its last `depth` samples, so the topic carries resource limits of
+/// `depth` samples (ros2-client's `QosProfile` has no resource limits; the writer
+/// inherits them from the topic).
+fn writer_topic(
+    context: &Context,
+    node_name: &NodeName,
+    topic: &Name,
+    type_name: MessageTypeName,
+    q: Qos,
+) -> Result<ros2_client::dds::rustdds::Topic, ros2_client::dds::rustdds::dds::CreateError> {
+    use ros2_client::dds::rustdds::{policy, QosPolicies, QosPolicyBuilder, TopicKind};
+    let depth = q.depth.max(1) as i32;
+    let limits = QosPolicyBuilder::new()
+        .resource_limits(policy::ResourceLimits {
+            max_samples: depth,
+            max_instances: 1,
+            max_samples_per_instance: depth,
+        })
+        .build();
+    let dds_qos = QosPolicies::from(qos(q)).modify_by(&limits);
+    context.domain_participant().create_topic(
+        topic.to_dds_name("rt", node_name, ""),
+        type_name.dds_msg_type(),
+        &dds_qos,
+        TopicKind::NoKey,
+    )
+}
+
 /// The DDS QoS of a recorded-QoS description. Reliable writers never block the loop:
 /// a full window fails the publication (counted) instead.
 fn qos(q: Qos) -> QosProfile {
@@ -231,7 +265,7 @@ impl SimNode {
             NodeName::new(&cfg.names.namespace, &cfg.names.node).map_err(dds("node name"))?;
         let mut node = context
             .new_node(
-                node_name,
+                node_name.clone(),
                 NodeOptions::new()
                     .enable_rosout(true)
                     // ros2-client serves parameters only with the Enhanced (Fast DDS)
@@ -279,13 +313,14 @@ impl SimNode {
         let mut pubs = Vec::new();
         for o in &names.objects {
             let markers = if outputs.markers {
-                let t = node
-                    .create_topic(
-                        &name(&o.markers)?,
-                        topic_type::<MarkerArray>(),
-                        &qos(Qos::MARKERS),
-                    )
-                    .map_err(dds("markers topic"))?;
+                let t = writer_topic(
+                    &context,
+                    &node_name,
+                    &name(&o.markers)?,
+                    topic_type::<MarkerArray>(),
+                    Qos::MARKERS,
+                )
+                .map_err(dds("markers topic"))?;
                 Some(
                     node.create_publisher(&t, Some(qos(Qos::MARKERS)))
                         .map_err(dds("markers publisher"))?,
@@ -294,13 +329,14 @@ impl SimNode {
                 None
             };
             let singular_points = if outputs.singular_points {
-                let t = node
-                    .create_topic(
-                        &name(&o.singular_points)?,
-                        topic_type::<SingularPoints>(),
-                        &qos(Qos::DATA),
-                    )
-                    .map_err(dds("singular points topic"))?;
+                let t = writer_topic(
+                    &context,
+                    &node_name,
+                    &name(&o.singular_points)?,
+                    topic_type::<SingularPoints>(),
+                    Qos::DATA,
+                )
+                .map_err(dds("singular points topic"))?;
                 Some(
                     node.create_publisher(&t, Some(qos(Qos::DATA)))
                         .map_err(dds("singular points publisher"))?,
@@ -309,13 +345,14 @@ impl SimNode {
                 None
             };
             let status = if outputs.status {
-                let t = node
-                    .create_topic(
-                        &name(&o.status)?,
-                        topic_type::<SimStatus>(),
-                        &qos(Qos::DATA),
-                    )
-                    .map_err(dds("status topic"))?;
+                let t = writer_topic(
+                    &context,
+                    &node_name,
+                    &name(&o.status)?,
+                    topic_type::<SimStatus>(),
+                    Qos::DATA,
+                )
+                .map_err(dds("status topic"))?;
                 Some(
                     node.create_publisher(&t, Some(qos(Qos::DATA)))
                         .map_err(dds("status publisher"))?,
@@ -330,13 +367,14 @@ impl SimNode {
             });
         }
         let clock = if outputs.clock {
-            let t = node
-                .create_topic(
-                    &name(&names.clock)?,
-                    topic_type::<Clock>(),
-                    &qos(Qos::CLOCK),
-                )
-                .map_err(dds("clock topic"))?;
+            let t = writer_topic(
+                &context,
+                &node_name,
+                &name(&names.clock)?,
+                topic_type::<Clock>(),
+                Qos::CLOCK,
+            )
+            .map_err(dds("clock topic"))?;
             Some(
                 node.create_publisher(&t, Some(qos(Qos::CLOCK)))
                     .map_err(dds("clock publisher"))?,

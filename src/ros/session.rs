@@ -81,12 +81,17 @@ pub struct Session {
     pub paused: bool,
     /// Real-time ticks skipped because the simulation could not keep up.
     pub overrun_ticks: u64,
+    /// Per object: steps whose solver stopped on an iteration limit, and steps whose
+    /// result was not finite (rejected, previous state kept), since start-up.
+    unconverged_steps: Vec<u64>,
+    rejected_steps: Vec<u64>,
     targets: Vec<Option<crate::geometry::Pose>>,
 }
 
 impl Session {
     pub fn new(scene: Scene, policy: InputPolicy, handle_topics: Vec<String>) -> Session {
         let n = scene.world.handles().len();
+        let objects = scene.world.objects().len();
         Session {
             scene,
             policy,
@@ -96,6 +101,8 @@ impl Session {
             episode: 0,
             paused: false,
             overrun_ticks: 0,
+            unconverged_steps: vec![0; objects],
+            rejected_steps: vec![0; objects],
             targets: vec![None; n],
         }
     }
@@ -117,7 +124,12 @@ impl Session {
         }
         let start = Instant::now();
         let report = self.scene.world.step(&self.targets);
-        (report, start.elapsed().as_secs_f64())
+        let elapsed = start.elapsed().as_secs_f64();
+        for (i, o) in report.objects.iter().enumerate() {
+            self.unconverged_steps[i] += u64::from(!o.converged);
+            self.rejected_steps[i] += u64::from(o.kept_previous_state);
+        }
+        (report, elapsed)
     }
 
     /// Back to t = 0: the world's initial state; handles follow the script until a new
@@ -207,6 +219,8 @@ impl Session {
             paused: self.paused,
             step_duration,
             overrun_ticks: self.overrun_ticks,
+            unconverged_steps: self.unconverged_steps[object],
+            rejected_steps: self.rejected_steps[object],
             ..SimStatus::default()
         };
         match report.and_then(|r| r.objects.get(object)) {

@@ -97,7 +97,11 @@ pub fn load_str(text: &str, path: &Path, overrides: &[String]) -> Result<Scene, 
     // column), from the overridden tree otherwise; both name the key path.
     let parse_error = |path_in_scene: String, inner: String| SceneError::Parse {
         file: path.to_path_buf(),
-        message: if path_in_scene.is_empty() || path_in_scene == "." {
+        // serde_yaml already names the path in some messages: say it once
+        message: if path_in_scene.is_empty()
+            || path_in_scene == "."
+            || inner.starts_with(&format!("{path_in_scene}: "))
+        {
             inner
         } else {
             format!("`{path_in_scene}`: {inner}")

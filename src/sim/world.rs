@@ -57,6 +57,13 @@ pub struct ObjectStepReport {
     pub constraint_violation: f64,
     /// Number of singular points after the step.
     pub singular_points: usize,
+    /// Upper bound on the work the handles and point forces did on the object during
+    /// the step, J: per held point |F| |Δx| (F the constraint force after the step, Δx
+    /// the target's displacement over the step), per normal guide K |n - n_target|
+    /// |Δn_target|, per point force |F . Δx|. Gravity is not included: its potential is
+    /// part of [`Energies`]. Implicit Euler is dissipative, so the total energy cannot
+    /// rise by more than the sum of these over the steps (the stress suite checks it).
+    pub work_bound: f64,
 }
 
 /// What a whole-world step did.

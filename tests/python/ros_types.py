@@ -175,6 +175,8 @@ class SimStatus(IdlStruct, typename="developable_sim::msg::dds_::SimStatus_"):
     singular_point_count: t.uint32 = 0
     overrun_ticks: t.uint64 = 0
     rejected_inputs: t.uint64 = 0
+    unconverged_steps: t.uint64 = 0
+    rejected_steps: t.uint64 = 0
     handles: t.sequence[HandleStatus] = field(default_factory=list)
 
 

@@ -108,6 +108,8 @@ def test_every_output_decodes_and_is_well_formed(start_node, ros, domain_id):
             abs_tol=1e-12,
         )
         assert s.handles[0].name == "twist_end" and not s.handles[0].external
+        # counters since start-up: never a non-finite step in this scene
+        assert s.rejected_steps == 0 and 0 <= s.unconverged_steps <= s.step
     with_points = [s for s in got["singular"] if s.points]
     assert with_points, "the extreme torsion never produced a singular point"
     for s in with_points:

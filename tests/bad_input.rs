@@ -1,0 +1,140 @@
+//! Bad input at the command line (issue 6): malformed scenes point at the line and
+//! column, a missing scene or an unwritable bag folder is named with the cause, and a
+//! disk that fills while recording ends the run with a clear error and a bag whose
+//! recorded messages are all still readable (and `bag reindex` repairs it).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use developable_sim::record::read::scan;
+use developable_sim::scene;
+
+const TORSION: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/config/scenes/ribbon_extreme_torsion.yaml"
+);
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("bad_input_{name}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_developable_sim"))
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn load_err(text: &str) -> String {
+    match scene::load_str(text, Path::new("bad.yaml"), &[]) {
+        Ok(_) => panic!("scene accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn malformed_yaml_and_wrong_types_name_line_and_column() {
+    // an unclosed flow sequence: the parser stops at line 2
+    let e = load_err("duration: [1\ndt: 0.1\n");
+    assert!(e.starts_with("bad.yaml: "), "{e}");
+    assert!(e.contains("line 2 column"), "{e}");
+    // a wrong type in the file (no overrides): the key path, the type, line and column
+    let e = load_err(
+        "duration: 0.05\ndt: 0.01\nribbon:\n  length: 1.0\n  width: 0.05\n  segments: many\n",
+    );
+    for part in [
+        "bad.yaml",
+        "ribbon.segments",
+        "invalid type",
+        "line 6 column 13",
+    ] {
+        assert!(e.contains(part), "`{e}` lacks `{part}`");
+    }
+    assert_eq!(e.matches("ribbon.segments").count(), 1, "the key once: {e}");
+    // a tab where YAML wants spaces
+    let e = load_err("duration: 0.05\ndt: 0.01\nribbon:\n\tlength: 1.0\n");
+    assert!(e.contains("line 4 column"), "{e}");
+}
+
+#[test]
+fn a_missing_scene_or_an_unwritable_bag_folder_is_named_with_the_cause() {
+    let dir = scratch("cli");
+    let missing = dir.join("no_such_scene.yaml");
+    let out = bin().arg("run").arg(&missing).output().unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let e = stderr(&out);
+    assert!(
+        e.contains(&missing.display().to_string()) && e.contains("cannot read"),
+        "{e}"
+    );
+    assert!(e.contains("No such file"), "the OS cause is kept: {e}");
+
+    // a bag folder whose parent is a file cannot be created
+    std::fs::write(dir.join("occupied"), "x").unwrap();
+    let bag = dir.join("occupied").join("bag");
+    let out = bin()
+        .args(["run", TORSION, "--duration", "0.05", "--record"])
+        .arg(&bag)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let e = stderr(&out);
+    assert!(e.contains(&bag.display().to_string()), "{e}");
+    assert!(e.contains("cannot create it"), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
+}
+
+/// The MCAP file grows past RLIMIT_FSIZE (`ulimit -f`, 512-byte blocks) like a full disk:
+/// with SIGXFSZ ignored (the disposition survives exec) the write fails with EFBIG.
+#[test]
+fn a_full_disk_while_recording_ends_the_run_clearly_and_keeps_the_bag_readable() {
+    if !Path::new("/bin/sh").exists() {
+        eprintln!("skipped: no /bin/sh");
+        return;
+    }
+    let dir = scratch("full_disk");
+    let bag = dir.join("bag");
+    // 64 blocks = 32 KiB: a few hundred messages of the torsion scene fit, a 2 s run
+    // does not
+    let script = format!(
+        "trap '' XFSZ; ulimit -f 64 && exec '{}' run '{}' --record '{}'",
+        env!("CARGO_BIN_EXE_developable_sim"),
+        TORSION,
+        bag.display()
+    );
+    let out = Command::new("/bin/sh")
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    let e = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
+    // the error names the bag file and the cause
+    assert!(e.contains("bag_0.mcap"), "{e}");
+    assert!(e.contains("File too large"), "{e}");
+    let mcap = bag.join("bag_0.mcap");
+    assert!(mcap.exists(), "{e}");
+    // what was recorded before the failure is readable by a streaming reader
+    let before = scan(&mcap).unwrap();
+    assert!(before.message_count() > 0, "{e}");
+    // `bag reindex` (no size limit now) rebuilds metadata.yaml and the index; nothing
+    // the streaming reader saw is lost
+    let out = bin().args(["bag", "reindex"]).arg(&bag).output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let after = scan(&mcap).unwrap();
+    assert!(after.complete, "reindex writes a complete file");
+    assert_eq!(after.message_count(), before.message_count());
+    let meta: developable_sim::record::metadata::MetadataFile =
+        serde_yaml::from_str(&std::fs::read_to_string(bag.join("metadata.yaml")).unwrap()).unwrap();
+    assert_eq!(
+        meta.rosbag2_bagfile_information.message_count,
+        after.message_count()
+    );
+    let out = bin().args(["bag", "info"]).arg(&bag).output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+}
