@@ -747,26 +747,7 @@ impl SceneFile {
         if let Some(stage) = super::contact::build_stage(&self, &ck, file, &world)? {
             world = world.with_contact(stage);
         }
-        let name = self.name.clone().unwrap_or_else(|| {
-            file.file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "scene".into())
-        });
-        Ok(Scene {
-            name,
-            file: file.to_path_buf(),
-            duration,
-            world,
-            frame_id: self.frame_id.clone(),
-            handle_topics: topics,
-            outputs: Outputs {
-                markers: self.outputs.markers,
-                singular_points: self.outputs.singular_points,
-                status: self.outputs.status,
-                clock: self.outputs.clock,
-            },
-            source: self,
-        })
+        Ok(self.into_scene(file, duration, world, topics))
     }
 
     /// The ribbons declared (`ribbon:` or `ribbons:`) with their key prefixes, and the
@@ -1069,5 +1050,37 @@ impl SceneFile {
                 .positive("solver.constraint_tolerance", s.constraint_tolerance)?,
             extrapolate: s.extrapolate,
         })
+    }
+}
+
+impl SceneFile {
+    /// The built scene: `world` with the file's name (or its stem), frame and outputs.
+    pub(super) fn into_scene(
+        self,
+        file: &Path,
+        duration: f64,
+        world: World,
+        handle_topics: Vec<String>,
+    ) -> Scene {
+        let name = self.name.clone().unwrap_or_else(|| {
+            file.file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "scene".into())
+        });
+        Scene {
+            name,
+            file: file.to_path_buf(),
+            duration,
+            world,
+            frame_id: self.frame_id.clone(),
+            handle_topics,
+            outputs: Outputs {
+                markers: self.outputs.markers,
+                singular_points: self.outputs.singular_points,
+                status: self.outputs.status,
+                clock: self.outputs.clock,
+            },
+            source: self,
+        }
     }
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::file::{parse_handle, pose_from, Check, PoseFile, SceneFile};
-use super::{Outputs, Scene, SceneError};
+use super::{Scene, SceneError};
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::paper::{Collider, PaperParams, PaperSim, PresetCrease};
 use crate::sim::{SimObject, World};
@@ -403,25 +403,6 @@ impl SceneFile {
             handles,
             dt,
         );
-        let name = self.name.clone().unwrap_or_else(|| {
-            file.file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "scene".into())
-        });
-        Ok(Scene {
-            name,
-            file: file.to_path_buf(),
-            duration,
-            world,
-            frame_id: self.frame_id.clone(),
-            handle_topics: topics,
-            outputs: Outputs {
-                markers: self.outputs.markers,
-                singular_points: self.outputs.singular_points,
-                status: self.outputs.status,
-                clock: self.outputs.clock,
-            },
-            source: self,
-        })
+        Ok(self.into_scene(file, duration, world, topics))
     }
 }
