@@ -83,6 +83,7 @@ class HandleStatus(IdlStruct, typename="developable_sim::msg::dds_::HandleStatus
     rejected_zero_quaternion: t.uint64 = 0
     rejected_stale_stamp: t.uint64 = 0
     rejected_unknown_frame: t.uint64 = 0
+    rejected_future_stamp: t.uint64 = 0
 
 
 @dataclass

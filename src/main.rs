@@ -737,6 +737,11 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
     let policy = InputPolicy {
         frame_id: scene.frame_id.clone(),
         accept_empty_frame_id: p.bool("accept_empty_frame_id").unwrap_or(false),
+        max_stamp_lead: positive(
+            "max_stamp_lead",
+            p.double("max_stamp_lead")
+                .unwrap_or(developable_sim::ros::input::DEFAULT_MAX_STAMP_LEAD),
+        )?,
     };
     let start_paused = a.paused || p.bool("start_paused").unwrap_or(false);
 

@@ -86,6 +86,7 @@ def bench_tick(work, seconds):
     print(f"[tick] real-time 100 Hz, {s['steps']} steps, overruns {s['overrun_ticks']}")
     print(f"  step:                   {fmt(s['step'])}")
     print(f"  tick start -> markers:  {fmt(s['tick_to_markers'])}")
+    print(f"  beyond the tick's step: {fmt(s['tick_beyond_step'])}")
     return s
 
 

@@ -24,6 +24,10 @@ use crate::runner::StepObserver;
 use crate::scene::Scene;
 use crate::sim::StepReport;
 
+fn default_max_stamp_lead() -> f64 {
+    crate::ros::input::DEFAULT_MAX_STAMP_LEAD
+}
+
 /// Name of the MCAP metadata record describing the session.
 pub const SESSION_RECORD: &str = "developable_sim";
 
@@ -36,10 +40,16 @@ pub struct SessionInfo {
     pub scene_yaml: String,
     pub frame_id: String,
     pub accept_empty_frame_id: bool,
+    /// s; bags recorded before it existed replay with the default.
+    #[serde(default = "default_max_stamp_lead")]
+    pub max_stamp_lead: f64,
     pub line_width: f64,
     pub sphere_diameter: f64,
     pub handle_topics: Vec<String>,
     pub clock_topic: Option<String>,
+    /// The colliders' markers, when recorded (bags from before it existed have none).
+    #[serde(default)]
+    pub colliders_topic: Option<String>,
     /// Per object: (markers, singular points, status); None when not recorded.
     pub object_topics: Vec<(Option<String>, Option<String>, String)>,
 }
@@ -76,6 +86,7 @@ pub struct SessionRecorder {
     bag: BagWriter,
     handles: Vec<TopicId>,
     clock: Option<TopicId>,
+    colliders: Option<TopicId>,
     objects: Vec<ObjectIds>,
     last_ns: u64,
 }
@@ -106,10 +117,13 @@ impl SessionRecorder {
             })?,
             frame_id: session.policy.frame_id.clone(),
             accept_empty_frame_id: session.policy.accept_empty_frame_id,
+            max_stamp_lead: session.policy.max_stamp_lead,
             line_width: session.style.line_width,
             sphere_diameter: session.style.sphere_diameter,
             handle_topics: names.handles.clone(),
             clock_topic: clock.then(|| names.clock.clone()),
+            colliders_topic: (published.markers && session.has_colliders())
+                .then(|| names.colliders.clone()),
             object_topics: names
                 .objects
                 .iter()
@@ -132,6 +146,10 @@ impl SessionRecorder {
         } else {
             None
         };
+        let colliders = match &info.colliders_topic {
+            Some(t) => Some(bag.add_topic::<MarkerArray>(t, Qos::MARKERS)?),
+            None => None,
+        };
         let mut objects = Vec::new();
         for (m, s, st) in &info.object_topics {
             objects.push(ObjectIds {
@@ -150,6 +168,7 @@ impl SessionRecorder {
             bag,
             handles,
             clock,
+            colliders,
             objects,
             last_ns: 0,
         })
@@ -162,18 +181,27 @@ impl SessionRecorder {
         self.last_ns
     }
 
-    /// Record a pose taken from handle `handle`'s topic. `publish_ns`: its source
-    /// timestamp (ns since the epoch), if known.
+    /// The arrival time of an input about to be recorded (ns since the epoch, strictly
+    /// increasing): the node judges the pose's stamp against it and records it as the
+    /// message's log time, so a replay judges it against the same instant.
+    pub fn arrival_ns(&mut self) -> u64 {
+        self.stamp()
+    }
+
+    /// Record a pose taken from handle `handle`'s topic at `arrival_ns` (from
+    /// [`Self::arrival_ns`]). `publish_ns`: its source timestamp (ns since the epoch),
+    /// if known.
     pub fn record_input(
         &mut self,
         handle: usize,
         msg: &PoseStamped,
+        arrival_ns: u64,
         publish_ns: Option<u64>,
     ) -> Result<(), RecordError> {
         let Some(id) = self.handles.get(handle).copied() else {
             return Ok(());
         };
-        let t = self.stamp();
+        let t = arrival_ns;
         let data = crate::ros::cdr::encode(msg)?;
         self.bag.write_raw(id, t, publish_ns.unwrap_or(t), &data)
     }
@@ -200,6 +228,10 @@ impl SessionRecorder {
                 let t = self.stamp();
                 self.bag.write(id, t, s)?;
             }
+        }
+        if let (Some(id), Some(m)) = (self.colliders, &frame.colliders) {
+            let t = self.stamp();
+            self.bag.write(id, t, m)?;
         }
         Ok(())
     }
@@ -262,6 +294,7 @@ impl RunRecorder {
         let policy = InputPolicy {
             frame_id: scene.frame_id.clone(),
             accept_empty_frame_id: false,
+            max_stamp_lead: crate::ros::input::DEFAULT_MAX_STAMP_LEAD,
         };
         let session = Session::new(scene.clone(), policy, names.handles.clone());
         let published = FrameContent {

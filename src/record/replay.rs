@@ -72,6 +72,7 @@ enum Output {
     Markers(usize),
     Singular(usize),
     Status(usize),
+    Colliders,
 }
 
 /// Replay the bag folder `dir`.
@@ -132,6 +133,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                     let policy = InputPolicy {
                         frame_id: i.frame_id.clone(),
                         accept_empty_frame_id: i.accept_empty_frame_id,
+                        max_stamp_lead: i.max_stamp_lead,
                     };
                     let mut s = Session::new(scene, policy, i.handle_topics.clone());
                     s.style.line_width = i.line_width;
@@ -141,6 +143,10 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                     }
                     if let Some(c) = &i.clock_topic {
                         routes.insert(c.clone(), Route::Output(Output::Clock));
+                    }
+                    if let Some(c) = &i.colliders_topic {
+                        content.markers = true;
+                        routes.insert(c.clone(), Route::Output(Output::Colliders));
                     }
                     for (o, (m, sp, st)) in i.object_topics.iter().enumerate() {
                         if let Some(m) = m {
@@ -174,7 +180,9 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                     match route {
                         Route::Input(h) => {
                             let pose: PoseStamped = cdr::decode(&m.data).map_err(decode_err)?;
-                            let _ = s.offer(h, &pose);
+                            // the node judged the stamp against the arrival time it recorded as the
+                            // message's log time
+                            let _ = s.offer(h, &pose, m.log_time);
                             report.inputs += 1;
                             inputs_since_frame = true;
                         }
@@ -183,7 +191,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                                 Output::Clock => {
                                     to_value(&cdr::decode::<Clock>(&m.data).map_err(decode_err)?)
                                 }
-                                Output::Markers(_) => to_value(
+                                Output::Markers(_) | Output::Colliders => to_value(
                                     &cdr::decode::<MarkerArray>(&m.data).map_err(decode_err)?,
                                 ),
                                 Output::Singular(_) => to_value(
@@ -234,6 +242,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                                     f.objects[o].singular_points.as_ref().map(to_value)
                                 }
                                 Output::Status(o) => f.objects[o].status.as_ref().map(to_value),
+                                Output::Colliders => f.colliders.as_ref().map(to_value),
                             }
                             .transpose()
                             .map_err(|e| bag_err(e.to_string()))?;

@@ -14,14 +14,21 @@ pub const MIN_QUATERNION_NORM: f64 = 1e-6;
 pub const NORMALIZED_TOLERANCE: f64 = 1e-6;
 
 /// What the filter accepts.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct InputPolicy {
     /// The scene's fixed frame: poses must be expressed in it.
     pub frame_id: String,
     /// Treat an empty `header.frame_id` as the scene frame (default false: rejected as
     /// an unknown frame, since an empty frame is ambiguous in tf).
     pub accept_empty_frame_id: bool,
+    /// s: a pose stamped more than this after its arrival (wall clock) is rejected. One
+    /// such stamp, once accepted, would make every later correctly stamped pose look
+    /// stale; the margin covers clock offsets between machines.
+    pub max_stamp_lead: f64,
 }
+
+/// Default of [`InputPolicy::max_stamp_lead`], s.
+pub const DEFAULT_MAX_STAMP_LEAD: f64 = 10.0;
 
 /// Why a pose was rejected.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,6 +37,7 @@ pub enum Rejection {
     NonFinite,
     ZeroQuaternion,
     StaleStamp,
+    FutureStamp,
 }
 
 impl std::fmt::Display for Rejection {
@@ -39,6 +47,7 @@ impl std::fmt::Display for Rejection {
             Rejection::NonFinite => "NaN or infinite value",
             Rejection::ZeroQuaternion => "zero quaternion",
             Rejection::StaleStamp => "stamp older than the last accepted pose",
+            Rejection::FutureStamp => "stamp ahead of the wall clock by more than max_stamp_lead",
         })
     }
 }
@@ -56,12 +65,19 @@ pub struct HandleInput {
     pub rejected_zero_quaternion: u64,
     pub rejected_stale_stamp: u64,
     pub rejected_unknown_frame: u64,
+    pub rejected_future_stamp: u64,
 }
 
 impl HandleInput {
-    /// Check `msg`; when acceptable it becomes the target (latest wins).
-    pub fn offer(&mut self, policy: &InputPolicy, msg: &PoseStamped) -> Result<(), Rejection> {
-        let verdict = check(policy, self.last_stamp, msg);
+    /// Check `msg`, received at `received_ns` (wall clock, ns since the Unix epoch);
+    /// when acceptable it becomes the target (latest wins).
+    pub fn offer(
+        &mut self,
+        policy: &InputPolicy,
+        msg: &PoseStamped,
+        received_ns: u64,
+    ) -> Result<(), Rejection> {
+        let verdict = check(policy, self.last_stamp, msg, received_ns);
         match verdict {
             Ok((pose, normalized)) => {
                 self.target = Some(pose);
@@ -76,6 +92,7 @@ impl HandleInput {
                     Rejection::NonFinite => &mut self.rejected_non_finite,
                     Rejection::ZeroQuaternion => &mut self.rejected_zero_quaternion,
                     Rejection::StaleStamp => &mut self.rejected_stale_stamp,
+                    Rejection::FutureStamp => &mut self.rejected_future_stamp,
                 } += 1;
                 Err(r)
             }
@@ -98,6 +115,7 @@ impl HandleInput {
         s.rejected_zero_quaternion = self.rejected_zero_quaternion;
         s.rejected_stale_stamp = self.rejected_stale_stamp;
         s.rejected_unknown_frame = self.rejected_unknown_frame;
+        s.rejected_future_stamp = self.rejected_future_stamp;
     }
 
     pub fn rejected(&self) -> u64 {
@@ -105,15 +123,18 @@ impl HandleInput {
             + self.rejected_zero_quaternion
             + self.rejected_stale_stamp
             + self.rejected_unknown_frame
+            + self.rejected_future_stamp
     }
 }
 
-/// Validate one pose: frame, finiteness, quaternion, stamp order (in that order).
-/// Returns the pose (unit quaternion) and whether it had to be normalized.
+/// Validate one pose received at `received_ns` (wall clock, ns since the Unix epoch):
+/// frame, finiteness, quaternion, stamp not ahead of the clock, stamp order (in that
+/// order). Returns the pose (unit quaternion) and whether it had to be normalized.
 pub fn check(
     policy: &InputPolicy,
     last_stamp: Option<Time>,
     msg: &PoseStamped,
+    received_ns: u64,
 ) -> Result<(Pose, bool), Rejection> {
     let frame = msg
         .header
@@ -144,6 +165,12 @@ pub fn check(
     }
     if norm < MIN_QUATERNION_NORM {
         return Err(Rejection::ZeroQuaternion);
+    }
+    let stamp = msg.header.stamp;
+    let stamp_ns = i128::from(stamp.sec) * 1_000_000_000 + i128::from(stamp.nanosec);
+    let lead_ns = (policy.max_stamp_lead * 1e9) as i128;
+    if stamp_ns > i128::from(received_ns) + lead_ns {
+        return Err(Rejection::FutureStamp);
     }
     if let Some(last) = last_stamp {
         if msg.header.stamp < last {
@@ -182,50 +209,56 @@ mod tests {
         }
     }
 
+    /// Arrival time of every pose in these tests: 1000 s after the epoch, ns.
+    const AT: u64 = 1_000_000_000_000;
+
     #[test]
     fn rejects_bad_poses_and_counts_them() {
         let policy = InputPolicy {
             frame_id: "world".into(),
             accept_empty_frame_id: false,
+            max_stamp_lead: DEFAULT_MAX_STAMP_LEAD,
         };
         let mut h = HandleInput::default();
         let id = [0.0, 0.0, 0.0, 1.0];
         assert_eq!(
-            h.offer(&policy, &msg("world", 5, [1.0, 0.0, 0.0], id)),
+            h.offer(&policy, &msg("world", 5, [1.0, 0.0, 0.0], id), AT),
             Ok(())
         );
         assert_eq!(
-            h.offer(&policy, &msg("map", 6, [0.0; 3], id)),
+            h.offer(&policy, &msg("map", 6, [0.0; 3], id), AT),
             Err(Rejection::UnknownFrame)
         );
         assert_eq!(
-            h.offer(&policy, &msg("", 6, [0.0; 3], id)),
+            h.offer(&policy, &msg("", 6, [0.0; 3], id), AT),
             Err(Rejection::UnknownFrame)
         );
         assert_eq!(
-            h.offer(&policy, &msg("world", 6, [f64::NAN, 0.0, 0.0], id)),
+            h.offer(&policy, &msg("world", 6, [f64::NAN, 0.0, 0.0], id), AT),
             Err(Rejection::NonFinite)
         );
         assert_eq!(
             h.offer(
                 &policy,
-                &msg("world", 6, [0.0; 3], [0.0, f64::INFINITY, 0.0, 1.0])
+                &msg("world", 6, [0.0; 3], [0.0, f64::INFINITY, 0.0, 1.0]),
+                AT
             ),
             Err(Rejection::NonFinite)
         );
         assert_eq!(
             h.offer(
                 &policy,
-                &msg("world", 6, [0.0; 3], [1e300, 1e300, 0.0, 0.0])
+                &msg("world", 6, [0.0; 3], [1e300, 1e300, 0.0, 0.0]),
+                AT
             ),
             Err(Rejection::NonFinite)
         );
         assert_eq!(
-            h.offer(&policy, &msg("world", 6, [0.0; 3], [0.0; 4])),
+            h.offer(&policy, &msg("world", 6, [0.0; 3], [0.0; 4]), AT),
             Err(Rejection::ZeroQuaternion)
         );
         assert_eq!(
-            h.offer(&policy, &msg("world", 4, [0.0; 3], id)),
+            h.offer(&policy, &msg("world", 4, [0.0; 3], id), AT),
             Err(Rejection::StaleStamp)
         );
         // the target is still the first pose
@@ -234,7 +267,8 @@ mod tests {
         assert_eq!(
             h.offer(
                 &policy,
-                &msg("/world", 5, [2.0, 0.0, 0.0], [0.0, 0.0, 0.0, 2.0])
+                &msg("/world", 5, [2.0, 0.0, 0.0], [0.0, 0.0, 0.0, 2.0]),
+                AT
             ),
             Ok(())
         );
@@ -243,11 +277,28 @@ mod tests {
         assert_eq!((h.accepted, h.rejected(), h.rejected_non_finite), (2, 7, 3));
         h.clear_target();
         assert!(h.target.is_none());
-        assert_eq!(h.offer(&policy, &msg("world", 1, [0.0; 3], id)), Ok(()));
+        assert_eq!(h.offer(&policy, &msg("world", 1, [0.0; 3], id), AT), Ok(()));
         let lenient = InputPolicy {
             accept_empty_frame_id: true,
-            ..policy
+            ..policy.clone()
         };
-        assert_eq!(h.offer(&lenient, &msg("", 2, [0.0; 3], id)), Ok(()));
+        assert_eq!(h.offer(&lenient, &msg("", 2, [0.0; 3], id), AT), Ok(()));
+        // a stamp more than max_stamp_lead (10 s) after arrival would make every later
+        // pose stale: rejected, and the target stays; exactly at the lead is accepted
+        let future = 1000 + DEFAULT_MAX_STAMP_LEAD as i32;
+        assert_eq!(
+            h.offer(&policy, &msg("world", future + 1, [5.0, 0.0, 0.0], id), AT),
+            Err(Rejection::FutureStamp)
+        );
+        assert_eq!(h.rejected_future_stamp, 1);
+        assert!(h.target.unwrap().translation.vector.x.abs() < 1e-15);
+        assert_eq!(
+            h.offer(&policy, &msg("world", future, [0.0; 3], id), AT),
+            Ok(())
+        );
+        assert_eq!(
+            h.offer(&policy, &msg("world", 3, [0.0; 3], id), AT),
+            Err(Rejection::StaleStamp)
+        );
     }
 }

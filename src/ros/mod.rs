@@ -13,5 +13,6 @@ pub mod msgs;
 pub mod names;
 pub mod node;
 pub mod params;
+pub mod reply;
 pub mod schema;
 pub mod session;

@@ -214,6 +214,9 @@ pub struct Marker {
 
 impl Marker {
     // `type`
+    pub const CUBE: i32 = 1;
+    pub const SPHERE: i32 = 2;
+    pub const CYLINDER: i32 = 3;
     pub const LINE_LIST: i32 = 5;
     pub const SPHERE_LIST: i32 = 7;
     pub const TRIANGLE_LIST: i32 = 11;
@@ -315,6 +318,7 @@ pub struct HandleStatus {
     pub rejected_zero_quaternion: u64,
     pub rejected_stale_stamp: u64,
     pub rejected_unknown_frame: u64,
+    pub rejected_future_stamp: u64,
 }
 
 impl HandleStatus {
@@ -324,6 +328,7 @@ impl HandleStatus {
             + self.rejected_zero_quaternion
             + self.rejected_stale_stamp
             + self.rejected_unknown_frame
+            + self.rejected_future_stamp
     }
 }
 
@@ -360,5 +365,5 @@ pub struct SimStatus {
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_62704785775ed881206ce41580e278c76d6b1ca02c08daf6e2ba33b49b469e03"
+    "RIHS01_196dc28e15f83c0e9ae398b58431264ce438aaa75d442cd4323ffe1fa954f35b"
 );

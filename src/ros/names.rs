@@ -5,7 +5,8 @@
 //! Defaults: handle inputs `handles/<handle>` (relative, so `-r __ns:=/robot1` moves
 //! them to `/robot1/handles/<handle>`; a `topic:` given in the scene is absolute and
 //! stays), outputs `<object>/markers`, `<object>/singular_points`, `<object>/status`
-//! (relative), `/clock` (absolute), services `~/reset`, `~/set_paused`, `~/step`.
+//! (relative), `colliders` (relative; only for a scene with colliders), `/clock`
+//! (absolute), services `~/reset`, `~/set_paused`, `~/step`.
 
 use crate::scene::Scene;
 
@@ -29,6 +30,8 @@ pub struct NodeNames {
     /// Per object: (markers, singular_points, status).
     pub objects: Vec<ObjectTopics>,
     pub clock: String,
+    /// The colliders' markers (published only when the scene has colliders).
+    pub colliders: String,
     pub reset: String,
     pub set_paused: String,
     pub step: String,
@@ -93,6 +96,7 @@ impl NodeNames {
         Ok(NodeNames {
             node: node.to_string(),
             clock: resolve("/clock")?,
+            colliders: resolve("colliders")?,
             reset: resolve("~/reset")?,
             set_paused: resolve("~/set_paused")?,
             step: resolve("~/step")?,

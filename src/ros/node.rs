@@ -28,6 +28,7 @@ use super::msgs::{
     SingularPoints, TriggerRequest, TriggerResponse,
 };
 use super::names::NodeNames;
+use super::reply::{ClientReaders, Flushed, HeldReplies};
 use super::session::{Frame, FrameContent, MarkerStyle, Session};
 use crate::record::bag::BagOptions;
 use crate::record::metadata::Qos;
@@ -138,10 +139,19 @@ pub struct NodeStats {
     pub overrun_ticks: u64,
     /// Publications that failed or were dropped (full reliable window).
     pub dropped_publications: u64,
+    /// Service replies sent (after the client's reply reader was discovered).
+    pub service_replies: u64,
+    /// Service replies sent after `reply::GIVE_UP` without the client's reply reader in
+    /// discovery (the client may never see them), or that failed to send.
+    pub service_replies_unseen: u64,
     /// Simulator step only.
     pub step: LatencyStats,
     /// Tick start (or lock-step trigger) -> markers published.
     pub tick_to_markers: LatencyStats,
+    /// Per tick: tick start -> markers published minus that tick's own step time (the
+    /// node's processing beyond the simulator: taking inputs, building and publishing
+    /// the frame).
+    pub tick_beyond_step: LatencyStats,
     /// Pose taken from DDS -> markers of the first step that used it published.
     pub input_to_markers: LatencyStats,
     /// Per 10 s of wall time.
@@ -166,9 +176,15 @@ pub struct SimNode {
     subs: Vec<Subscription<PoseStamped>>,
     pubs: Vec<ObjectPubs>,
     clock: Option<Publisher<Clock>>,
+    /// The colliders' markers (only for a scene with colliders and markers on).
+    colliders: Option<Publisher<MarkerArray>>,
     reset_srv: Server<TriggerRequest, TriggerResponse>,
     pause_srv: Server<SetBoolRequest, SetBoolResponse>,
     step_srv: Server<TriggerRequest, TriggerResponse>,
+    reset_replies: HeldReplies<TriggerResponse>,
+    pause_replies: HeldReplies<SetBoolResponse>,
+    step_replies: HeldReplies<TriggerResponse>,
+    client_readers: ClientReaders,
     node: Option<Node>,
     spinner: Option<std::thread::JoinHandle<()>>,
     _context: Context,
@@ -382,11 +398,41 @@ impl SimNode {
         } else {
             None
         };
+        let has_colliders = scene
+            .world
+            .contact_stage()
+            .is_some_and(|s| !s.colliders().is_empty());
+        let colliders = if outputs.markers && has_colliders {
+            let t = writer_topic(
+                &context,
+                &node_name,
+                &name(&names.colliders)?,
+                topic_type::<MarkerArray>(),
+                Qos::MARKERS,
+            )
+            .map_err(dds("colliders topic"))?;
+            Some(
+                node.create_publisher(&t, Some(qos(Qos::MARKERS)))
+                    .map_err(dds("colliders publisher"))?,
+            )
+        } else {
+            None
+        };
         let srv_qos = QosProfile::publisher_default()
             .reliability_reliable(WhenFull::Fail)
             .durability(Durability::Volatile)
             .history(History::KeepLast { depth: 10 });
         let trigger = ServiceTypeName::new("std_srvs", "Trigger");
+        let held = |s: &str| -> Result<_, NodeError> {
+            let n = name(s)?;
+            Ok(HeldReplies::new(
+                n.to_dds_name("rq", &node_name, "Request"),
+                n.to_dds_name("rr", &node_name, "Reply"),
+            ))
+        };
+        let reset_replies = held(&names.reset)?;
+        let pause_replies = held(&names.set_paused)?;
+        let step_replies = held(&names.step)?;
         let mut reset_srv = node
             .create_server::<TriggerRequest, TriggerResponse>(
                 ServiceMapping::Cyclone,
@@ -460,9 +506,14 @@ impl SimNode {
             subs,
             pubs,
             clock,
+            colliders,
             reset_srv,
             pause_srv,
             step_srv,
+            reset_replies,
+            pause_replies,
+            step_replies,
+            client_readers: ClientReaders::default(),
             node: Some(node),
             spinner: Some(spinner),
             _context: context,
@@ -533,6 +584,12 @@ impl SimNode {
             } else {
                 Duration::from_millis(200)
             };
+            // held service replies are re-checked every SETTLE
+            let timeout = if self.replies_waiting() {
+                timeout.min(super::reply::SETTLE)
+            } else {
+                timeout
+            };
             if let Err(e) = self.poll.poll(&mut events, Some(timeout)) {
                 if e.kind() != std::io::ErrorKind::Interrupted {
                     return Err(e.into());
@@ -600,6 +657,9 @@ impl SimNode {
             if let (Some(m), Some(publisher)) = (&o.markers, &p.markers) {
                 dropped += publisher.publish(m.clone()).is_err() as u64;
             }
+        }
+        if let (Some(m), Some(publisher)) = (&frame.colliders, &self.colliders) {
+            dropped += publisher.publish(m.clone()).is_err() as u64;
         }
         let published_at = Instant::now();
         if let Some(t) = trigger {
@@ -673,8 +733,12 @@ impl SimNode {
                     .map(|t| t.to_nanos())
                     .filter(|t| *t > 0)
                     .map(|t| t as u64);
-                self.record(|r| r.record_input(h, &msg, publish_ns));
-                match self.session.offer(h, &msg) {
+                let arrival_ns = self
+                    .recorder
+                    .as_mut()
+                    .map_or_else(crate::record::bag::now_ns, |r| r.arrival_ns());
+                self.record(|r| r.record_input(h, &msg, arrival_ns, publish_ns));
+                match self.session.offer(h, &msg, arrival_ns) {
                     Ok(()) => {
                         self.pending_input[h] = Some(received);
                         if self.lockstep == Lockstep::Handle(h) && !self.session.paused {
@@ -705,7 +769,7 @@ impl SimNode {
                 success: true,
                 message: format!("reset to t = 0 s (episode {})", self.session.episode),
             };
-            let _ = self.reset_srv.send_response(id, resp);
+            self.reset_replies.hold(id, resp);
         }
         while let Ok(Some((id, req))) = self.pause_srv.receive_request() {
             let was = self.session.paused;
@@ -734,7 +798,7 @@ impl SimNode {
                     format!("running from t = {t:.6} s")
                 },
             };
-            let _ = self.pause_srv.send_response(id, resp);
+            self.pause_replies.hold(id, resp);
         }
         while let Ok(Some((id, _req))) = self.step_srv.receive_request() {
             let resp = if self.lockstep == Lockstep::Service || self.session.paused {
@@ -755,7 +819,49 @@ impl SimNode {
                         .into(),
                 }
             };
-            let _ = self.step_srv.send_response(id, resp);
+            self.step_replies.hold(id, resp);
+        }
+        self.flush_replies();
+    }
+
+    fn replies_waiting(&self) -> bool {
+        !(self.reset_replies.is_empty()
+            && self.pause_replies.is_empty()
+            && self.step_replies.is_empty())
+    }
+
+    /// Send the held replies whose clients can receive them (see `reply`).
+    fn flush_replies(&mut self) {
+        if !self.replies_waiting() {
+            return;
+        }
+        let now = Instant::now();
+        self.client_readers
+            .refresh(&self._context.domain_participant(), now);
+        let r = &self.client_readers;
+        let done = [
+            self.reset_replies.flush(&self.reset_srv, r, now),
+            self.pause_replies.flush(&self.pause_srv, r, now),
+            self.step_replies.flush(&self.step_srv, r, now),
+        ];
+        for d in done {
+            let Flushed {
+                sent,
+                sent_unseen,
+                failed,
+            } = d;
+            self.stats.service_replies += sent + sent_unseen;
+            self.stats.service_replies_unseen += sent_unseen + failed;
+            if sent_unseen + failed > 0 {
+                eprintln!(
+                    "[developable_sim] warning: {} service repl{} sent although the \
+                     client's reply reader was not discovered within {} s, {failed} failed \
+                     (is the client on the Cyclone DDS service mapping?)",
+                    sent_unseen,
+                    if sent_unseen == 1 { "y" } else { "ies" },
+                    super::reply::GIVE_UP.as_secs()
+                );
+            }
         }
     }
 
@@ -783,12 +889,25 @@ impl SimNode {
     }
 
     fn finish(mut self) -> NodeStats {
+        // replies still held for clients not yet discovered get a short grace
+        let grace = Instant::now() + Duration::from_millis(250);
+        while self.replies_waiting() && Instant::now() < grace {
+            std::thread::sleep(super::reply::SETTLE);
+            self.flush_replies();
+        }
         let mut stats = std::mem::take(&mut self.stats);
         stats.sim_time = self.session.scene.world.time();
         stats.wall_s = self.started.elapsed().as_secs_f64();
         stats.overrun_ticks = self.session.overrun_ticks;
         stats.step = LatencyStats::of(&self.step_ms);
         stats.tick_to_markers = LatencyStats::of(&self.tick_ms);
+        let beyond: Vec<f64> = self
+            .tick_ms
+            .iter()
+            .zip(&self.step_ms)
+            .map(|(tick, step)| tick - step)
+            .collect();
+        stats.tick_beyond_step = LatencyStats::of(&beyond);
         stats.input_to_markers = LatencyStats::of(&self.input_ms);
         if let Some(r) = self.recorder.take() {
             stats.recorded = r.counts();

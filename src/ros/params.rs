@@ -123,6 +123,14 @@ pub const DECLARED: &[Declared] = &[
               (otherwise they are rejected as an unknown frame).",
     },
     Declared {
+        name: "max_stamp_lead",
+        ty: ParamType::Double,
+        default: "10.0",
+        doc: "s, poses stamped further ahead of the node's wall clock at arrival are \
+              rejected (one accepted far-future stamp would make every later pose stale); \
+              > 0.",
+    },
+    Declared {
         name: "marker.line_width",
         ty: ParamType::Double,
         default: "0.002",

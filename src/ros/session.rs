@@ -11,7 +11,7 @@ use crate::sim::StepReport;
 use super::convert::{point, pose};
 use super::input::{HandleInput, InputPolicy, Rejection};
 use super::msgs::{
-    Clock, ColorRGBA, HandleStatus, Header, Marker, MarkerArray, PoseStamped, SimStatus,
+    Clock, ColorRGBA, HandleStatus, Header, Marker, MarkerArray, Point, PoseStamped, SimStatus,
     SingularPoint, SingularPoints, Time, Vector3,
 };
 
@@ -27,6 +27,10 @@ pub struct MarkerStyle {
     pub curved: ColorRGBA,
     pub singular: ColorRGBA,
     pub ruling: ColorRGBA,
+    /// Color of the colliders' markers.
+    pub collider: ColorRGBA,
+    /// Side of the square drawn for a ground plane, m (default 4).
+    pub ground_size: f64,
 }
 
 impl Default for MarkerStyle {
@@ -38,6 +42,13 @@ impl Default for MarkerStyle {
             curved: ColorRGBA::rgb(0.96, 0.62, 0.22),
             singular: ColorRGBA::rgb(0.85, 0.1, 0.1),
             ruling: ColorRGBA::rgb(0.2, 0.2, 0.25),
+            collider: ColorRGBA {
+                r: 0.6,
+                g: 0.6,
+                b: 0.62,
+                a: 0.6,
+            },
+            ground_size: 4.0,
         }
     }
 }
@@ -66,6 +77,9 @@ pub struct Frame {
     pub stamp: Time,
     pub clock: Clock,
     pub objects: Vec<ObjectFrame>,
+    /// The scene's colliders (None when markers are not asked for or the scene has no
+    /// colliders).
+    pub colliders: Option<MarkerArray>,
 }
 
 /// A scene with its handle inputs and counters.
@@ -107,9 +121,15 @@ impl Session {
         }
     }
 
-    /// Offer a pose received for handle `handle`.
-    pub fn offer(&mut self, handle: usize, msg: &PoseStamped) -> Result<(), Rejection> {
-        self.inputs[handle].offer(&self.policy, msg)
+    /// Offer a pose received for handle `handle` at `received_ns` (wall clock, ns since
+    /// the Unix epoch).
+    pub fn offer(
+        &mut self,
+        handle: usize,
+        msg: &PoseStamped,
+        received_ns: u64,
+    ) -> Result<(), Rejection> {
+        self.inputs[handle].offer(&self.policy, msg, received_ns)
     }
 
     pub fn inputs(&self) -> &[HandleInput] {
@@ -192,10 +212,16 @@ impl Session {
                 }
             })
             .collect();
+        let colliders = if content.markers {
+            self.collider_markers(&header)
+        } else {
+            None
+        };
         Frame {
             stamp,
             clock: Clock { clock: stamp },
             objects,
+            colliders,
         }
     }
 
@@ -270,6 +296,106 @@ impl Session {
             s.handles.push(hs);
         }
         s
+    }
+
+    /// Whether the scene has colliders to draw.
+    pub fn has_colliders(&self) -> bool {
+        self.scene
+            .world
+            .contact_stage()
+            .is_some_and(|s| !s.colliders().is_empty())
+    }
+
+    /// One marker per collider, at its current pose (attached colliders follow their
+    /// handle's target): the ground as a thin square of `style.ground_size`, boxes,
+    /// spheres, capsules (a cylinder and its two end spheres) and triangle meshes.
+    fn collider_markers(&self, header: &Header) -> Option<MarkerArray> {
+        use crate::contact::ColliderShape;
+        let world = &self.scene.world;
+        let colliders = world.contact_stage()?.colliders();
+        if colliders.is_empty() {
+            return None;
+        }
+        let style = &self.style;
+        let targets = world.current_targets();
+        let mut markers = Vec::with_capacity(colliders.len() + 1);
+        for (i, c) in colliders.iter().enumerate() {
+            let world_from_collider = c.world_pose(targets);
+            let mut m = Marker {
+                header: header.clone(),
+                ns: "colliders".into(),
+                id: i as i32,
+                action: Marker::ADD,
+                pose: pose(&world_from_collider),
+                color: style.collider,
+                ..Marker::default()
+            };
+            let uniform = |d: f64| Vector3 { x: d, y: d, z: d };
+            match &c.shape {
+                ColliderShape::HalfSpace => {
+                    // the surface is z = 0 of the collider frame; a 1 mm slab below it
+                    m.type_ = Marker::CUBE;
+                    let below =
+                        world_from_collider * nalgebra::Translation3::new(0.0, 0.0, -0.0005);
+                    m.pose = pose(&below);
+                    m.scale = Vector3 {
+                        x: style.ground_size,
+                        y: style.ground_size,
+                        z: 0.001,
+                    };
+                }
+                ColliderShape::Cuboid { half_extents } => {
+                    m.type_ = Marker::CUBE;
+                    m.scale = Vector3 {
+                        x: 2.0 * half_extents.x,
+                        y: 2.0 * half_extents.y,
+                        z: 2.0 * half_extents.z,
+                    };
+                }
+                ColliderShape::Ball { radius } => {
+                    m.type_ = Marker::SPHERE;
+                    m.scale = uniform(2.0 * radius);
+                }
+                ColliderShape::Capsule {
+                    half_height,
+                    radius,
+                } => {
+                    m.type_ = Marker::CYLINDER;
+                    m.scale = Vector3 {
+                        x: 2.0 * radius,
+                        y: 2.0 * radius,
+                        z: 2.0 * half_height,
+                    };
+                    // the end caps, in the same frame (ids after the colliders')
+                    let mut caps = m.clone();
+                    caps.id = (colliders.len() + i) as i32;
+                    caps.type_ = Marker::SPHERE_LIST;
+                    caps.scale = uniform(2.0 * radius);
+                    caps.points = [-half_height, *half_height]
+                        .iter()
+                        .map(|z| Point {
+                            x: 0.0,
+                            y: 0.0,
+                            z: *z,
+                        })
+                        .collect();
+                    markers.push(caps);
+                }
+                ColliderShape::TriMesh {
+                    vertices,
+                    triangles,
+                } => {
+                    m.type_ = Marker::TRIANGLE_LIST;
+                    m.scale = uniform(1.0);
+                    m.points = triangles
+                        .iter()
+                        .flat_map(|t| t.iter().map(|&v| point(&vertices[v as usize])))
+                        .collect();
+                }
+            }
+            markers.push(m);
+        }
+        Some(MarkerArray { markers })
     }
 
     fn markers(

@@ -10,6 +10,7 @@ from conftest import SCENES, SENSOR_QOS, Ros, markers_finite, pose_msg, reliable
 
 GRIPPER = str(SCENES / "ribbon_gripper.yaml")
 TORSION = str(SCENES / "ribbon_extreme_torsion.yaml")
+PUSH = str(SCENES / "ribbon_gripper_push.yaml")
 
 # The handle constraint is hard (augmented Lagrangian, stopped at |dq| < 1e-4), so a
 # reachable target is met to well under a millimetre; 5 mm is the issue's bar.
@@ -121,6 +122,44 @@ def test_every_output_decodes_and_is_well_formed(start_node, ros, domain_id):
     assert ticks == sorted(ticks) and ticks[-1] > 0
 
 
+def test_colliders_are_published_as_markers_and_follow_their_handle(start_node, ros, domain_id):
+    """ribbon_gripper_push: a table (half-space) and a finger box carried by the handle
+    `finger`. Both are drawn on /colliders; the finger's marker moves with its handle's
+    scripted sweep, the table's stays."""
+    start_node(domain_id, PUSH, "--as-fast-as-possible", "--duration", "30")
+    reader = ros.reader("/colliders", rt.MarkerArray, reliable_qos(1, True))
+    got = []
+    deadline = time.monotonic() + 15.0
+    while time.monotonic() < deadline and len(got) < 40:
+        got.extend(s for s in reader.take(N=256) if hasattr(s, "markers"))
+        time.sleep(0.01)
+    assert len(got) >= 2, f"too few collider marker arrays: {len(got)}"
+    for ma in got:
+        assert [m.ns for m in ma.markers] == ["colliders", "colliders"]
+        assert [m.id for m in ma.markers] == [0, 1]
+        table, finger = ma.markers
+        assert table.type == 1 and finger.type == 1  # CUBE
+        assert all(m.header.frame_id == "world" and m.action == 0 for m in ma.markers)
+        # the table: a thin slab whose top face is z = 0
+        assert table.scale.z == 0.001 and abs(table.pose.position.z + 0.0005) < 1e-12
+        # the finger: the scene's full edge lengths
+        assert (finger.scale.x, finger.scale.y, finger.scale.z) == (0.04, 0.02, 0.06)
+        assert all(math.isfinite(v) for m in ma.markers for v in (m.pose.position.x, m.pose.position.y))
+    ys = [ma.markers[1].pose.position.y for ma in got]
+    assert max(ys) - min(ys) > 0.01, f"the finger did not move with its handle: {ys[:3]}..."
+    assert len({ma.markers[0].pose.position.y for ma in got}) == 1
+
+
+def test_a_scene_without_colliders_publishes_no_collider_topic(start_node, ros, domain_id):
+    start_node(domain_id, GRIPPER)
+    status = ros.reader("/ribbon/status", rt.SimStatus)
+    colliders = ros.reader("/colliders", rt.MarkerArray, reliable_qos(1, True))
+    _status_after(ros, status, lambda s: s.step >= 20)
+    # the status reader matched the node long ago: a /colliders writer would have too
+    assert not colliders.get_matched_publications()
+    assert not [s for s in colliders.take(N=16) if hasattr(s, "markers")]
+
+
 def _status_after(ros: Ros, reader, pred, timeout=10.0):
     return ros.take(reader, timeout, until=lambda s: pred(s))[-1]
 
@@ -158,6 +197,28 @@ def test_services_reset_pause_and_step_answer_on_the_cyclone_mapping(start_node,
     _status_after(ros, status, lambda s: s.episode == 1 and s.step >= 3)
 
 
+def test_every_service_call_from_a_fresh_client_is_answered(start_node, ros, domain_id):
+    """A client may send its request as soon as its writer matched the node's request
+    reader, before the node has discovered the client's reply reader; a reply written
+    then would reach nobody (volatile durability). The node holds it until the client's
+    reader is known, as rmw_cyclonedds does. Each call here creates fresh endpoints
+    (as a short-lived rclpy client does), and each must be answered."""
+    start_node(domain_id, GRIPPER, "--paused")
+    for i in range(12):
+        r = ros.call(
+            "/developable_sim/set_paused",
+            rt.SetBoolRequest,
+            rt.SetBoolResponse,
+            timeout=5.0,
+            data=True,
+        )
+        assert r.success and "paused" in r.message, f"call {i}: {r.message}"
+    # a second participant (another process's client) is answered too
+    other = Ros(domain_id)
+    r = other.call("/developable_sim/step", rt.TriggerRequest, rt.TriggerResponse, timeout=5.0)
+    assert r.success and "stepped" in r.message, r.message
+
+
 def test_bad_poses_are_rejected_counted_and_never_reach_the_mesh(start_node, ros, domain_id):
     node = start_node(domain_id, GRIPPER)
     status = ros.reader("/ribbon/status", rt.SimStatus)
@@ -173,6 +234,9 @@ def test_bad_poses_are_rejected_counted_and_never_reach_the_mesh(start_node, ros
         pose_msg(0.7, 0.0, 0.3, sec=5),  # stamp older than the accepted one
         pose_msg(0.7, 0.0, 0.3, frame="map", sec=14),  # unknown frame
         pose_msg(0.7, 0.0, 0.3, frame="", sec=15),  # empty frame (rejected by default)
+        # an hour ahead of the wall clock (more than max_stamp_lead, 10 s): had it been
+        # accepted, every correctly stamped pose after it would have looked stale
+        pose_msg(0.9, 0.0, 0.3, sec=int(time.time()) + 3600),
         pose_msg(0.7, 0.0, 0.3, q=(0.0, 0.0, 0.0, 2.0), sec=16),  # accepted, normalized
     ]
     expected = dict(
@@ -182,6 +246,7 @@ def test_bad_poses_are_rejected_counted_and_never_reach_the_mesh(start_node, ros
         rejected_zero_quaternion=1,
         rejected_stale_stamp=1,
         rejected_unknown_frame=2,
+        rejected_future_stamp=1,
     )
     # best effort: resend the whole sequence (with fresh stamps) until every sample got
     # through once; counters only ever grow, so wait for the exact totals of one pass
@@ -197,7 +262,7 @@ def test_bad_poses_are_rejected_counted_and_never_reach_the_mesh(start_node, ros
     h = last.handles[0]
     for k, v in expected.items():
         assert getattr(h, k) == v, f"{k}: {getattr(h, k)} != {v}"
-    assert last.rejected_inputs == 6
+    assert last.rejected_inputs == 7
     assert h.external and h.last_stamp.sec == 16
     q = h.target.orientation
     assert abs(math.sqrt(q.x**2 + q.y**2 + q.z**2 + q.w**2) - 1.0) < 1e-12

@@ -1,0 +1,157 @@
+//! Service replies held until the client can receive them.
+//!
+//! A client on the Cyclone DDS service mapping (rclpy on rmw_cyclonedds) creates its
+//! request writer and its reply reader together and may send a request as soon as its
+//! writer has matched our request reader. Our reply writer delivers only to readers it
+//! has already matched, and with volatile durability a reader matched later never
+//! receives earlier samples: a reply written before the node has discovered the
+//! client's reply reader is lost and the client waits forever. rmw_cyclonedds holds
+//! such a reply until the client's reader is matched; so do we.
+//!
+//! ros2-client does not expose the reply writer's matched readers, so the test is the
+//! participant's discovery database. The request id carries the client writer's GUID,
+//! whose first 8 bytes (host and application id of the GUID prefix) the client's reply
+//! reader shares. A client creates its request writer and reply reader as a pair, so
+//! the reply waits until that participant has at least as many reply readers on the
+//! reply topic as request writers on the request topic (a client that just replaced
+//! its endpoints is then not mistaken for its predecessor). A reader that has just
+//! entered the database may not be matched to the writer yet (RustDDS's event loop
+//! does that a moment later), so a reader counts once it has been known for
+//! [`SETTLE`]; after [`GIVE_UP`] the reply is sent anyway and counted.
+
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+use ros2_client::dds::rustdds::DomainParticipant;
+use ros2_client::{Message, RmwRequestId, Server};
+
+/// How long a client's reply reader must have been known before a reply is sent to it.
+pub const SETTLE: Duration = Duration::from_millis(5);
+/// How long a reply waits for the client's reader before it is sent regardless.
+pub const GIVE_UP: Duration = Duration::from_secs(5);
+
+/// The endpoints of remote participants that service clients use.
+#[derive(Default)]
+pub struct ClientReaders {
+    /// Reader GUID -> (DDS topic, host and app id, first seen).
+    readers: HashMap<[u8; 16], (String, [u8; 8], Instant)>,
+    /// (DDS topic, host and app id) -> number of writers.
+    writers: HashMap<(String, [u8; 8]), usize>,
+}
+
+impl ClientReaders {
+    /// Re-read the discovery database; endpoints that left are forgotten.
+    pub fn refresh(&mut self, participant: &DomainParticipant, now: Instant) {
+        let mut readers = HashMap::with_capacity(self.readers.len());
+        for r in participant.discovered_readers() {
+            let guid = r.reader_proxy.remote_reader_guid;
+            let key = guid.to_bytes();
+            let since = self.readers.get(&key).map_or(now, |e| e.2);
+            let topic = r.subscription_topic_data.topic_name().clone();
+            readers.insert(key, (topic, host_app(guid.prefix.as_ref()), since));
+        }
+        self.readers = readers;
+        self.writers.clear();
+        for w in participant.discovered_writers() {
+            let guid = w.writer_proxy.remote_writer_guid;
+            let topic = w.publication_topic_data.topic_name.clone();
+            *self
+                .writers
+                .entry((topic, host_app(guid.prefix.as_ref())))
+                .or_default() += 1;
+        }
+    }
+
+    /// Whether the client that sent `id` on `request_topic` has a reply reader on
+    /// `reply_topic` known for at least [`SETTLE`] (see the module doc).
+    pub fn settled(
+        &self,
+        request_topic: &str,
+        reply_topic: &str,
+        id: &RmwRequestId,
+        now: Instant,
+    ) -> bool {
+        let client = host_app(&id.writer_gid.to_bytes16());
+        let readers = self
+            .readers
+            .values()
+            .filter(|(topic, host, since)| {
+                topic == reply_topic && *host == client && now.duration_since(*since) >= SETTLE
+            })
+            .count();
+        let writers = self
+            .writers
+            .get(&(request_topic.to_owned(), client))
+            .copied()
+            .unwrap_or(0);
+        readers >= writers.max(1)
+    }
+}
+
+fn host_app(guid_bytes: &[u8]) -> [u8; 8] {
+    let mut out = [0; 8];
+    out.copy_from_slice(&guid_bytes[..8]);
+    out
+}
+
+/// The replies of one server that wait for their client's reader.
+pub struct HeldReplies<Resp> {
+    /// DDS names of the request and reply topics (`rq/.../<service>Request`,
+    /// `rr/.../<service>Reply`).
+    request_topic: String,
+    reply_topic: String,
+    waiting: Vec<(RmwRequestId, Resp, Instant)>,
+}
+
+/// What one [`HeldReplies::flush`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Flushed {
+    pub sent: u64,
+    /// Sent after [`GIVE_UP`] without the client's reader in sight.
+    pub sent_unseen: u64,
+    pub failed: u64,
+}
+
+impl<Resp: Message + 'static> HeldReplies<Resp> {
+    pub fn new(request_topic: String, reply_topic: String) -> Self {
+        HeldReplies {
+            request_topic,
+            reply_topic,
+            waiting: Vec::new(),
+        }
+    }
+
+    pub fn hold(&mut self, id: RmwRequestId, response: Resp) {
+        self.waiting.push((id, response, Instant::now()));
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.waiting.is_empty()
+    }
+
+    /// Send every reply whose client can receive it (in request order per client).
+    pub fn flush<Req: Message + 'static>(
+        &mut self,
+        server: &Server<Req, Resp>,
+        readers: &ClientReaders,
+        now: Instant,
+    ) -> Flushed {
+        let mut done = Flushed::default();
+        let mut keep = Vec::new();
+        for (id, response, received) in self.waiting.drain(..) {
+            let ready = readers.settled(&self.request_topic, &self.reply_topic, &id, now);
+            let expired = now.duration_since(received) >= GIVE_UP;
+            if !(ready || expired) {
+                keep.push((id, response, received));
+                continue;
+            }
+            match server.send_response(id, response) {
+                Ok(()) if ready => done.sent += 1,
+                Ok(()) => done.sent_unseen += 1,
+                Err(_) => done.failed += 1,
+            }
+        }
+        self.waiting = keep;
+        done
+    }
+}
