@@ -281,11 +281,24 @@ pub fn crumple_flat_region(
     // interior singular vertex is that apex (the d-cone absorbs the conflict); only when
     // no region can be built that way, a new singular point is created inside the cone
     // (sec. 5.2, fig. 6d)
-    for attract in [true, false] {
-        match crumple_inner(ctx, layer, gmesh, labels, strain, attract, rng) {
-            Some(events) if !events.is_empty() => return events,
-            _ => *layer = saved.clone(),
+    let mut attracted = false;
+    if let Some(events) = crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng)
+    {
+        if !events.is_empty() {
+            return events;
         }
+    }
+    *layer = saved.clone();
+    if attracted {
+        let mut again = false;
+        if let Some(events) =
+            crumple_inner(ctx, layer, gmesh, labels, strain, false, &mut again, rng)
+        {
+            if !events.is_empty() {
+                return events;
+            }
+        }
+        *layer = saved;
     }
     Vec::new()
 }
@@ -297,6 +310,7 @@ fn crumple_inner(
     labels: &[usize],
     strain: &TriangleStrain,
     attract: bool,
+    attracted: &mut bool,
     rng: &mut impl Rng,
 ) -> Option<Vec<CrumpleEvent>> {
     let params = ctx.params;
@@ -380,6 +394,11 @@ fn crumple_inner(
                 Some(id)
             }
             Border::CurvedRuling { region, ruling } => {
+                let cone_apex = layer
+                    .regions
+                    .iter()
+                    .find(|r| r.id == region)
+                    .and_then(|r| r.singular_apex());
                 let Some((id, new)) = insert_in_curved(
                     ctx,
                     layer,
@@ -394,6 +413,7 @@ fn crumple_inner(
                 ) else {
                     return None;
                 };
+                *attracted |= attract && !new && Some(id) == cone_apex;
                 if new {
                     events.push(CrumpleEvent::NewSingular {
                         id,
