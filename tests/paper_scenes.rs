@@ -60,6 +60,21 @@ fn cylinder_then_bend_is_nearly_isometric_and_creases_only_in_the_second_bend() 
     let mut ids: Vec<u64> = p.singular_points().iter().map(|s| s.id).collect();
     ids.dedup();
     assert_eq!(ids.len(), p.singular_points().len(), "ids are unique");
+    // a conflict next to an existing d-cone reuses its apex: no two singular points
+    // closer than one boundary sample (1/rho_bound, rho_bound = 1.2 /cm)
+    let spacing = 1.0 / p.params.boundary_density;
+    let pts = p.singular_points();
+    for (i, a) in pts.iter().enumerate() {
+        for b in &pts[i + 1..] {
+            let d = (a.material - b.material).norm();
+            assert!(
+                d >= spacing,
+                "singular points {} and {} are {d} m apart",
+                a.id,
+                b.id
+            );
+        }
+    }
 }
 
 #[test]
