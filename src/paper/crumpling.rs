@@ -282,7 +282,8 @@ pub fn crumple_flat_region(
     // no region can be built that way, a new singular point is created inside the cone
     // (sec. 5.2, fig. 6d)
     let mut attracted = false;
-    if let Some(events) = crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng)
+    if let Some(events) =
+        crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng)
     {
         if !events.is_empty() {
             return events;
