@@ -60,6 +60,21 @@ fn cylinder_then_bend_is_nearly_isometric_and_creases_only_in_the_second_bend() 
     let mut ids: Vec<u64> = p.singular_points().iter().map(|s| s.id).collect();
     ids.dedup();
     assert_eq!(ids.len(), p.singular_points().len(), "ids are unique");
+    // a conflict next to an existing d-cone reuses its apex: no two singular points
+    // closer than one boundary sample (1/rho_bound, rho_bound = 1.2 /cm)
+    let spacing = 1.0 / p.params.boundary_density;
+    let pts = p.singular_points();
+    for (i, a) in pts.iter().enumerate() {
+        for b in &pts[i + 1..] {
+            let d = (a.material - b.material).norm();
+            assert!(
+                d >= spacing,
+                "singular points {} and {} are {d} m apart",
+                a.id,
+                b.id
+            );
+        }
+    }
 }
 
 #[test]
@@ -122,8 +137,9 @@ fn singular_vertices_survive_unloading() {
 
 #[test]
 fn fewer_singular_points_as_epsilon_c_grows() {
-    // fig. 21: a stiffer paper (larger epsilon_c) gets fewer singular points; averaged
-    // over seeds since the placement of each one is random
+    // fig. 21: the fig. 1 scenario with epsilon_c = 1 %, 0.5 %, 0.2 %: a stiffer paper
+    // (larger epsilon_c) gets fewer singular points; averaged over seeds since the
+    // placement of each one is random (sec. 5.2)
     let mean = |eps: &str| {
         let seeds = ["seed=0", "seed=1", "seed=2", "seed=3"];
         let n: usize = seeds
@@ -136,12 +152,16 @@ fn fewer_singular_points_as_epsilon_c_grows() {
             .sum();
         n as f64 / seeds.len() as f64
     };
-    let thin = mean("0.001");
-    let stiff = mean("0.01");
-    assert!(
-        thin > stiff,
-        "mean singular points: eps_c 0.1 %: {thin}, 1 %: {stiff}"
-    );
+    let counts: Vec<(&str, f64)> = ["0.01", "0.005", "0.002"]
+        .into_iter()
+        .map(|eps| (eps, mean(eps)))
+        .collect();
+    for w in counts.windows(2) {
+        assert!(
+            w[1].1 > w[0].1,
+            "mean singular points by epsilon_c (strictly more as it shrinks): {counts:?}"
+        );
+    }
 }
 
 #[test]
@@ -150,6 +170,9 @@ fn heavy_crumpling_makes_more_than_twenty_singular_points() {
     assert!(stats.finite);
     let n = stats.singular_vertices.unwrap();
     assert!(n > 20, "singular vertices {n} (fig. 22: more than twenty)");
+    // and the sheet stays near-isometric, like the fig. 1 scene (table IV: 0.89 %)
+    let c = stats.compression_mean_pct.unwrap();
+    assert!(c <= 0.5, "compression_mean_pct {c}");
 }
 
 #[test]

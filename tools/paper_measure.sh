@@ -4,6 +4,7 @@
 # 1. paper_cylinder_then_bend: frame times and compression (stats JSON, printed whole)
 # 2. paper_first_singularity over seeds 0-19: first singular point (material u, v; time)
 # 3. paper_cylinder_then_bend: singular vertices vs epsilon_c (1 %, 0.5 %, 0.2 %), seeds 0-3
+# 4. paper_crumple, seeds 0-2: compression, isometry error, singular vertices
 set -euo pipefail
 BIN=${1:-./target/release/developable_sim}
 OUT=$(mktemp -d)
@@ -36,4 +37,9 @@ for eps in 0.01 0.005 0.002; do
         n=$((n + $(num "$OUT/e.json" singular_vertices)))
     done
     echo "epsilon_c $eps: mean $(python3 -c "print($n / 4)") singular vertices"
+done
+echo "== paper_crumple, seeds 0-2 (the scene's seed is 0)"
+for s in 0 1 2; do
+    "$BIN" run config/scenes/paper_crumple.yaml --set seed=$s --stats "$OUT/k.json" >/dev/null
+    python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); print("seed", sys.argv[2], {k: d.get(k) for k in ["compression_mean_pct","compressed_edges_pct","isometry_error_max","singular_vertices","finite"]})' "$OUT/k.json" $s
 done

@@ -277,13 +277,31 @@ pub fn crumple_flat_region(
     rng: &mut impl Rng,
 ) -> Vec<CrumpleEvent> {
     let saved = layer.clone();
-    match crumple_inner(ctx, layer, gmesh, labels, strain, rng) {
-        Some(events) if !events.is_empty() => events,
-        _ => {
-            *layer = saved;
-            Vec::new()
+    // appendix B, fig. 24(b, c): a border on a ruling of a cone whose apex is an
+    // interior singular vertex is that apex (the d-cone absorbs the conflict); only when
+    // no region can be built that way, a new singular point is created inside the cone
+    // (sec. 5.2, fig. 6d)
+    let mut attracted = false;
+    if let Some(events) =
+        crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng)
+    {
+        if !events.is_empty() {
+            return events;
         }
     }
+    *layer = saved.clone();
+    if attracted {
+        let mut again = false;
+        if let Some(events) =
+            crumple_inner(ctx, layer, gmesh, labels, strain, false, &mut again, rng)
+        {
+            if !events.is_empty() {
+                return events;
+            }
+        }
+        *layer = saved;
+    }
+    Vec::new()
 }
 
 fn crumple_inner(
@@ -292,6 +310,8 @@ fn crumple_inner(
     gmesh: &GeometricMesh,
     labels: &[usize],
     strain: &TriangleStrain,
+    attract: bool,
+    attracted: &mut bool,
     rng: &mut impl Rng,
 ) -> Option<Vec<CrumpleEvent>> {
     let params = ctx.params;
@@ -362,17 +382,24 @@ fn crumple_inner(
             Border::Boundary => None,
             Border::Singular { id } => Some(id),
             Border::FlatFold { a, b } => {
-                let Some(id) = split_fold(ctx, layer, &current, &band, a, b, rng) else {
+                let Some((id, new)) = split_fold(ctx, layer, &current, &band, a, b, rng) else {
                     return None;
                 };
-                events.push(CrumpleEvent::NewSingular {
-                    id,
-                    material: layer.singular_material(id)?,
-                    on_fold: true,
-                });
+                if new {
+                    events.push(CrumpleEvent::NewSingular {
+                        id,
+                        material: layer.singular_material(id)?,
+                        on_fold: true,
+                    });
+                }
                 Some(id)
             }
             Border::CurvedRuling { region, ruling } => {
+                let cone_apex = layer
+                    .regions
+                    .iter()
+                    .find(|r| r.id == region)
+                    .and_then(|r| r.singular_apex());
                 let Some((id, new)) = insert_in_curved(
                     ctx,
                     layer,
@@ -382,10 +409,12 @@ fn crumple_inner(
                     ruling,
                     &f_refs[side],
                     &dir,
+                    attract,
                     rng,
                 ) else {
                     return None;
                 };
+                *attracted |= attract && !new && Some(id) == cone_apex;
                 if new {
                     events.push(CrumpleEvent::NewSingular {
                         id,
@@ -611,6 +640,21 @@ pub(crate) fn segment_is_free(
     true
 }
 
+/// The existing singular vertex nearest to `s` (pattern, m) closer than the S_G
+/// resolution 1/rho_bound, if any. Fibers already broken there: a conflict this close
+/// to a d-cone is absorbed by its apex instead of breaking the sheet again (sec. 5.2
+/// places a new point within sigma of e_sing; two apices closer than one boundary
+/// sample cannot be told apart by the coarse S_G).
+fn nearby_singular(layer: &GeometricLayer, params: &PaperParams, s: &Point2) -> Option<u64> {
+    layer
+        .singular
+        .iter()
+        .map(|x| ((x.material - s).norm(), x.id))
+        .filter(|(d, _)| *d < params.boundary_spacing())
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, id)| id)
+}
+
 /// Fig. 6(c), sec. 5.2: a singular vertex on the fold (a, b) between two flat regions,
 /// at a uniformly random position where the band meets it. The fold becomes a
 /// degenerate curved region of one ruling: two plastic creases.
@@ -622,7 +666,7 @@ fn split_fold(
     a: Endpoint,
     b: Endpoint,
     rng: &mut impl Rng,
-) -> Option<u64> {
+) -> Option<(u64, bool)> {
     let p = layer.endpoint_material(ctx.pattern, &a);
     let q = layer.endpoint_material(ctx.pattern, &b);
     let len = (q - p).norm();
@@ -639,6 +683,13 @@ fn split_fold(
     };
     let u = rng.random_range(u0..=u1);
     let s = p + (q - p) * u;
+    if let Some(old) = nearby_singular(layer, ctx.params, &s) {
+        // an end of the fold that is already singular is the border; a singular vertex
+        // off the fold cannot be one
+        return [a, b]
+            .contains(&Endpoint::Singular(old))
+            .then_some((old, false));
+    }
     if ctx.pattern.signed_inside_distance(&s) < gap
         || gmesh.vertices.iter().any(|v| (v.material - s).norm() < gap)
     {
@@ -663,7 +714,7 @@ fn split_fold(
         b,
         kind,
     });
-    Some(id)
+    Some((id, true))
 }
 
 /// Fig. 6(d), sec. 5.2 and fig. 11: the imaginary rulings meet ruling `ruling` of
@@ -671,7 +722,9 @@ fn split_fold(
 /// dihedral angle above theta_0; place the singular vertex s around e_sing by
 /// chi(s) = exp(-d^2 / sigma^2); remove the rulings between e_lim and e_sup (the next
 /// ruling sharper than theta_0) and replace them by cones of apex s, leaving the flat
-/// transition triangle (s, e_sup). Returns s and whether it is new.
+/// transition triangle (s, e_sup). When `attract` and C is already a cone of interior
+/// apex a, a is the border instead (appendix B, fig. 24b, c). Returns s and whether it
+/// is new.
 #[allow(clippy::too_many_arguments)]
 fn insert_in_curved(
     ctx: &CrumpleContext,
@@ -682,20 +735,15 @@ fn insert_in_curved(
     ruling: usize,
     f_ref: &Point2,
     dprop: &Vector2<f64>,
+    attract: bool,
     rng: &mut impl Rng,
 ) -> Option<(u64, bool)> {
     let ri = layer.regions.iter().position(|r| r.id == region_id)?;
     let apex = layer.regions[ri].singular_apex();
-    // sec. 5.2 / appendix A, fig. 6(d): a ruling of C in conflict with the new rulings
-    // gets a new singular point inside C, also when C is already a cone (a d-cone
-    // meets the new bend further out: crumpling makes singular points progressively,
-    // fig. 22). Only when no new point fits there, the apex of a cone C attracts the
-    // new rulings (appendix B, fig. 24b, c).
-    if let Some(found) = insert_new_singular(ctx, layer, gmesh, band, ri, ruling, f_ref, dprop, rng)
-    {
-        return Some(found);
+    if let Some(a) = apex.filter(|_| attract) {
+        return Some((a, false));
     }
-    apex.map(|a| (a, false))
+    insert_new_singular(ctx, layer, gmesh, band, ri, ruling, f_ref, dprop, rng)
 }
 
 /// [`insert_in_curved`]'s new singular point inside region `ri` near the ruling in
@@ -794,6 +842,9 @@ fn insert_new_singular(
         break;
     }
     let s = s?;
+    if let Some(old) = nearby_singular(layer, params, &s) {
+        return Some((old, false));
+    }
     // which rulings separate s from F
     let side = |k: usize, p: &Point2| orient(&mat(rv[k][0]), &mat(rv[k][1]), p).signum();
     let mut removed = Vec::new();
