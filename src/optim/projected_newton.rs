@@ -21,6 +21,13 @@ pub trait BoxProblem {
         gradient: Option<&mut [f64]>,
         hessian: Option<&mut DMatrix<f64>>,
     ) -> f64;
+    /// The Hessian model at `x`, called only right after `evaluate(x, Some(g), None)`
+    /// at that same `x`: a problem that keeps what that evaluation computed can
+    /// assemble the Hessian without a second pass. The solver asks for it only when it
+    /// takes another step, so the last iterate never pays for one.
+    fn hessian(&mut self, x: &[f64], hessian: &mut DMatrix<f64>) {
+        self.evaluate(x, None, Some(hessian));
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -31,6 +38,10 @@ pub struct NewtonOptions {
     /// Stop when (f_k - f_{k+1}) / max(|f_k|, |f_{k+1}|, 1) is at most this after a full
     /// step (the L-BFGS-B `factr` test, so both solvers share one criterion).
     pub ftol: f64,
+    /// When set, the projected-gradient tolerance is this factor times the projected
+    /// gradient at the (clamped) start instead of `pgtol`; the start value is returned
+    /// in [`NewtonResult::initial_projected_gradient_inf`].
+    pub pgtol_relative_to_start: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,6 +50,8 @@ pub struct NewtonResult {
     pub iterations: u32,
     pub evaluations: u32,
     pub projected_gradient_inf: f64,
+    /// Projected gradient (infinity norm) at the clamped start.
+    pub initial_projected_gradient_inf: f64,
     pub converged: bool,
 }
 
@@ -46,6 +59,8 @@ pub struct NewtonResult {
 #[derive(Default)]
 pub struct ProjectedNewton {
     g: Vec<f64>,
+    /// Gradient at the first (full-step) trial point of the line search.
+    g_trial: Vec<f64>,
     h: DMatrix<f64>,
     free: Vec<usize>,
     reduced: Vec<f64>,
@@ -92,24 +107,34 @@ impl ProjectedNewton {
     ) -> NewtonResult {
         let n = problem.dimension();
         self.g.resize(n, 0.0);
+        self.g_trial.resize(n, 0.0);
         self.trial.resize(n, 0.0);
         for i in 0..n {
             x[i] = x[i].clamp(lower[i], upper[i]);
         }
         let mut evaluations = 1;
-        let mut f = problem.evaluate(x, Some(&mut self.g), Some(&mut self.h));
+        let mut f = problem.evaluate(x, Some(&mut self.g), None);
         let mut pg = projected_gradient_inf(x, &self.g, lower, upper);
+        let initial_pg = pg;
+        let pgtol = match options.pgtol_relative_to_start {
+            Some(factor) => factor * pg.max(1e-300),
+            None => options.pgtol,
+        };
         if !f.is_finite() || !pg.is_finite() {
             return NewtonResult {
                 f,
                 iterations: 0,
                 evaluations,
                 projected_gradient_inf: pg,
+                initial_projected_gradient_inf: initial_pg,
                 converged: false,
             };
         }
         let mut iterations = 0;
-        let mut converged = pg <= options.pgtol;
+        let mut converged = pg <= pgtol;
+        // Whether self.h holds the Hessian at x (assembled on demand: see
+        // BoxProblem::hessian).
+        let mut hessian_ready = false;
         // Start from a tenth of the damping the last solve's first iteration needed:
         // consecutive time steps have similar curvature, and every rejected
         // factorization costs as much as an accepted one.
@@ -131,6 +156,12 @@ impl ProjectedNewton {
             if m == 0 {
                 converged = true;
                 break;
+            }
+            if !hessian_ready {
+                // x was the last point evaluated with a gradient (the start or the
+                // accepted trial)
+                problem.hessian(x, &mut self.h);
+                hessian_ready = true;
             }
             // Newton step on the Hessian; where it is indefinite, the PSD fallback
             // model; then more damping.
@@ -158,17 +189,23 @@ impl ProjectedNewton {
                 converged = true;
                 break;
             }
-            // projected Armijo line search along the Newton direction
+            // Projected Armijo line search along the Newton direction. The full step is
+            // evaluated with its gradient: it is accepted almost always, and then that
+            // evaluation is the next iterate's.
             let mut alpha = 1.0;
             let mut accepted = false;
             let mut f_new = f;
-            for _ in 0..40 {
+            for trial in 0..40 {
                 self.trial.copy_from_slice(x);
                 for (k, &i) in self.free.iter().enumerate() {
                     self.trial[i] = (x[i] + alpha * self.reduced[k]).clamp(lower[i], upper[i]);
                 }
                 evaluations += 1;
-                f_new = problem.evaluate(&self.trial, None, None);
+                f_new = if trial == 0 {
+                    problem.evaluate(&self.trial, Some(&mut self.g_trial), None)
+                } else {
+                    problem.evaluate(&self.trial, None, None)
+                };
                 let decrease: f64 = self
                     .free
                     .iter()
@@ -181,8 +218,9 @@ impl ProjectedNewton {
                 alpha *= 0.5;
             }
             if !accepted {
-                // No decrease along the model direction: more damping next time; stop if
-                // the model is already heavily damped (we are at the noise floor).
+                // No decrease along the model direction: more damping next time (the
+                // Hessian at x is kept); stop if the model is already heavily damped
+                // (we are at the noise floor).
                 if self.damping > 1e2 {
                     break;
                 }
@@ -197,11 +235,17 @@ impl ProjectedNewton {
             }
             x.copy_from_slice(&self.trial);
             let f_old = f;
-            evaluations += 1;
-            f = problem.evaluate(x, Some(&mut self.g), Some(&mut self.h));
-            let _ = f_new;
+            if alpha == 1.0 {
+                // the full-step trial was evaluated with its gradient
+                f = f_new;
+                std::mem::swap(&mut self.g, &mut self.g_trial);
+            } else {
+                evaluations += 1;
+                f = problem.evaluate(x, Some(&mut self.g), None);
+            }
+            hessian_ready = false;
             pg = projected_gradient_inf(x, &self.g, lower, upper);
-            if pg <= options.pgtol {
+            if pg <= pgtol {
                 converged = true;
             } else if alpha == 1.0
                 && (f_old - f) <= options.ftol * f_old.abs().max(f.abs()).max(1.0)
@@ -214,6 +258,7 @@ impl ProjectedNewton {
             iterations,
             evaluations,
             projected_gradient_inf: pg,
+            initial_projected_gradient_inf: initial_pg,
             converged,
         }
     }
@@ -328,6 +373,7 @@ mod tests {
             max_iterations: 100,
             pgtol: 1e-10,
             ftol: 0.0,
+            pgtol_relative_to_start: None,
         };
         let r = ProjectedNewton::new().minimize(&mut Rosen, &mut x, &[-10.0; 2], &[10.0; 2], &opts);
         assert!(r.converged, "{r:?}");
@@ -345,6 +391,7 @@ mod tests {
             max_iterations: 200,
             pgtol: 1e-10,
             ftol: 0.0,
+            pgtol_relative_to_start: None,
         };
         let r = ProjectedNewton::new().minimize(
             &mut Rosen,

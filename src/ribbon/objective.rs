@@ -312,6 +312,14 @@ pub struct Workspace {
     scratch_columns: Vec<[f64; 6]>,
     scratch_psuf: Vec<(Matrix3, Vector3, Vector3)>,
     hessian_suffix: Vec<SMatrix<f64, 6, 6>>,
+    /// Kinetic-term slopes of the resampling along u (bottom, top rim).
+    slope_bottom: Vec<Vector3>,
+    slope_top: Vec<Vector3>,
+    /// Cross-block scratch (loop closure): P_e1 columns and B P_e2 columns.
+    scratch_left: Vec<Vec8>,
+    scratch_right: Vec<(usize, Vec8)>,
+    /// Whether the last evaluation kept what `assemble_newton_hessian` needs.
+    second_order_recorded: bool,
     pub parts: ObjectiveParts,
 }
 
@@ -498,9 +506,27 @@ impl<'a> Objective<'a> {
         gradient: Option<(&mut [f64], GradientMode)>,
         hessian: Option<&mut DMatrix<f64>>,
     ) -> f64 {
+        let value = self.evaluate_recording(q, ws, gradient, hessian.is_some());
+        if let Some(h) = hessian {
+            self.assemble_newton_hessian(ws, h);
+        }
+        value
+    }
+
+    /// The objective at q and, if asked, its gradient; with `second_order`, also the
+    /// per-element second-order data, so that [`Self::assemble_newton_hessian`] can
+    /// build the Hessian at q afterwards without another pass (a Newton solver only
+    /// needs it once it knows it has not converged).
+    pub fn evaluate_recording(
+        &self,
+        q: &[f64],
+        ws: &mut Workspace,
+        gradient: Option<(&mut [f64], GradientMode)>,
+        second_order: bool,
+    ) -> f64 {
         let n = self.strip.segments;
         self.prepare(q, ws);
-        let want_hessian = hessian.is_some();
+        let want_hessian = second_order;
         let record_points = matches!(gradient, Some((_, GradientMode::ChainRule)));
         ws.element_gradient.clear();
         ws.element_gradient.resize(n, Vec8::zeros());
@@ -515,18 +541,9 @@ impl<'a> Objective<'a> {
             ws.element_second.resize(n, SecondOrder::default());
         }
         ws.parts = ObjectiveParts::default();
-        let nq = self.layout.len();
         let mut grad_out = gradient;
         if let Some((g, _)) = grad_out.as_mut() {
             g.iter_mut().for_each(|x| *x = 0.0);
-        }
-        let mut h_out = hessian;
-        if let Some(h) = h_out.as_deref_mut() {
-            if h.nrows() != nq || h.ncols() != nq {
-                *h = DMatrix::zeros(nq, nq);
-            } else {
-                h.fill(0.0);
-            }
         }
 
         let mut acc = Accumulator {
@@ -556,7 +573,11 @@ impl<'a> Objective<'a> {
         match t.kinetic {
             KineticModel::Full => {
                 ws.parts.kinetic =
-                    self.kinetic_full(&mut acc, &mut ws.residual_bottom, &mut ws.residual_top);
+                    self.kinetic_full(
+                        &mut acc,
+                        [&mut ws.residual_bottom, &mut ws.residual_top],
+                        [&mut ws.slope_bottom, &mut ws.slope_top],
+                    );
             }
             KineticModel::Lumped => {
                 ws.parts.kinetic = self.kinetic_lumped(&mut acc);
@@ -621,21 +642,6 @@ impl<'a> Objective<'a> {
                 &mut grad_out,
             );
             direct(ip, 2.0 * bend_k * s * psi, &mut grad_out);
-            if let Some(hm) = h_out.as_deref_mut() {
-                // Exact Hessian of k (1+c^2) psi^2, clamped to PSD (it is indefinite
-                // for c^2 > 1/3), plus 2 beta on c.
-                let block = nalgebra::Matrix2::new(
-                    2.0 * bend_k * psi * psi,
-                    4.0 * bend_k * c * psi,
-                    4.0 * bend_k * c * psi,
-                    2.0 * bend_k * s,
-                );
-                let clamped = psd_2x2(&block);
-                hm[(ic, ic)] += clamped[(0, 0)] + 2.0 * t.crease_regularizer;
-                // (each unordered pair once: the matrix is symmetrized at the end)
-                hm[(ic, ip)] += clamped[(0, 1)];
-                hm[(ip, ip)] += clamped[(1, 1)];
-            }
         }
         // |c_{n-1}| <= Δc_max, the inequality left after the substitution (sec. 5.1),
         // in the paper's form mu/2 min(C + λ/μ, 0)^2 (constant terms dropped).
@@ -651,9 +657,6 @@ impl<'a> Objective<'a> {
                     ws.parts.constraint += 0.5 * t.penalty * shifted * shifted;
                     let ic = self.layout.c(n - 1);
                     direct(ic, t.penalty * shifted * sign, &mut grad_out);
-                    if let Some(hm) = h_out.as_deref_mut() {
-                        hm[(ic, ic)] += t.penalty;
-                    }
                 }
             }
         }
@@ -661,7 +664,7 @@ impl<'a> Objective<'a> {
         let value = ws.parts.total();
 
         // --- assemble the geometric part ---
-        let need_twists = grad_out.is_some() || h_out.is_some();
+        let need_twists = grad_out.is_some() || second_order;
         if need_twists {
             self.compute_twists(q, ws);
         }
@@ -671,18 +674,70 @@ impl<'a> Objective<'a> {
                 GradientMode::ChainRule => self.gradient_chain_rule(q, ws, g),
             }
         }
-        if let Some(hm) = h_out {
-            self.assemble_hessian(ws, hm);
-        }
+        ws.second_order_recorded = second_order;
         value
+    }
+
+    /// The Hessian (N x N, N = layout.len()) at the q of the last
+    /// [`Self::evaluate_recording`] with `second_order`, whose data `ws` still holds.
+    pub fn assemble_newton_hessian(&self, ws: &mut Workspace, hm: &mut DMatrix<f64>) {
+        assert!(
+            ws.second_order_recorded,
+            "assemble_newton_hessian needs an evaluation that recorded second-order data"
+        );
+        let n = self.strip.segments;
+        let nq = self.layout.len();
+        if hm.nrows() != nq || hm.ncols() != nq {
+            *hm = DMatrix::zeros(nq, nq);
+        } else {
+            hm.fill(0.0);
+        }
+        let t = self.terms;
+        let nf = n as f64;
+        let bend_k = t.bending_stiffness * nf * self.strip.width / self.strip.length;
+        for k in 1..n {
+            let c = ws.coords.crease_direction[k];
+            let psi = ws.coords.bending_angle[k];
+            let s = 1.0 + c * c;
+            let (ic, ip) = (self.layout.c(k), self.layout.psi(k));
+            // Exact Hessian of k (1+c^2) psi^2, clamped to PSD (it is indefinite for
+            // c^2 > 1/3), plus 2 beta on c.
+            let block = nalgebra::Matrix2::new(
+                2.0 * bend_k * psi * psi,
+                4.0 * bend_k * c * psi,
+                4.0 * bend_k * c * psi,
+                2.0 * bend_k * s,
+            );
+            let clamped = psd_2x2(&block);
+            hm[(ic, ic)] += clamped[(0, 0)] + 2.0 * t.crease_regularizer;
+            // (each unordered pair once: the matrix is symmetrized at the end)
+            hm[(ic, ip)] += clamped[(0, 1)];
+            hm[(ip, ip)] += clamped[(1, 1)];
+        }
+        // the end-crease inequality term, where active (see `evaluate_recording`)
+        if n >= 2 {
+            let c_last = ws.coords.crease_direction[n - 1];
+            for (sign, lambda) in [
+                (-1.0, t.end_crease_multipliers[0]),
+                (1.0, t.end_crease_multipliers[1]),
+            ] {
+                let cval = t.crease_bound + sign * c_last;
+                let shifted = (cval + lambda / t.penalty).min(0.0);
+                if shifted < 0.0 {
+                    let ic = self.layout.c(n - 1);
+                    hm[(ic, ic)] += t.penalty;
+                }
+            }
+        }
+        self.assemble_hessian(ws, hm);
     }
 
     /// Full kinetic term with resampling: rho/2 |(X - R(X̄, X^n))/h - R(X̄, V^n)|_M^2.
     fn kinetic_full(
         &self,
         acc: &mut Accumulator,
-        res_b: &mut Vec<Vector3>,
-        res_t: &mut Vec<Vector3>,
+        [res_b, res_t]: [&mut Vec<Vector3>; 2],
+        [slope_b, slope_t]: [&mut Vec<Vector3>; 2],
     ) -> f64 {
         let n = self.strip.segments;
         let t = self.terms;
@@ -693,8 +748,6 @@ impl<'a> Objective<'a> {
         res_b.resize(n + 1, Vector3::zeros());
         res_t.resize(n + 1, Vector3::zeros());
         // slopes of R along u for the local (sliding) derivative
-        let mut slope_b = [Vector3::zeros(); 0].to_vec();
-        let mut slope_t = [Vector3::zeros(); 0].to_vec();
         slope_b.resize(n + 1, Vector3::zeros());
         slope_t.resize(n + 1, Vector3::zeros());
         for j in 0..=n {
@@ -1177,6 +1230,8 @@ impl<'a> Objective<'a> {
             scratch_psuf,
             scratch_twists,
             scratch_columns,
+            scratch_left,
+            scratch_right,
             ..
         } = ws;
         // first element moved by each coordinate, and the twists as 6-vectors
@@ -1321,7 +1376,12 @@ impl<'a> Objective<'a> {
                 hs[cm + cn * nq] += element_hessian[m][(6, 7)];
             }
         }
-        // cross blocks B between elements e1, e2 (loop closure): H += P_e1^T B P_e2 + T
+        // cross blocks B between elements e1, e2 (loop closure): H += M + M^T with
+        // M_ab = P_e1(a)^T B P_e2(b). Column b of P_e2 is zero unless b moves element e2
+        // (for e2 = 0 only the base and c_1), so only those columns are visited: O(N)
+        // per block instead of O(N^2). M_ab goes to (a, b) and the symmetrizing pass
+        // below adds M_ba from (b, a); the diagonal, which that pass keeps as is, takes
+        // both halves here.
         for (e1, e2, block) in cross_blocks.iter() {
             let p = |e: usize, a: usize| -> Vec8 {
                 let mut v = Vec8::zeros();
@@ -1338,18 +1398,21 @@ impl<'a> Objective<'a> {
                 }
                 v
             };
-            let right: Vec<Vec8> = (0..nq).map(|b| block * p(*e2, b)).collect();
-            let left: Vec<Vec8> = (0..nq).map(|a| p(*e1, a)).collect();
-            for b in 0..nq {
-                for a in 0..nq {
-                    // B term and its transpose, stored once per unordered pair
-                    let v = left[a].dot(&right[b]) + left[b].dot(&right[a]);
-                    if a < b {
-                        hs[a + b * nq] += v;
-                    } else if a == b {
-                        hs[a + b * nq] += v;
-                    }
+            scratch_right.clear();
+            scratch_right.extend(
+                (0..nq)
+                    .map(|b| (b, p(*e2, b)))
+                    .filter(|(_, v)| v.iter().any(|x| *x != 0.0))
+                    .map(|(b, v)| (b, block * v)),
+            );
+            scratch_left.clear();
+            scratch_left.extend((0..nq).map(|a| p(*e1, a)));
+            for (b, right_b) in scratch_right.iter() {
+                let col = &mut hs[b * nq..(b + 1) * nq];
+                for (h_ab, left_a) in col.iter_mut().zip(scratch_left.iter()) {
+                    *h_ab += left_a.dot(right_b);
                 }
+                col[*b] += scratch_left[*b].dot(right_b);
             }
         }
         // every unordered pair was written once at (a, b) or (b, a): H = A + A^T - diag

@@ -51,6 +51,9 @@ pub struct StepSolver {
     lower: Vec<f64>,
     upper: Vec<f64>,
     q_prev: Vec<f64>,
+    /// Buffers of the z-problem (q and its gradient), kept across rounds and steps.
+    q_scratch: Vec<f64>,
+    gq_scratch: Vec<f64>,
 }
 
 impl Clone for StepSolver {
@@ -92,6 +95,8 @@ struct ZProblem<'o, 'w> {
     q: Vec<f64>,
     gq: Vec<f64>,
     mode: GradientMode,
+    /// Record second-order data with every gradient (for `BoxProblem::hessian`).
+    second_order: bool,
 }
 
 impl ZProblem<'_, '_> {
@@ -119,17 +124,21 @@ impl BoxProblem for ZProblem<'_, '_> {
         let lay = self.objective.layout;
         z_to_q(&lay, z, &mut self.q);
         let want_g = gradient.is_some();
+        let second_order = hessian.is_some() || (want_g && self.second_order);
         let f = if want_g {
-            self.objective.evaluate(
+            self.objective.evaluate_recording(
                 &self.q,
                 self.workspace,
                 Some((&mut self.gq, self.mode)),
-                hessian,
+                second_order,
             )
         } else {
             self.objective
-                .evaluate(&self.q, self.workspace, None, hessian)
+                .evaluate_recording(&self.q, self.workspace, None, second_order)
         };
+        if let Some(h) = hessian {
+            self.objective.assemble_newton_hessian(self.workspace, h);
+        }
         if let Some(g) = gradient {
             self.gradient_to_z(g);
         }
@@ -175,6 +184,14 @@ impl BoxProblem for ZNewton<'_, '_, '_> {
             None => self.0.evaluate(z, gradient, None),
         }
     }
+    fn hessian(&mut self, _z: &[f64], h: &mut DMatrix<f64>) {
+        // the workspace holds the second-order data of the evaluation at z
+        let problem = &mut *self.0;
+        problem
+            .objective
+            .assemble_newton_hessian(problem.workspace, h);
+        hessian_to_z(&problem.objective.layout, h);
+    }
 }
 
 impl StepSolver {
@@ -218,28 +235,30 @@ impl StepSolver {
             for i in 0..nq {
                 self.z[i] = self.z[i].clamp(self.lower[i], self.upper[i]);
             }
+            self.q_scratch.resize(nq, 0.0);
+            self.gq_scratch.resize(nq, 0.0);
             let mut problem = ZProblem {
                 objective: &objective,
                 workspace: &mut self.workspace,
-                q: vec![0.0; nq],
-                gq: vec![0.0; nq],
+                q: std::mem::take(&mut self.q_scratch),
+                gq: std::mem::take(&mut self.gq_scratch),
                 mode: GradientMode::Adjoint,
+                second_order: false,
             };
-            // relative gradient tolerance against the first round's start
-            let scale = *pg0.get_or_insert_with(|| {
-                let mut g = vec![0.0; nq];
-                problem.evaluate(&self.z, Some(&mut g), None);
-                crate::optim::projected_gradient_inf(&self.z, &g, &self.lower, &self.upper)
-                    .max(1e-300)
-            });
-            let pgtol = settings.tolerance * scale;
             let (iterations, converged, f) = match settings.kind {
                 SolverKind::GaussNewton => {
+                    // relative gradient tolerance against the first round's start (the
+                    // solver measures it at its first evaluation)
                     let opts = NewtonOptions {
                         max_iterations: settings.max_iterations,
-                        pgtol,
+                        pgtol: settings.tolerance * pg0.unwrap_or(0.0),
                         ftol: FTOL,
+                        pgtol_relative_to_start: match pg0 {
+                            Some(_) => None,
+                            None => Some(settings.tolerance),
+                        },
                     };
+                    problem.second_order = true;
                     let r = self.newton.minimize(
                         &mut ZNewton(&mut problem),
                         &mut self.z,
@@ -247,9 +266,23 @@ impl StepSolver {
                         &self.upper,
                         &opts,
                     );
+                    pg0.get_or_insert(r.initial_projected_gradient_inf.max(1e-300));
                     (r.iterations, r.converged, r.f)
                 }
                 SolverKind::Lbfgsb => {
+                    // relative gradient tolerance against the first round's start
+                    let scale = *pg0.get_or_insert_with(|| {
+                        let mut g = vec![0.0; nq];
+                        problem.evaluate(&self.z, Some(&mut g), None);
+                        crate::optim::projected_gradient_inf(
+                            &self.z,
+                            &g,
+                            &self.lower,
+                            &self.upper,
+                        )
+                        .max(1e-300)
+                    });
+                    let pgtol = settings.tolerance * scale;
                     let options = LbfgsbOptions {
                         max_iterations: settings.max_iterations as usize,
                         pgtol,
@@ -267,6 +300,9 @@ impl StepSolver {
                     (r.iterations as u32, r.converged(), r.f)
                 }
             };
+            self.q_scratch = std::mem::take(&mut problem.q);
+            self.gq_scratch = std::mem::take(&mut problem.gq);
+            drop(problem);
             outcome.iterations += iterations;
             outcome.outer_iterations = outer + 1;
             outcome.converged &= converged;
