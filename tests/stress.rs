@@ -157,6 +157,7 @@ fn the_node_status_counts_unconverged_steps() {
     let policy = InputPolicy {
         frame_id: s.frame_id.clone(),
         accept_empty_frame_id: false,
+        max_stamp_lead: developable_sim::ros::input::DEFAULT_MAX_STAMP_LEAD,
     };
     let topics = s.handle_topics.clone();
     let mut session = Session::new(s, policy, topics);
