@@ -133,9 +133,15 @@ fn dts(interval: f64, divisors: &[u32]) -> Vec<f64> {
 /// model, up to 4 of L-BFGS-B, up to 3 of the conforming FEM (~100x a ribbon step),
 /// all at least 4x the reference's dt, resolution and tolerance sweeps of the fast
 /// solver at its middle dt, and a reference at 1/`reference_divisor` of the sample
-/// interval (default 64 for ribbons, 72 for paper; it must be even) and twice the
-/// resolution.
-pub fn plan(defaults: SceneDefaults, quick: bool, reference_divisor: Option<u32>) -> ScenePlan {
+/// interval (default 64 for ribbons, 72 for paper; it must be even) and
+/// `reference_refinement` (default 2) times the resolution.
+pub fn plan(
+    defaults: SceneDefaults,
+    quick: bool,
+    reference_divisor: Option<u32>,
+    reference_refinement: Option<f64>,
+) -> ScenePlan {
+    let refine = reference_refinement.unwrap_or(2.0);
     let samples = if quick { 5 } else { 10 };
     let interval = defaults.duration / samples as f64;
     let sample_times = (1..=samples).map(|k| interval * k as f64).collect();
@@ -169,7 +175,7 @@ pub fn plan(defaults: SceneDefaults, quick: bool, reference_divisor: Option<u32>
                     upto(&[1, 2, 4, 8, 16], 4),
                     upto(&[2, 4, 8], 3),
                     reference_div,
-                    2.0 * d.resolution,
+                    (refine * d.resolution).round(),
                 )
             };
             for dt in dts(interval, &main) {
@@ -245,7 +251,7 @@ pub fn plan(defaults: SceneDefaults, quick: bool, reference_divisor: Option<u32>
                 (
                     vec![3, 6, 9, 18],
                     reference_divisor.unwrap_or(72),
-                    2.0 * d.resolution,
+                    refine * d.resolution,
                 )
             };
             for dt in dts(interval, &main) {
@@ -324,6 +330,7 @@ mod tests {
                     },
                     quick,
                     None,
+                    None,
                 );
                 for run in p.runs.iter().chain([&p.reference, &p.reference_check]) {
                     for t in &p.sample_times {
@@ -351,7 +358,7 @@ mod full_plan_tests {
             resolution: 50.0,
             tolerance: 1e-6,
         };
-        let p = plan(d, false, Some(32));
+        let p = plan(d, false, Some(32), None);
         assert!(p.runs.iter().all(|r| r.dt >= 4.0 * p.reference.dt - 1e-15));
         let count = |m: Method, s: Sweep| {
             p.runs
@@ -368,7 +375,9 @@ mod full_plan_tests {
         let finest = p.runs.iter().map(|r| r.dt).fold(f64::MAX, f64::min);
         assert!(p.reference.dt < finest && p.reference_check.dt < finest);
         // with a fine reference: 5 time steps of our solver, 4 of L-BFGS-B
-        let fine = plan(d, false, Some(128));
+        let fine = plan(d, false, Some(128), Some(1.0));
+        assert_eq!(fine.reference.resolution, d.resolution);
+        assert_eq!(p.reference.resolution, 2.0 * d.resolution);
         let n = |m: Method| {
             fine.runs
                 .iter()
