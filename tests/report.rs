@@ -1,6 +1,6 @@
 //! `developable_sim report --quick` on one tiny scene, in process: the CSV's rows and
 //! columns, finite positive errors, the fast solver's error falling with dt, the FEM
-//! baseline's row, valid PNG plots and the summary.
+//! baseline's row, CPU run times of one-thread runs, valid PNG plots and the summary.
 
 use std::path::PathBuf;
 
@@ -57,10 +57,31 @@ fn quick_report_on_a_tiny_cantilever() {
     for r in &rows {
         assert_eq!(r.len(), columns.len(), "{r:?}");
     }
-    // reference + 3 gauss_newton + lbfgsb + lumped + conforming_fem
-    assert_eq!(rows.len(), 7, "{csv}");
+    // reference + its 2 dt check + 3 gauss_newton + lbfgsb + lumped + conforming_fem
+    assert_eq!(rows.len(), 8, "{csv}");
     assert_eq!(rows[0][col("sweep")], "reference");
-    for r in &rows[1..] {
+    assert_eq!(rows[1][col("sweep")], "reference_2dt");
+    for r in &rows {
+        // run time is the process CPU time; every run is on one thread, so it cannot
+        // exceed the wall time (5 % + 5 ms: the two clocks are read one after another)
+        let wall: f64 = r[col("wall_s")].parse().unwrap();
+        let cpu: f64 = r[col("cpu_s")].parse().unwrap();
+        assert!(
+            cpu > 0.0 && cpu <= 1.05 * wall + 5e-3,
+            "cpu {cpu} s, wall {wall} s: {r:?}"
+        );
+        let per_sim: f64 = r[col("cpu_per_simulated_s")].parse().unwrap();
+        assert!(
+            (per_sim - cpu / 0.2).abs() <= 1e-5 * (1.0 + per_sim),
+            "{r:?}"
+        );
+    }
+    // the reference's own error (its run at 2 dt against it) is below the error of
+    // every swept run: they are all coarser
+    let ref_err: f64 = rows[1][col("error_rms_m")]
+        .parse()
+        .expect("reference_2dt error");
+    for r in &rows[2..] {
         let e: f64 = r[col("error_rms_m")].parse().expect("error_rms_m");
         let end: f64 = r[col("error_end_m")].parse().expect("error_end_m");
         assert!(e.is_finite() && e > 0.0, "{r:?}");
@@ -68,6 +89,9 @@ fn quick_report_on_a_tiny_cantilever() {
         let wall: f64 = r[col("wall_s")].parse().unwrap();
         assert!(wall > 0.0, "{r:?}");
         assert_eq!(r[col("finite")], "true", "{r:?}");
+        if r[col("method")] != "conforming_fem" {
+            assert!(e > ref_err, "reference error {ref_err} not below {r:?}");
+        }
     }
     // implicit Euler converges: halving dt must lower the error against the reference
     let mut fast: Vec<(f64, f64)> = rows
@@ -106,4 +130,10 @@ fn quick_report_on_a_tiny_cantilever() {
     let summary = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(summary.contains("## tiny_cantilever"), "{summary}");
     assert!(summary.contains("Order in time"), "{summary}");
+    assert!(
+        summary.contains("Run time = CPU time of the process during the run"),
+        "{summary}"
+    );
+    assert!(summary.contains("every run used one thread"), "{summary}");
+    assert!(summary.contains("The reference's own error"), "{summary}");
 }

@@ -1,5 +1,5 @@
-//! Executes one planned run (an edge: it loads scene files and measures wall time) and
-//! keeps its surface at the sample times.
+//! Executes one planned run (an edge: it loads scene files and measures wall and CPU
+//! time) and keeps its surface at the sample times.
 
 use std::path::Path;
 use std::time::Instant;
@@ -23,8 +23,14 @@ pub struct RunOutput {
     pub steps: usize,
     /// Wall time of the whole run, s.
     pub wall_s: f64,
+    /// CPU time of the process (every thread) during the run, s: the run time the
+    /// report compares, since it does not count the time other processes take from a
+    /// shared machine. Equals `wall_s` on an idle machine with one thread.
+    pub cpu_s: f64,
     /// Median wall time of a step, ms.
     pub step_ms_median: f64,
+    /// Median process CPU time of a step, ms.
+    pub step_cpu_ms_median: f64,
     /// Median solver iterations per step (ribbon: inner iterations summed over
     /// augmented-Lagrangian rounds; FEM and paper: Newton iterations).
     pub iterations_median: f64,
@@ -69,6 +75,38 @@ pub fn scene_defaults(file: &Path, duration: Option<f64>) -> anyhow::Result<Scen
     })
 }
 
+/// Overrides that keep a ribbon's initial shape when the run changes its resolution:
+/// a `helix` start gives every crease the same bending angle psi (rad), so n creases
+/// bend by n psi in all; a run with `n` elements instead of the scene's `n0` gets psi
+/// n0 / n, the same curve (same curvature psi n / l, same ruling angle), not a helix
+/// with n / n0 times as many turns.
+pub fn same_shape_overrides(
+    file: &Path,
+    kind: SceneKind,
+    spec: &RunSpec,
+) -> anyhow::Result<Vec<String>> {
+    if kind != SceneKind::Ribbon || spec.method == Method::ConformingFem {
+        return Ok(Vec::new());
+    }
+    let scene = scene::load(file, &[])?;
+    let Some(ribbon) = &scene.source.ribbon else {
+        return Ok(Vec::new());
+    };
+    let shape = &ribbon.initial_shape;
+    let n0 = ribbon.segments as f64;
+    let n = spec.resolution.round();
+    Ok(
+        if shape.kind.as_deref() == Some("helix") && n != n0 && n > 0.0 {
+            vec![format!(
+                "ribbon.initial_shape.bending_angle={}",
+                shape.bending_angle * n0 / n
+            )]
+        } else {
+            Vec::new()
+        },
+    )
+}
+
 /// Keeps the surface at the sample times (the step landing on a sample time, or the
 /// nearest one: dt values are chosen to divide the sample interval).
 struct Sampler<'a> {
@@ -76,9 +114,76 @@ struct Sampler<'a> {
     next: usize,
     samples: Vec<SurfaceMesh>,
     iterations: Vec<f64>,
+    /// Process CPU time at the start of the run and after the last step, s.
+    cpu_start: f64,
+    cpu_last: f64,
+    /// Wall clock at the start of the run and its reading after the last step.
+    wall_start: Instant,
+    wall_last: Instant,
+    /// CPU time of each step (from the previous step's end), ms.
+    step_cpu_ms: Vec<f64>,
+}
+
+/// CPU time consumed by this process so far (all threads), s.
+pub fn process_cpu_s() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes one timespec through a valid pointer to a local;
+    // CLOCK_PROCESS_CPUTIME_ID is supported on every Linux and macOS.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    if rc != 0 {
+        return f64::NAN;
+    }
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+}
+
+impl<'a> Sampler<'a> {
+    fn new(times: &'a [f64]) -> Self {
+        let cpu = process_cpu_s();
+        let now = Instant::now();
+        Sampler {
+            times,
+            next: 0,
+            samples: Vec::new(),
+            iterations: Vec::new(),
+            cpu_start: cpu,
+            cpu_last: cpu,
+            wall_start: now,
+            wall_last: now,
+            step_cpu_ms: Vec::new(),
+        }
+    }
+
+    /// Start the clocks (the run's first step follows).
+    fn start(&mut self) {
+        self.cpu_start = process_cpu_s();
+        self.cpu_last = self.cpu_start;
+        self.wall_start = Instant::now();
+        self.wall_last = self.wall_start;
+    }
+
+    /// Read the clocks after a step.
+    fn step_done(&mut self) {
+        let cpu = process_cpu_s();
+        self.step_cpu_ms.push((cpu - self.cpu_last) * 1e3);
+        self.cpu_last = cpu;
+        self.wall_last = Instant::now();
+    }
+
+    /// (wall s, CPU s) from the start to the last step's end.
+    fn elapsed(&self) -> (f64, f64) {
+        (
+            (self.wall_last - self.wall_start).as_secs_f64(),
+            self.cpu_last - self.cpu_start,
+        )
+    }
 }
 
 impl Sampler<'_> {
+    /// Keep `mesh` for every sample time reached (before the step's clocks are read:
+    /// the copy is part of the run's cost either way, and small).
     fn offer(&mut self, time: f64, dt: f64, mesh: &SurfaceMesh) {
         while self.next < self.times.len() && time >= self.times[self.next] - 0.5 * dt {
             self.samples.push(mesh.clone());
@@ -91,6 +196,7 @@ impl StepObserver for Sampler<'_> {
     fn after_step(&mut self, scene: &Scene, report: &StepReport, _: f64) -> anyhow::Result<()> {
         let dt = scene.world.dt();
         self.offer(report.time, dt, scene.world.mesh(0));
+        self.step_done();
         Ok(())
     }
 }
@@ -103,23 +209,24 @@ pub fn execute(
     spec: &RunSpec,
     times: &[f64],
 ) -> anyhow::Result<RunOutput> {
-    let mut scene = scene::load(file, &overrides(kind, duration, spec))?;
-    let mut sampler = Sampler {
-        times,
-        next: 0,
-        samples: Vec::new(),
-        iterations: Vec::new(),
-    };
+    let mut set = overrides(kind, duration, spec);
+    set.extend(same_shape_overrides(file, kind, spec)?);
+    let mut scene = scene::load(file, &set)?;
+    let mut sampler = Sampler::new(times);
     if spec.method == Method::ConformingFem {
         return execute_fem(&scene, spec, duration, sampler);
     }
+    sampler.start();
     let stats = runner::run(&mut scene, &mut sampler, &|| false)?;
+    let (wall_s, cpu_s) = sampler.elapsed();
     Ok(RunOutput {
         spec: spec.clone(),
         samples: sampler.samples,
         steps: stats.steps,
-        wall_s: stats.wall_s,
+        wall_s,
+        cpu_s,
         step_ms_median: stats.step_ms.median,
+        step_cpu_ms_median: percentiles(&sampler.step_cpu_ms).median,
         iterations_median: stats.solver.iterations_median,
         unconverged_steps: stats.solver.unconverged_steps,
         isometry_error_max: stats.isometry_error_max,
@@ -147,7 +254,7 @@ fn execute_fem(
     let steps = (duration / fem.dt()).round().max(1.0) as usize;
     let mut step_ms = Vec::with_capacity(steps);
     let (mut isometry, mut constraint, mut unconverged) = (0.0_f64, 0.0_f64, 0);
-    let wall = Instant::now();
+    sampler.start();
     for _ in 0..steps {
         let start = Instant::now();
         let r = fem.step();
@@ -157,13 +264,16 @@ fn execute_fem(
         constraint = constraint.max(r.constraint_violation);
         unconverged += usize::from(!r.converged);
         sampler.offer(fem.time(), fem.dt(), fem.mesh());
+        sampler.step_done();
     }
-    let wall_s = wall.elapsed().as_secs_f64();
+    let (wall_s, cpu_s) = sampler.elapsed();
     Ok(RunOutput {
         spec: spec.clone(),
         steps,
         wall_s,
+        cpu_s,
         step_ms_median: percentiles(&step_ms).median,
+        step_cpu_ms_median: percentiles(&sampler.step_cpu_ms).median,
         iterations_median: percentiles(&sampler.iterations).median,
         unconverged_steps: unconverged,
         isometry_error_max: isometry,

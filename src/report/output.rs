@@ -26,12 +26,20 @@ pub struct SceneReport {
     pub name: String,
     pub plan: ScenePlan,
     pub reference: Row,
+    /// The reference at twice its time step, compared with the reference: its error
+    /// estimates the reference's own time error.
+    pub reference_check: Row,
+    /// Why the report compares over a shorter duration than the scene's, if it does.
+    pub duration_note: Option<String>,
     pub rows: Vec<Row>,
     /// Material points compared at each sample time.
     pub points_total: usize,
     /// The order in time of the fast method from successive halvings of dt (distance
     /// of each run to the next finer one), free of the reference's spatial error.
     pub self_convergence_order: Option<f64>,
+    /// (dt, RMS distance over time to the run at the next finer dt) along the fast
+    /// method's dt sweep, coarse to fine.
+    pub successive_differences: Vec<(f64, f64)>,
 }
 
 impl SceneReport {
@@ -60,6 +68,12 @@ impl SceneReport {
         log_log_slope(&self.dt_sweep(self.fast_method()))
     }
 
+    /// The reference's estimated time error: RMS over time of its distance to the same
+    /// run at twice its dt (for a first-order method e(2h) - e(h) ~ e(h)), m.
+    pub fn reference_error_estimate(&self) -> Option<f64> {
+        self.reference_check.error.map(|e| e.rms_over_time)
+    }
+
     fn methods(&self) -> Vec<Method> {
         let mut m: Vec<Method> = self.rows.iter().map(|r| r.run.spec.method).collect();
         m.sort();
@@ -68,13 +82,16 @@ impl SceneReport {
     }
 }
 
-pub const CSV_HEADER: &str = "scene,method,sweep,dt_s,resolution,tolerance,steps,error_rms_m,error_end_m,points_compared,isometry_error_max,constraint_violation_max_m,wall_s,wall_per_simulated_s,step_ms_median,iterations_median,unconverged_steps,finite";
+pub const CSV_HEADER: &str = "scene,method,sweep,dt_s,resolution,tolerance,steps,error_rms_m,error_end_m,points_compared,isometry_error_max,constraint_violation_max_m,wall_s,wall_per_simulated_s,cpu_s,cpu_per_simulated_s,step_ms_median,step_cpu_ms_median,iterations_median,unconverged_steps,finite";
 
 pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
     let mut out = String::from(CSV_HEADER);
     out.push('\n');
     for s in scenes {
-        for row in std::iter::once(&s.reference).chain(&s.rows) {
+        for row in [&s.reference, &s.reference_check]
+            .into_iter()
+            .chain(&s.rows)
+        {
             let r = &row.run;
             let (e_rms, e_end, used) = match row.error {
                 Some(e) => (
@@ -86,7 +103,7 @@ pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
             };
             writeln!(
                 out,
-                "{},{},{},{},{},{:e},{},{},{},{},{:.6e},{:.6e},{:.6},{:.6},{:.6},{},{},{}",
+                "{},{},{},{},{},{:e},{},{},{},{},{:.6e},{:.6e},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{},{}",
                 s.name,
                 r.spec.method.name(),
                 r.spec.sweep.name(),
@@ -101,7 +118,10 @@ pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
                 r.constraint_violation_max,
                 r.wall_s,
                 r.wall_s / s.plan.defaults.duration,
+                r.cpu_s,
+                r.cpu_s / s.plan.defaults.duration,
                 r.step_ms_median,
+                r.step_cpu_ms_median,
                 r.iterations_median,
                 r.unconverged_steps,
                 r.finite
@@ -133,15 +153,16 @@ fn register_font() {
     });
 }
 
-/// Log-log error (RMS over time) against run time, one line per method (its dt
-/// sweep), the other sweeps as hollow markers.
+/// Log-log error (RMS over time) against run time (process CPU time), one line per
+/// method (its dt sweep), the other sweeps as hollow markers; a dashed line at the
+/// reference's estimated own error.
 pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
     register_font();
     let (w, h) = (900u32, 600u32);
     let pts: Vec<(f64, f64)> = s
         .rows
         .iter()
-        .filter_map(|r| r.error.map(|e| (r.run.wall_s, e.rms_over_time)))
+        .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms_over_time)))
         .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
         .collect();
     anyhow::ensure!(!pts.is_empty(), "{}: no run to plot", s.name);
@@ -151,6 +172,12 @@ pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
         x1 = x1.max(*x);
         y0 = y0.min(*y);
         y1 = y1.max(*y);
+    }
+    let reference_error = s
+        .reference_error_estimate()
+        .filter(|e| *e > 0.0 && e.is_finite());
+    if let Some(e) = reference_error {
+        y0 = y0.min(e);
     }
     let (x0, x1, y0, y1) = (x0 / 1.5, x1 * 1.5, y0 / 1.5, y1 * 1.5);
     let mut buf = vec![255u8; (w * h * 3) as usize];
@@ -166,7 +193,7 @@ pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
             .map_err(|e| anyhow::anyhow!("{e:?}"))?;
         chart
             .configure_mesh()
-            .x_desc("run time (wall), s")
+            .x_desc("run time (process CPU time), s")
             .y_desc("RMS error over time, m")
             .x_label_formatter(&|v| format!("{v:.2e}"))
             .y_label_formatter(&|v| format!("{v:.0e}"))
@@ -178,7 +205,7 @@ pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
                 .rows
                 .iter()
                 .filter(|r| r.run.spec.method == method && r.run.spec.sweep == Sweep::TimeStep)
-                .filter_map(|r| r.error.map(|e| (r.run.wall_s, e.rms_over_time)))
+                .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms_over_time)))
                 .filter(|(x, y)| *x > 0.0 && *y > 0.0)
                 .collect();
             line.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -196,12 +223,27 @@ pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
                 .rows
                 .iter()
                 .filter(|r| r.run.spec.method == method && r.run.spec.sweep != Sweep::TimeStep)
-                .filter_map(|r| r.error.map(|e| (r.run.wall_s, e.rms_over_time)))
+                .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms_over_time)))
                 .filter(|(x, y)| *x > 0.0 && *y > 0.0)
                 .collect();
             chart
                 .draw_series(others.iter().map(|p| Circle::new(*p, 6, c.stroke_width(2))))
                 .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        }
+        if let Some(e) = reference_error {
+            let grey = RGBColor(120, 120, 120);
+            // dashed: segments over every other twentieth of the log x range
+            let (lx0, lx1) = (x0.ln(), x1.ln());
+            let dashes = (0..20).step_by(2).map(move |k| {
+                let a = (lx0 + (lx1 - lx0) * k as f64 / 20.0).exp();
+                let b = (lx0 + (lx1 - lx0) * (k + 1) as f64 / 20.0).exp();
+                PathElement::new(vec![(a, e), (b, e)], grey.stroke_width(1))
+            });
+            chart
+                .draw_series(dashes)
+                .map_err(|e| anyhow::anyhow!("{e:?}"))?
+                .label("reference's own error (vs its 2 dt run)")
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
         }
         chart
             .configure_series_labels()
@@ -227,6 +269,36 @@ fn sci(v: f64) -> String {
     format!("{v:.2e}")
 }
 
+/// Runs whose process CPU time exceeds their wall time by more than 5 % (+ 5 ms of
+/// clock granularity): they used more than one thread.
+pub fn multithreaded_runs(s: &SceneReport) -> Vec<&Row> {
+    [&s.reference, &s.reference_check]
+        .into_iter()
+        .chain(&s.rows)
+        .filter(|r| r.run.cpu_s > 1.05 * r.run.wall_s + 5e-3)
+        .collect()
+}
+
+/// Local orders along a (dt, error) sequence, coarse to fine: ln(e_i / e_i+1) /
+/// ln(dt_i / dt_i+1) for each pair.
+pub fn local_orders(sweep: &[(f64, f64)]) -> Vec<f64> {
+    sweep
+        .windows(2)
+        .filter(|w| w[0].1 > 0.0 && w[1].1 > 0.0 && w[0].0 != w[1].0)
+        .map(|w| (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln())
+        .collect()
+}
+
+fn list(v: &[f64]) -> String {
+    if v.is_empty() {
+        return "n/a".into();
+    }
+    v.iter()
+        .map(|p| format!("{p:.2}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 /// `summary.md`: per scene the reference, a table of the runs, the order in time, the
 /// Pareto front and the error each method reaches within the fast method's run time.
 pub fn write_summary(
@@ -235,21 +307,45 @@ pub fn write_summary(
     quick: bool,
     command: &str,
     wall_s: f64,
+    cpu_s: f64,
 ) -> anyhow::Result<()> {
     let mut md = String::new();
     writeln!(md, "# Error against run time\n")?;
     writeln!(
         md,
-        "Generated by `{command}` ({} report, {:.0} s wall). Errors are RMS distances (m) \
-         between a run's surface and the reference's at matched material points (the ribbon \
-         remeshes in material space, so surfaces are resampled, never compared by vertex \
-         index), at fixed sample times; `error_rms` is sqrt(mean over sample times of the \
-         squared distance), `error_end` the distance at the last sample time. Run time is \
-         wall time on this machine, one thread per run. Every run and its columns are in \
-         `report.csv`; the plots are `<scene>.png` (lines: each method's dt sweep; hollow \
-         markers: its resolution and tolerance sweeps).\n",
+        "Generated by `{command}` ({} report, {:.0} s wall, {:.0} s CPU). Errors are RMS \
+         distances (m) between a run's surface and the reference's at matched material \
+         points (the ribbon remeshes in material space, so surfaces are resampled, never \
+         compared by vertex index), at fixed sample times; `error_rms` is sqrt(mean over \
+         sample times of the squared distance), `error_end` the distance at the last \
+         sample time. Every run and its columns are in `report.csv`; the plots are \
+         `<scene>.png` (lines: each method's dt sweep; hollow markers: its resolution \
+         and tolerance sweeps; dashed: the reference's own estimated error).\n",
         if quick { "quick" } else { "full" },
-        wall_s
+        wall_s,
+        cpu_s
+    )?;
+    let threaded: usize = scenes.iter().map(|s| multithreaded_runs(s).len()).sum();
+    writeln!(
+        md,
+        "**Run time = CPU time of the process during the run**; it equals wall time on \
+         an idle machine with one thread. The runs execute one after another, each on \
+         one thread (a one-thread rayon pool, faer's parallelism set to sequential), \
+         and the process CPU time counts every thread, so parallel work could not hide \
+         in it: {}. The machine is shared (2 cores, other builds and benchmarks), so \
+         wall times are inflated by an unknown factor and are listed only for \
+         reference; the plots, the Pareto front and the equal-run-time comparison use \
+         CPU time.\n",
+        if threaded == 0 {
+            "no run's CPU time exceeded its wall time (by more than 5 %), i.e. every run \
+             used one thread"
+                .to_string()
+        } else {
+            format!(
+                "{threaded} run(s) used more CPU than wall time (more than one thread), \
+                 marked `(>1 thread)` below"
+            )
+        }
     )?;
     writeln!(
         md,
@@ -259,18 +355,26 @@ pub fn write_summary(
          mesh n x 10, Green-strain stretching with stiffness 1e8 N, discrete-shell \
          bending with the ribbon's alpha, handles eliminated as hard constraints; see \
          src/baseline/conforming_fem.rs), `paper_newton` (Schreck et al.'s simulator). \
-         Resolution: ribbon elements along (FEM: quads along, 10 across); paper: \
-         boundary sample density, samples/m.\n"
+         Resolution: ribbon elements along (FEM: quads along, 10 across; a helix start \
+         keeps its shape: psi per crease scaled by n0/n); paper: boundary sample \
+         density, samples/m.\n"
     )?;
     for s in scenes {
         let d = &s.plan.defaults;
         let r = &s.reference.run.spec;
         writeln!(md, "## {}\n", s.name)?;
+        if let Some(why) = &s.duration_note {
+            writeln!(
+                md,
+                "Compared over {} s, shorter than the scene: {why}.\n",
+                d.duration
+            )?;
+        }
         writeln!(
             md,
             "Simulated {} s, compared at {} times ({}) on {} material points. Reference: \
-             `{}`, dt = {} s (the swept dt divided by up to {}), resolution {} (default \
-             {}), tolerance {:e}; its run took {:.2} s.\n",
+             `{}`, dt = {} s (the sample interval / {}), resolution {} (default \
+             {}), tolerance {:e}; its run took {:.2} s CPU.\n",
             d.duration,
             s.plan.sample_times.len(),
             s.plan
@@ -286,8 +390,22 @@ pub fn write_summary(
             r.resolution,
             d.resolution,
             r.tolerance,
-            s.reference.run.wall_s
+            s.reference.run.cpu_s
         )?;
+        if let Some(e) = s.reference_error_estimate() {
+            writeln!(
+                md,
+                "**The reference's own error**: the same run at twice its dt \
+                 (`reference_2dt`) is {} m from it (RMS over time; {} at the end). For \
+                 implicit Euler (first order) e(2h) - e(h) ~ e(h), so errors below ~{} \
+                 m are not resolved by this reference.\n",
+                sci(e),
+                s.reference_check
+                    .error
+                    .map_or("-".into(), |e| sci(e.at_end)),
+                sci(e)
+            )?;
+        }
         if d.kind == SceneKind::Paper {
             let used_min = s
                 .rows
@@ -306,21 +424,30 @@ pub fn write_summary(
         }
         writeln!(
             md,
-            "| method | sweep | dt s | resolution | tolerance | error_rms m | error_end m | isometry max | constraint max m | run time s | s per sim. s | step ms (median) | iterations (median) | unconverged |"
+            "| method | sweep | dt s | resolution | tolerance | error_rms m | error_end m | isometry max | constraint max m | CPU s | CPU s per sim. s | wall s | step CPU ms (median) | iterations (median) | unconverged |"
         )?;
         writeln!(
             md,
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
         )?;
-        for row in std::iter::once(&s.reference).chain(&s.rows) {
+        let threaded = multithreaded_runs(s);
+        for row in [&s.reference, &s.reference_check]
+            .into_iter()
+            .chain(&s.rows)
+        {
             let r = &row.run;
             let (e, e_end) = row
                 .error
                 .map(|e| (sci(e.rms_over_time), sci(e.at_end)))
                 .unwrap_or(("-".into(), "-".into()));
+            let mark = if threaded.iter().any(|t| std::ptr::eq(*t, row)) {
+                " (>1 thread)"
+            } else {
+                ""
+            };
             writeln!(
                 md,
-                "| {} | {} | {:.5} | {} | {:e} | {e} | {e_end} | {} | {} | {:.3} | {:.3} | {:.3} | {} | {} |",
+                "| {} | {} | {:.6} | {} | {:e} | {e} | {e_end} | {} | {} | {:.3}{mark} | {:.3} | {:.3} | {:.3} | {} | {} |",
                 r.spec.method.name(),
                 r.spec.sweep.name(),
                 r.spec.dt,
@@ -328,45 +455,61 @@ pub fn write_summary(
                 r.spec.tolerance,
                 sci(r.isometry_error_max),
                 sci(r.constraint_violation_max),
+                r.cpu_s,
+                r.cpu_s / d.duration,
                 r.wall_s,
-                r.wall_s / d.duration,
-                r.step_ms_median,
+                r.step_cpu_ms_median,
                 r.iterations_median,
                 r.unconverged_steps
             )?;
         }
         let fast = s.fast_method();
         writeln!(md)?;
+        let sweep = s.dt_sweep(fast);
         writeln!(
             md,
             "**Order in time** (implicit Euler, `{}`): slope of ln(error) against ln(dt) \
              over its dt sweep {}; from successive halvings (each run against the next \
-             finer one, which cancels the reference's spatial error) {}.\n",
+             finer one, which cancels the reference's own error) {}. Local orders, coarse \
+             to fine: against the reference {}; successive halvings {} (the distances \
+             between successive runs, m: {}).\n",
             fast.name(),
             s.order_against_reference()
                 .map_or("n/a".into(), |p| format!("**{p:.2}**")),
             s.self_convergence_order
-                .map_or("n/a".into(), |p| format!("**{p:.2}**"))
+                .map_or("n/a".into(), |p| format!("**{p:.2}**")),
+            list(&local_orders(&sweep)),
+            list(&local_orders(&s.successive_differences)),
+            if s.successive_differences.is_empty() {
+                "n/a".to_string()
+            } else {
+                s.successive_differences
+                    .iter()
+                    .map(|(_, e)| sci(*e))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            },
         )?;
         let points: Vec<(f64, f64)> = s
             .rows
             .iter()
             .map(|r| {
                 (
-                    r.run.wall_s,
+                    r.run.cpu_s,
                     r.error.map_or(f64::INFINITY, |e| e.rms_over_time),
                 )
             })
             .collect();
         writeln!(
             md,
-            "**Pareto front** (no other run is both faster and more accurate):\n"
+            "**Pareto front** (no other run is both faster, in CPU time, and more \
+             accurate):\n"
         )?;
         for i in pareto_front(&points) {
             let r = &s.rows[i].run;
             writeln!(
                 md,
-                "- `{}` {} dt = {} s, resolution {}, tolerance {:e}: {} m in {:.3} s",
+                "- `{}` {} sweep, dt = {} s, resolution {}, tolerance {:e}: {} m in {:.3} s CPU",
                 r.spec.method.name(),
                 r.spec.sweep.name(),
                 r.spec.dt,
@@ -380,12 +523,12 @@ pub fn write_summary(
         if let Some(budget) = equal_time_budget(s) {
             writeln!(
                 md,
-                "**At equal run time** (budget {budget:.3} s: the run time of the middle \
-                 run of the `{}` dt sweep): the best error each method reaches \
+                "**At equal run time** (budget {budget:.3} s CPU: the CPU time of the \
+                 middle run of the `{}` dt sweep): the best error each method reaches \
                  within it, and what its cheapest run costs.\n",
                 fast.name()
             )?;
-            writeln!(md, "| method | best error within budget, m | ratio to `{}` | cheapest run: s, error m |", fast.name())?;
+            writeln!(md, "| method | best error within budget, m | ratio to `{}` | cheapest run: CPU s, error m |", fast.name())?;
             writeln!(md, "|---|---|---|---|")?;
             let fast_err = best_error(s, fast, budget);
             for m in s.methods() {
@@ -394,7 +537,7 @@ pub fn write_summary(
                     .rows
                     .iter()
                     .filter(|r| r.run.spec.method == m && r.error.is_some())
-                    .min_by(|a, b| a.run.wall_s.total_cmp(&b.run.wall_s));
+                    .min_by(|a, b| a.run.cpu_s.total_cmp(&b.run.cpu_s));
                 writeln!(
                     md,
                     "| `{}` | {} | {} | {} |",
@@ -406,7 +549,7 @@ pub fn write_summary(
                     },
                     cheapest.map_or("-".into(), |r| format!(
                         "{:.3} s, {}",
-                        r.run.wall_s,
+                        r.run.cpu_s,
                         sci(r.error.map_or(f64::NAN, |e| e.rms_over_time))
                     ))
                 )?;
@@ -420,8 +563,8 @@ pub fn write_summary(
     Ok(())
 }
 
-/// The run-time budget of the equal-time comparison: the run time of the middle run of
-/// the fast method's dt sweep.
+/// The run-time budget of the equal-time comparison: the CPU time of the middle run of
+/// the fast method's dt sweep, s.
 pub fn equal_time_budget(s: &SceneReport) -> Option<f64> {
     let mut runs: Vec<&Row> = s
         .rows
@@ -429,16 +572,29 @@ pub fn equal_time_budget(s: &SceneReport) -> Option<f64> {
         .filter(|r| r.run.spec.method == s.fast_method() && r.run.spec.sweep == Sweep::TimeStep)
         .collect();
     runs.sort_by(|a, b| b.run.spec.dt.total_cmp(&a.run.spec.dt));
-    runs.get(runs.len() / 2).map(|r| r.run.wall_s)
+    runs.get(runs.len() / 2).map(|r| r.run.cpu_s)
 }
 
-/// The smallest error `method` reaches with a run of at most `budget` s.
+/// The smallest error `method` reaches with a run of at most `budget` s of CPU time.
 pub fn best_error(s: &SceneReport, method: Method, budget: f64) -> Option<f64> {
     let pts: Vec<(f64, f64)> = s
         .rows
         .iter()
         .filter(|r| r.run.spec.method == method)
-        .filter_map(|r| r.error.map(|e| (r.run.wall_s, e.rms_over_time)))
+        .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms_over_time)))
         .collect();
     best_within(&pts, budget).map(|i| pts[i].1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::local_orders;
+
+    #[test]
+    fn local_orders_of_a_first_order_sequence_are_one() {
+        let seq: Vec<(f64, f64)> = [0.1, 0.05, 0.025].iter().map(|&h| (h, 2.0 * h)).collect();
+        let p = local_orders(&seq);
+        assert_eq!(p.len(), 2);
+        assert!(p.iter().all(|p| (p - 1.0).abs() < 1e-12), "{p:?}");
+    }
 }

@@ -33,6 +33,9 @@ impl Method {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Sweep {
     Reference,
+    /// The reference at twice its time step: its distance to the reference estimates
+    /// the reference's own time error (first order: e(2h) - e(h) ~ e(h)).
+    ReferenceCheck,
     TimeStep,
     Resolution,
     Tolerance,
@@ -42,6 +45,7 @@ impl Sweep {
     pub fn name(self) -> &'static str {
         match self {
             Sweep::Reference => "reference",
+            Sweep::ReferenceCheck => "reference_2dt",
             Sweep::TimeStep => "dt",
             Sweep::Resolution => "resolution",
             Sweep::Tolerance => "tolerance",
@@ -90,7 +94,31 @@ pub struct ScenePlan {
     /// Times at which every run is compared with the reference, s.
     pub sample_times: Vec<f64>,
     pub reference: RunSpec,
+    /// The reference at twice its time step (see [`Sweep::ReferenceCheck`]).
+    pub reference_check: RunSpec,
     pub runs: Vec<RunSpec>,
+}
+
+impl ScenePlan {
+    fn new(
+        defaults: SceneDefaults,
+        sample_times: Vec<f64>,
+        reference: RunSpec,
+        runs: Vec<RunSpec>,
+    ) -> Self {
+        let reference_check = RunSpec {
+            sweep: Sweep::ReferenceCheck,
+            dt: 2.0 * reference.dt,
+            ..reference.clone()
+        };
+        ScenePlan {
+            defaults,
+            sample_times,
+            reference,
+            reference_check,
+            runs,
+        }
+    }
 }
 
 /// The sample interval divided by `k`: time steps that land on every sample time.
@@ -99,10 +127,21 @@ fn dts(interval: f64, divisors: &[u32]) -> Vec<f64> {
 }
 
 /// The plan of one scene. `quick`: 3 time steps of the fast solver, one run of each
-/// other method, a reference that differs only in time step and tolerance (so even a
-/// short run sees the time error alone); full: wider sweeps and a reference at twice
-/// the resolution.
-pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
+/// other method, a reference that differs only in time step (1/32 of the sample
+/// interval) and tolerance (so even a short run sees the time error alone); full: 5
+/// (4 when the reference is coarse) time steps of the fast solver and of the lumped
+/// model, up to 4 of L-BFGS-B, up to 3 of the conforming FEM (~100x a ribbon step),
+/// all at least 4x the reference's dt, resolution and tolerance sweeps of the fast
+/// solver at its middle dt, and a reference at 1/`reference_divisor` of the sample
+/// interval (default 64 for ribbons, 72 for paper; it must be even) and
+/// `reference_refinement` (default 2) times the resolution.
+pub fn plan(
+    defaults: SceneDefaults,
+    quick: bool,
+    reference_divisor: Option<u32>,
+    reference_refinement: Option<f64>,
+) -> ScenePlan {
+    let refine = reference_refinement.unwrap_or(2.0);
     let samples = if quick { 5 } else { 10 };
     let interval = defaults.duration / samples as f64;
     let sample_times = (1..=samples).map(|k| interval * k as f64).collect();
@@ -117,14 +156,26 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
     let mut runs = Vec::new();
     match d.kind {
         SceneKind::Ribbon => {
-            let (main, others, reference_div, ref_resolution) = if quick {
-                (vec![2, 4, 8], vec![4], 16, d.resolution)
+            let (main, lbfgsb, fem, reference_div, ref_resolution) = if quick {
+                (vec![2, 4, 8], vec![4], vec![4], 32, d.resolution)
             } else {
+                // every swept dt at least 4x the reference's (so its 2 dt check run is
+                // still finer than every run): the 5 finest of interval / 1 .. 32
+                let reference_div = reference_divisor.unwrap_or(64);
+                let upto = |ks: &[u32], keep: usize| -> Vec<u32> {
+                    let v: Vec<u32> = ks
+                        .iter()
+                        .copied()
+                        .filter(|k| 4 * k <= reference_div)
+                        .collect();
+                    v[v.len().saturating_sub(keep)..].to_vec()
+                };
                 (
-                    vec![2, 4, 8, 16, 32],
-                    vec![2, 4, 8, 16],
-                    64,
-                    2.0 * d.resolution,
+                    upto(&[1, 2, 4, 8, 16, 32], 5),
+                    upto(&[1, 2, 4, 8, 16], 4),
+                    upto(&[2, 4, 8], 3),
+                    reference_div,
+                    (refine * d.resolution).round(),
                 )
             };
             for dt in dts(interval, &main) {
@@ -136,7 +187,7 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
                     d.tolerance,
                 ));
             }
-            for dt in dts(interval, &others) {
+            for dt in dts(interval, &lbfgsb) {
                 runs.push(spec(
                     Method::Lbfgsb,
                     Sweep::TimeStep,
@@ -145,7 +196,7 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
                     d.tolerance,
                 ));
             }
-            for dt in dts(interval, if quick { &others } else { &main }) {
+            for dt in dts(interval, if quick { &lbfgsb } else { &main }) {
                 runs.push(spec(
                     Method::Lumped,
                     Sweep::TimeStep,
@@ -154,9 +205,7 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
                     d.tolerance,
                 ));
             }
-            // the FEM costs ~100x a ribbon step: three time steps in the full report
-            let fem_dts = if quick { vec![4] } else { vec![2, 4, 8] };
-            for dt in dts(interval, &fem_dts) {
+            for dt in dts(interval, &fem) {
                 runs.push(spec(
                     Method::ConformingFem,
                     Sweep::TimeStep,
@@ -166,7 +215,7 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
                 ));
             }
             if !quick {
-                let dt = interval / 8.0;
+                let dt = interval / main[main.len() / 2] as f64;
                 for r in [0.5 * d.resolution, 2.0 * d.resolution] {
                     runs.push(spec(
                         Method::GaussNewton,
@@ -174,13 +223,6 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
                         dt,
                         r.round(),
                         d.tolerance,
-                    ));
-                    runs.push(spec(
-                        Method::ConformingFem,
-                        Sweep::Resolution,
-                        dt,
-                        r.round(),
-                        1e-6,
                     ));
                 }
                 for tol in [1e-3, 1e-9] {
@@ -193,24 +235,24 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
                     ));
                 }
             }
-            ScenePlan {
-                defaults,
-                sample_times,
-                reference: spec(
-                    Method::GaussNewton,
-                    Sweep::Reference,
-                    interval / reference_div as f64,
-                    ref_resolution,
-                    1e-10,
-                ),
-                runs,
-            }
+            let reference = spec(
+                Method::GaussNewton,
+                Sweep::Reference,
+                interval / reference_div as f64,
+                ref_resolution,
+                1e-10,
+            );
+            ScenePlan::new(defaults, sample_times, reference, runs)
         }
         SceneKind::Paper => {
             let (main, reference_div, ref_resolution) = if quick {
-                (vec![2, 4, 8], 16, d.resolution)
+                (vec![2, 4, 8], 32, d.resolution)
             } else {
-                (vec![3, 6, 9, 18], 36, 2.0 * d.resolution)
+                (
+                    vec![3, 6, 9, 18],
+                    reference_divisor.unwrap_or(72),
+                    refine * d.resolution,
+                )
             };
             for dt in dts(interval, &main) {
                 runs.push(spec(
@@ -226,19 +268,18 @@ pub fn plan(defaults: SceneDefaults, quick: bool) -> ScenePlan {
                 for r in [0.5 * d.resolution, 2.0 * d.resolution] {
                     runs.push(spec(Method::Paper, Sweep::Resolution, dt, r, d.tolerance));
                 }
+                for tol in [1e-4, 1e-8] {
+                    runs.push(spec(Method::Paper, Sweep::Tolerance, dt, d.resolution, tol));
+                }
             }
-            ScenePlan {
-                defaults,
-                sample_times,
-                reference: spec(
-                    Method::Paper,
-                    Sweep::Reference,
-                    interval / reference_div as f64,
-                    ref_resolution,
-                    d.tolerance * 1e-2,
-                ),
-                runs,
-            }
+            let reference = spec(
+                Method::Paper,
+                Sweep::Reference,
+                interval / reference_div as f64,
+                ref_resolution,
+                d.tolerance * 1e-2,
+            );
+            ScenePlan::new(defaults, sample_times, reference, runs)
         }
     }
 }
@@ -288,8 +329,10 @@ mod tests {
                         tolerance: 1e-6,
                     },
                     quick,
+                    None,
+                    None,
                 );
-                for run in p.runs.iter().chain([&p.reference]) {
+                for run in p.runs.iter().chain([&p.reference, &p.reference_check]) {
                     for t in &p.sample_times {
                         let steps = t / run.dt;
                         assert!((steps - steps.round()).abs() < 1e-9, "{run:?} at {t}");
@@ -297,5 +340,52 @@ mod tests {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod full_plan_tests {
+    use super::*;
+
+    /// The full report sweeps what issue 6 asks for on a ribbon: >= 4 time steps of our
+    /// solver, L-BFGS-B, the lumped model, >= 2 time steps of the conforming FEM, a
+    /// resolution and a tolerance sweep; the reference is finer than every run.
+    #[test]
+    fn full_ribbon_plan_sweeps_every_axis() {
+        let d = SceneDefaults {
+            kind: SceneKind::Ribbon,
+            duration: 0.4,
+            resolution: 50.0,
+            tolerance: 1e-6,
+        };
+        let p = plan(d, false, Some(32), None);
+        assert!(p.runs.iter().all(|r| r.dt >= 4.0 * p.reference.dt - 1e-15));
+        let count = |m: Method, s: Sweep| {
+            p.runs
+                .iter()
+                .filter(|r| r.method == m && r.sweep == s)
+                .count()
+        };
+        assert!(count(Method::GaussNewton, Sweep::TimeStep) >= 4);
+        assert!(count(Method::Lbfgsb, Sweep::TimeStep) >= 2);
+        assert!(count(Method::Lumped, Sweep::TimeStep) >= 2);
+        assert!(count(Method::ConformingFem, Sweep::TimeStep) >= 2);
+        assert_eq!(count(Method::GaussNewton, Sweep::Resolution), 2);
+        assert_eq!(count(Method::GaussNewton, Sweep::Tolerance), 2);
+        let finest = p.runs.iter().map(|r| r.dt).fold(f64::MAX, f64::min);
+        assert!(p.reference.dt < finest && p.reference_check.dt < finest);
+        // with a fine reference: 5 time steps of our solver, 4 of L-BFGS-B
+        let fine = plan(d, false, Some(128), Some(1.0));
+        assert_eq!(fine.reference.resolution, d.resolution);
+        assert_eq!(p.reference.resolution, 2.0 * d.resolution);
+        let n = |m: Method| {
+            fine.runs
+                .iter()
+                .filter(|r| r.method == m && r.sweep == Sweep::TimeStep)
+                .count()
+        };
+        assert_eq!((n(Method::GaussNewton), n(Method::Lbfgsb)), (5, 4));
+        assert_eq!(p.reference_check.dt, 2.0 * p.reference.dt);
+        assert!((p.reference.dt - 0.04 / 32.0).abs() < 1e-15);
     }
 }
