@@ -572,12 +572,11 @@ impl<'a> Objective<'a> {
         let t = self.terms;
         match t.kinetic {
             KineticModel::Full => {
-                ws.parts.kinetic =
-                    self.kinetic_full(
-                        &mut acc,
-                        [&mut ws.residual_bottom, &mut ws.residual_top],
-                        [&mut ws.slope_bottom, &mut ws.slope_top],
-                    );
+                ws.parts.kinetic = self.kinetic_full(
+                    &mut acc,
+                    [&mut ws.residual_bottom, &mut ws.residual_top],
+                    [&mut ws.slope_bottom, &mut ws.slope_top],
+                );
             }
             KineticModel::Lumped => {
                 ws.parts.kinetic = self.kinetic_lumped(&mut acc);
@@ -647,12 +646,7 @@ impl<'a> Objective<'a> {
         // in the paper's form mu/2 min(C + λ/μ, 0)^2 (constant terms dropped).
         let c_last = acc.coords.crease_direction[n - 1];
         if n >= 2 {
-            for (sign, lambda) in [
-                (-1.0, t.end_crease_multipliers[0]),
-                (1.0, t.end_crease_multipliers[1]),
-            ] {
-                let cval = t.crease_bound + sign * c_last;
-                let shifted = (cval + lambda / t.penalty).min(0.0);
+            for (sign, shifted) in self.end_crease_shifts(c_last) {
                 if shifted < 0.0 {
                     ws.parts.constraint += 0.5 * t.penalty * shifted * shifted;
                     let ic = self.layout.c(n - 1);
@@ -676,6 +670,21 @@ impl<'a> Objective<'a> {
         }
         ws.second_order_recorded = second_order;
         value
+    }
+
+    /// The end-crease inequalities |c_{n-1}| <= Δc_max as C = Δc_max ∓ c_{n-1} >= 0: per
+    /// side, the sign of c_{n-1} in C and min(C + λ/μ, 0), negative where the augmented-
+    /// Lagrangian term mu/2 min(C + λ/μ, 0)^2 is active.
+    fn end_crease_shifts(&self, c_last: f64) -> [(f64, f64); 2] {
+        let t = self.terms;
+        [
+            (-1.0, t.end_crease_multipliers[0]),
+            (1.0, t.end_crease_multipliers[1]),
+        ]
+        .map(|(sign, lambda)| {
+            let cval = t.crease_bound + sign * c_last;
+            (sign, (cval + lambda / t.penalty).min(0.0))
+        })
     }
 
     /// The Hessian (N x N, N = layout.len()) at the q of the last
@@ -717,12 +726,7 @@ impl<'a> Objective<'a> {
         // the end-crease inequality term, where active (see `evaluate_recording`)
         if n >= 2 {
             let c_last = ws.coords.crease_direction[n - 1];
-            for (sign, lambda) in [
-                (-1.0, t.end_crease_multipliers[0]),
-                (1.0, t.end_crease_multipliers[1]),
-            ] {
-                let cval = t.crease_bound + sign * c_last;
-                let shifted = (cval + lambda / t.penalty).min(0.0);
+            for (_, shifted) in self.end_crease_shifts(c_last) {
                 if shifted < 0.0 {
                     let ic = self.layout.c(n - 1);
                     hm[(ic, ic)] += t.penalty;

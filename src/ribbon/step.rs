@@ -274,13 +274,8 @@ impl StepSolver {
                     let scale = *pg0.get_or_insert_with(|| {
                         let mut g = vec![0.0; nq];
                         problem.evaluate(&self.z, Some(&mut g), None);
-                        crate::optim::projected_gradient_inf(
-                            &self.z,
-                            &g,
-                            &self.lower,
-                            &self.upper,
-                        )
-                        .max(1e-300)
+                        crate::optim::projected_gradient_inf(&self.z, &g, &self.lower, &self.upper)
+                            .max(1e-300)
                     });
                     let pgtol = settings.tolerance * scale;
                     let options = LbfgsbOptions {

@@ -247,6 +247,23 @@ fn writer_topic(
     )
 }
 
+/// A publisher on `topic` (a resolved ROS name) whose writer history is bounded by its
+/// QoS depth (see [`writer_topic`]). `what` names it in errors.
+fn bounded_publisher<M: RosMessage + Serialize>(
+    node: &mut Node,
+    context: &Context,
+    node_name: &NodeName,
+    topic: &str,
+    q: Qos,
+    what: &str,
+) -> Result<Publisher<M>, NodeError> {
+    let name = Name::parse(topic).map_err(dds("topic name"))?;
+    let t = writer_topic(context, node_name, &name, topic_type::<M>(), q)
+        .map_err(|e| NodeError::Dds(format!("{what} topic: {e:?}")))?;
+    node.create_publisher(&t, Some(qos(q)))
+        .map_err(|e| NodeError::Dds(format!("{what} publisher: {e:?}")))
+}
+
 /// The DDS QoS of a recorded-QoS description. Reliable writers never block the loop:
 /// a full window fails the publication (counted) instead.
 fn qos(q: Qos) -> QosProfile {
@@ -328,96 +345,80 @@ impl SimNode {
         }
         let mut pubs = Vec::new();
         for o in &names.objects {
-            let markers = if outputs.markers {
-                let t = writer_topic(
-                    &context,
-                    &node_name,
-                    &name(&o.markers)?,
-                    topic_type::<MarkerArray>(),
-                    Qos::MARKERS,
-                )
-                .map_err(dds("markers topic"))?;
-                Some(
-                    node.create_publisher(&t, Some(qos(Qos::MARKERS)))
-                        .map_err(dds("markers publisher"))?,
-                )
-            } else {
-                None
-            };
-            let singular_points = if outputs.singular_points {
-                let t = writer_topic(
-                    &context,
-                    &node_name,
-                    &name(&o.singular_points)?,
-                    topic_type::<SingularPoints>(),
-                    Qos::DATA,
-                )
-                .map_err(dds("singular points topic"))?;
-                Some(
-                    node.create_publisher(&t, Some(qos(Qos::DATA)))
-                        .map_err(dds("singular points publisher"))?,
-                )
-            } else {
-                None
-            };
-            let status = if outputs.status {
-                let t = writer_topic(
-                    &context,
-                    &node_name,
-                    &name(&o.status)?,
-                    topic_type::<SimStatus>(),
-                    Qos::DATA,
-                )
-                .map_err(dds("status topic"))?;
-                Some(
-                    node.create_publisher(&t, Some(qos(Qos::DATA)))
-                        .map_err(dds("status publisher"))?,
-                )
-            } else {
-                None
-            };
+            let markers = outputs
+                .markers
+                .then(|| {
+                    bounded_publisher(
+                        &mut node,
+                        &context,
+                        &node_name,
+                        &o.markers,
+                        Qos::MARKERS,
+                        "markers",
+                    )
+                })
+                .transpose()?;
+            let singular_points = outputs
+                .singular_points
+                .then(|| {
+                    bounded_publisher(
+                        &mut node,
+                        &context,
+                        &node_name,
+                        &o.singular_points,
+                        Qos::DATA,
+                        "singular points",
+                    )
+                })
+                .transpose()?;
+            let status = outputs
+                .status
+                .then(|| {
+                    bounded_publisher(
+                        &mut node,
+                        &context,
+                        &node_name,
+                        &o.status,
+                        Qos::DATA,
+                        "status",
+                    )
+                })
+                .transpose()?;
             pubs.push(ObjectPubs {
                 markers,
                 singular_points,
                 status,
             });
         }
-        let clock = if outputs.clock {
-            let t = writer_topic(
-                &context,
-                &node_name,
-                &name(&names.clock)?,
-                topic_type::<Clock>(),
-                Qos::CLOCK,
-            )
-            .map_err(dds("clock topic"))?;
-            Some(
-                node.create_publisher(&t, Some(qos(Qos::CLOCK)))
-                    .map_err(dds("clock publisher"))?,
-            )
-        } else {
-            None
-        };
+        let clock = outputs
+            .clock
+            .then(|| {
+                bounded_publisher(
+                    &mut node,
+                    &context,
+                    &node_name,
+                    &names.clock,
+                    Qos::CLOCK,
+                    "clock",
+                )
+            })
+            .transpose()?;
         let has_colliders = scene
             .world
             .contact_stage()
             .is_some_and(|s| !s.colliders().is_empty());
-        let colliders = if outputs.markers && has_colliders {
-            let t = writer_topic(
-                &context,
-                &node_name,
-                &name(&names.colliders)?,
-                topic_type::<MarkerArray>(),
-                Qos::MARKERS,
-            )
-            .map_err(dds("colliders topic"))?;
-            Some(
-                node.create_publisher(&t, Some(qos(Qos::MARKERS)))
-                    .map_err(dds("colliders publisher"))?,
-            )
-        } else {
-            None
-        };
+        let colliders = (outputs.markers && has_colliders)
+            .then(|| {
+                bounded_publisher(
+                    &mut node,
+                    &context,
+                    &node_name,
+                    &names.colliders,
+                    Qos::MARKERS,
+                    "colliders",
+                )
+            })
+            .transpose()?;
         let srv_qos = QosProfile::publisher_default()
             .reliability_reliable(WhenFull::Fail)
             .durability(Durability::Volatile)
