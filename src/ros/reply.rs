@@ -17,7 +17,9 @@
 //! its endpoints is then not mistaken for its predecessor). A reader that has just
 //! entered the database may not be matched to the writer yet (RustDDS's event loop
 //! does that a moment later), so a reader counts once it has been known for
-//! [`SETTLE`]; after [`GIVE_UP`] the reply is sent anyway and counted.
+//! [`SETTLE`]; with one such reader but fewer readers than writers (a predecessor's
+//! disposed writer still in the database) the reply goes after [`PAIR_WAIT`]; with none,
+//! after [`GIVE_UP`] it is sent anyway and counted.
 
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
@@ -27,6 +29,11 @@ use ros2_client::{Message, RmwRequestId, Server};
 
 /// How long a client's reply reader must have been known before a reply is sent to it.
 pub const SETTLE: Duration = Duration::from_millis(5);
+/// How long a reply waits for the reader count to catch up with the writer count once
+/// the client's participant has at least one settled reply reader: the discovery
+/// database may keep a predecessor's disposed endpoint for a while, so the counts alone
+/// could hold a reply until [`GIVE_UP`].
+pub const PAIR_WAIT: Duration = Duration::from_millis(200);
 /// How long a reply waits for the client's reader before it is sent regardless.
 pub const GIVE_UP: Duration = Duration::from_secs(5);
 
@@ -62,13 +69,16 @@ impl ClientReaders {
         }
     }
 
-    /// Whether the client that sent `id` on `request_topic` has a reply reader on
-    /// `reply_topic` known for at least [`SETTLE`] (see the module doc).
+    /// Whether the client that sent `id` on `request_topic` at `received` can receive
+    /// its reply on `reply_topic`: its participant has as many reply readers known for at
+    /// least [`SETTLE`] as request writers, or at least one and the reply has waited
+    /// [`PAIR_WAIT`] (see the module doc).
     pub fn settled(
         &self,
         request_topic: &str,
         reply_topic: &str,
         id: &RmwRequestId,
+        received: Instant,
         now: Instant,
     ) -> bool {
         let client = host_app(&id.writer_gid.to_bytes16());
@@ -84,7 +94,7 @@ impl ClientReaders {
             .get(&(request_topic.to_owned(), client))
             .copied()
             .unwrap_or(0);
-        readers >= writers.max(1)
+        readers >= writers.max(1) || (readers >= 1 && now.duration_since(received) >= PAIR_WAIT)
     }
 }
 
@@ -139,7 +149,7 @@ impl<Resp: Message + 'static> HeldReplies<Resp> {
         let mut done = Flushed::default();
         let mut keep = Vec::new();
         for (id, response, received) in self.waiting.drain(..) {
-            let ready = readers.settled(&self.request_topic, &self.reply_topic, &id, now);
+            let ready = readers.settled(&self.request_topic, &self.reply_topic, &id, received, now);
             let expired = now.duration_since(received) >= GIVE_UP;
             if !(ready || expired) {
                 keep.push((id, response, received));
