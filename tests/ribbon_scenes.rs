@@ -98,30 +98,39 @@ fn helix_unrolling_agrees_at_h_001_and_h_005() {
 fn spinning_full_kinetics_deforms_lumped_stays_flat() {
     // Fig. 11: with the lumped model the spin about the centerline carries no kinetic
     // energy and the rest state stays optimal (flat to 1e-6, the issue's bound); with
-    // the full model the rims' inertia deforms the ribbon. The issue asks for the
-    // full model to reach 0.05 within the scene; ours reaches a few 1e-3 (see the
-    // README's known gaps), so this checks the qualitative split: full grows to more
-    // than 1000x its 1e-7 rad imperfection.
-    let max_abs = |s: &Scene| {
-        let q = ribbon(s).coordinates();
-        q.crease_direction
-            .iter()
-            .chain(&q.bending_angle)
-            .fold(0.0_f64, |m, x| m.max(x.abs()))
+    // the full model the rims' inertia makes the flat state unstable and some |c| or
+    // |psi| reaches 0.05 within the scene's duration (the issue's bar), from a 1e-7
+    // rad imperfection.
+    /// Largest |c| or |psi| seen after any step.
+    struct Peak(f64);
+    impl runner::StepObserver for Peak {
+        fn after_step(
+            &mut self,
+            scene: &Scene,
+            _: &developable_sim::sim::StepReport,
+            _: f64,
+        ) -> anyhow::Result<()> {
+            let q = ribbon(scene).coordinates();
+            for x in q.crease_direction.iter().chain(&q.bending_angle) {
+                self.0 = self.0.max(x.abs());
+            }
+            Ok(())
+        }
+    }
+    let peak = |sets: &[&str]| {
+        let mut s = load("ribbon_spinning", sets);
+        let mut peak = Peak(0.0);
+        let stats = runner::run(&mut s, &mut peak, &|| false).expect("run");
+        assert!(
+            stats.finite && stats.solver.unconverged_steps == 0,
+            "{stats:?}"
+        );
+        peak.0
     };
-    let (full, sf) = run("ribbon_spinning", &[]);
-    let (lumped, sl) = run("ribbon_spinning", &["ribbon.kinetic=lumped"]);
-    assert!(sf.finite && sl.finite);
-    assert!(
-        max_abs(&full) > 1e3 * 1e-7,
-        "full kinetics stayed flat: {}",
-        max_abs(&full)
-    );
-    assert!(
-        max_abs(&lumped) < 1e-6,
-        "lumped kinetics deformed: {}",
-        max_abs(&lumped)
-    );
+    let full = peak(&[]);
+    let lumped = peak(&["ribbon.kinetic=lumped"]);
+    assert!(full >= 0.05, "full kinetics peaked at {full}");
+    assert!(lumped < 1e-6, "lumped kinetics deformed: {lumped}");
 }
 
 #[test]

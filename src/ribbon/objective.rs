@@ -699,7 +699,8 @@ impl<'a> Objective<'a> {
         if hm.nrows() != nq || hm.ncols() != nq {
             *hm = DMatrix::zeros(nq, nq);
         } else {
-            hm.fill(0.0);
+            // one memset (nalgebra's fill walks the matrix entry by entry)
+            hm.as_mut_slice().fill(0.0);
         }
         let t = self.terms;
         let nf = n as f64;

@@ -155,10 +155,11 @@ fn hessian_to_z(layout: &Layout, h: &mut DMatrix<f64>) {
             h[(r, a)] += h[(r, b)];
         }
     }
-    for k in (1..n - 1).rev() {
-        let (a, b) = (layout.c(k), layout.c(k + 1));
-        for col in 0..h.ncols() {
-            h[(a, col)] += h[(b, col)];
+    // rows: the same suffix sums down each (contiguous) column
+    let rows = h.nrows();
+    for col in h.as_mut_slice().chunks_exact_mut(rows) {
+        for k in (1..n - 1).rev() {
+            col[layout.c(k)] += col[layout.c(k + 1)];
         }
     }
 }
@@ -257,6 +258,9 @@ impl StepSolver {
                             Some(_) => None,
                             None => Some(settings.tolerance),
                         },
+                        // a later round differs from the last one only by the multiplier
+                        // update: start with chord steps on its final factorization
+                        reuse_factorization: outer > 0,
                     };
                     problem.second_order = true;
                     let r = self.newton.minimize(
