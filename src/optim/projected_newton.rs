@@ -223,7 +223,6 @@ impl ProjectedNewton {
                     break;
                 }
             }
-            let m = self.free.len();
             if first && !chord {
                 self.first_damping = self.damping;
             }
