@@ -149,17 +149,25 @@ impl BoxProblem for ZProblem<'_, '_> {
 /// Transform a q-space Hessian into z-space in place: H_z = A^T H A.
 fn hessian_to_z(layout: &Layout, h: &mut DMatrix<f64>) {
     let n = layout.segments;
+    let rows = h.nrows();
+    let data = h.as_mut_slice();
+    // columns: column c_k += column c_{k+1}, from the end (contiguous vector adds)
     for k in (1..n - 1).rev() {
         let (a, b) = (layout.c(k), layout.c(k + 1));
-        for r in 0..h.nrows() {
-            h[(r, a)] += h[(r, b)];
+        let (head, tail) = data.split_at_mut(b * rows);
+        for (x, y) in head[a * rows..(a + 1) * rows].iter_mut().zip(&tail[..rows]) {
+            *x += y;
         }
     }
-    // rows: the same suffix sums down each (contiguous) column
-    let rows = h.nrows();
-    for col in h.as_mut_slice().chunks_exact_mut(rows) {
+    // rows: the same suffix sums down each column, eight columns side by side so that
+    // their independent dependency chains overlap (one column alone waits on every add)
+    for block in data.chunks_mut(rows * 8) {
+        let columns = block.len() / rows;
         for k in (1..n - 1).rev() {
-            col[layout.c(k)] += col[layout.c(k + 1)];
+            let (a, b) = (layout.c(k), layout.c(k + 1));
+            for col in 0..columns {
+                block[col * rows + a] += block[col * rows + b];
+            }
         }
     }
 }
