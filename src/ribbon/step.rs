@@ -6,10 +6,8 @@
 //! Lagrangian with penalty μ (1e3 in the paper). The inner problem is solved by
 //! L-BFGS-B (the paper) or by our projected Gauss-Newton.
 //!
-//! Differences from the paper, noted: multipliers are warm-started from the previous
-//! step instead of reset to 0 (the fixed point is the same; it saves outer rounds);
-//! with our solver μ grows 10x after a round that did not shrink the residual 4x
-//! (capped at 1e4 μ, reset every step), which stiff ribbons under handles need.
+//! Difference from the paper, noted: multipliers are warm-started from the previous
+//! step instead of reset to 0. The fixed point is the same; it saves outer rounds.
 
 use nalgebra::DMatrix;
 
@@ -27,9 +25,6 @@ use crate::optim::{BoxProblem, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNe
 /// above its tolerance near such a kink while f no longer changes. Both solvers share
 /// it, so they stop on the same criterion.
 pub const FTOL: f64 = 1e-12;
-
-/// The adaptive penalty's cap, a factor on the scene's mu (see `StepSolver::solve`).
-pub const MAX_PENALTY_GROWTH: f64 = 1e2;
 
 /// What one step's solve did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -229,8 +224,6 @@ impl StepSolver {
         };
         let has_equalities = !objective_terms.equalities.is_empty();
         let mut pg0: Option<f64> = None;
-        let scene_penalty = objective_terms.penalty;
-        let mut last_residual = f64::INFINITY;
         for outer in 0..settings.max_outer_iterations.max(1) {
             self.q_prev.clear();
             self.q_prev.extend_from_slice(q);
@@ -389,20 +382,7 @@ impl StepSolver {
             if outer + 1 == settings.max_outer_iterations {
                 outcome.converged = false;
             }
-            // Adaptive penalty (ours only; the paper's solver keeps its fixed mu): when
-            // a round did not shrink the largest residual 4x, the multiplier update
-            // mu C is too small for the constraint's stiffness (a 1000 J ribbon held by
-            // two grippers lagged 0.33 m with 110 of 300 steps on the round limit), so
-            // mu grows 10x, up to 1e4 x the scene's; Newton does not mind the
-            // conditioning. Back to the scene's mu at the next step.
-            let residual = max_pos.max(max_rot);
-            if settings.kind == SolverKind::GaussNewton && residual > 0.25 * last_residual {
-                objective_terms.penalty =
-                    (objective_terms.penalty * 10.0).min(MAX_PENALTY_GROWTH * scene_penalty);
-            }
-            last_residual = residual;
         }
-        objective_terms.penalty = scene_penalty;
         outcome
     }
 }
