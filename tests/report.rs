@@ -7,8 +7,9 @@ use std::path::PathBuf;
 use developable_sim::report::{output::CSV_HEADER, run_report, ReportOptions};
 
 /// A short cantilever: a coarse ribbon held at one end swings down under gravity (the
-/// quick plan: a reference at 1/16 of the sample interval, three time steps of the
-/// fast solver, one run each of L-BFGS-B, the lumped model and the conforming FEM).
+/// quick plan: a reference at 1/32 of the sample interval and its runs at 2 and 4 dt,
+/// three time steps of the fast solver, one run each of L-BFGS-B, the lumped model and
+/// the conforming FEM).
 /// A smooth motion, so implicit Euler's error must fall with dt. (A twisted flat strip
 /// buckles, a bifurcation seeded by a 1e-6 rad imperfection, and the helix unrolling
 /// whips within hundredths of a second: at the quick time steps neither error is
@@ -57,10 +58,16 @@ fn quick_report_on_a_tiny_cantilever() {
     for r in &rows {
         assert_eq!(r.len(), columns.len(), "{r:?}");
     }
-    // reference + its 2 dt check + 3 gauss_newton + lbfgsb + lumped + conforming_fem
-    assert_eq!(rows.len(), 8, "{csv}");
+    // reference + its 2 dt and 4 dt checks + 3 gauss_newton + lbfgsb + lumped +
+    // conforming_fem
+    assert_eq!(rows.len(), 9, "{csv}");
     assert_eq!(rows[0][col("sweep")], "reference");
     assert_eq!(rows[1][col("sweep")], "reference_2dt");
+    assert_eq!(rows[2][col("sweep")], "reference_4dt");
+    // a smooth motion: no reference step is stuck at its start
+    for r in &rows[..3] {
+        assert_eq!(r[col("stuck_steps")], "0", "{r:?}");
+    }
     for r in &rows {
         // run time is the process CPU time; every run is on one thread, so it cannot
         // exceed the wall time (5 % + 5 ms: the two clocks are read one after another)
@@ -81,7 +88,11 @@ fn quick_report_on_a_tiny_cantilever() {
     let ref_err: f64 = rows[1][col("error_rms_m")]
         .parse()
         .expect("reference_2dt error");
-    for r in &rows[2..] {
+    let ref_err_4dt: f64 = rows[2][col("error_rms_m")]
+        .parse()
+        .expect("reference_4dt error");
+    assert!(ref_err_4dt > ref_err, "{ref_err_4dt} <= {ref_err}");
+    for r in &rows[3..] {
         let e: f64 = r[col("error_rms_m")].parse().expect("error_rms_m");
         let end: f64 = r[col("error_end_m")].parse().expect("error_end_m");
         assert!(e.is_finite() && e > 0.0, "{r:?}");
@@ -136,4 +147,9 @@ fn quick_report_on_a_tiny_cantilever() {
     );
     assert!(summary.contains("every run used one thread"), "{summary}");
     assert!(summary.contains("The reference's own error"), "{summary}");
+    assert!(
+        summary.contains("local order of the reference's halvings"),
+        "{summary}"
+    );
+    assert!(!summary.contains("stuck at their start"), "{summary}");
 }

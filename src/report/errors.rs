@@ -63,6 +63,28 @@ pub fn log_log_slope(points: &[(f64, f64)]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
+/// Local order of a run's own halvings: log2(far / near), where `near` is the distance
+/// between the runs at h and 2h and `far` between the runs at 2h and 4h (1 for a first-
+/// order method in its asymptotic range, ~0 when halving h no longer brings the runs
+/// closer). None unless both are positive and finite.
+pub fn halving_order(near: f64, far: f64) -> Option<f64> {
+    (near > 0.0 && far > 0.0 && near.is_finite() && far.is_finite()).then(|| (far / near).log2())
+}
+
+/// The error of the run at h implied by the distance `near` to its run at 2h and the
+/// local `order` of its halvings: `near` in the first-order range (order >= 0.8, or no
+/// order known: e(2h) - e(h) ~ e(h)); near / (2^p - 1) for an order p in (0.2, 0.8)
+/// (the error left if the halvings kept shrinking at that rate); None when p <= 0.2 (the
+/// halvings do not converge, so the error is not bounded).
+pub fn error_from_halvings(near: f64, order: Option<f64>) -> Option<f64> {
+    match order {
+        None => Some(near),
+        Some(p) if p >= 0.8 => Some(near),
+        Some(p) if p > 0.2 => Some(near / (p.exp2() - 1.0)),
+        Some(_) => None,
+    }
+}
+
 /// Indices of the points (cost, error) no other point beats in both (lower is better),
 /// sorted by cost.
 pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
@@ -106,6 +128,22 @@ mod tests {
             .collect();
         assert!((log_log_slope(&p).unwrap() - 2.0).abs() < 1e-12);
         assert_eq!(log_log_slope(&p[..1]), None);
+    }
+
+    #[test]
+    fn halvings_bound_the_error_only_while_they_converge() {
+        // first order: the runs at h, 2h, 4h are 1, 2 apart -> e(h) ~ 1
+        let p = halving_order(1.0, 2.0).unwrap();
+        assert!((p - 1.0).abs() < 1e-12);
+        assert_eq!(error_from_halvings(1.0, Some(p)), Some(1.0));
+        // order 0.5: e(h) = d / (sqrt 2 - 1)
+        let e = error_from_halvings(1.0, halving_order(1.0, 2f64.sqrt())).unwrap();
+        assert!((e - 1.0 / (2f64.sqrt() - 1.0)).abs() < 1e-12);
+        // not converging: equal distances (order 0), or the coarser pair closer
+        assert_eq!(error_from_halvings(1.0, halving_order(1.0, 1.0)), None);
+        assert_eq!(error_from_halvings(1.0, halving_order(1.0, 0.5)), None);
+        assert_eq!(error_from_halvings(1.0, None), Some(1.0));
+        assert_eq!(halving_order(0.0, 1.0), None);
     }
 
     #[test]

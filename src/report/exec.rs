@@ -35,6 +35,12 @@ pub struct RunOutput {
     /// augmented-Lagrangian rounds; FEM and paper: Newton iterations).
     pub iterations_median: f64,
     pub unconverged_steps: usize,
+    /// Ribbon steps whose solver stopped unconverged after at most one iteration: it
+    /// found no step from its start and kept it (the start is the previous state unless
+    /// `solver.extrapolate`, so such a step zeroes the velocity). A subset of
+    /// `unconverged_steps`; a reference with any is not a converged solution. 0 for the
+    /// FEM and paper methods (not counted).
+    pub stuck_steps: usize,
     /// Max over steps of the relative edge-length error (dimensionless).
     pub isometry_error_max: f64,
     /// Max over steps of the handle / constraint violation, m.
@@ -122,6 +128,8 @@ struct Sampler<'a> {
     wall_last: Instant,
     /// CPU time of each step (from the previous step's end), ms.
     step_cpu_ms: Vec<f64>,
+    /// See [`RunOutput::stuck_steps`].
+    stuck_steps: usize,
 }
 
 /// CPU time consumed by this process so far (all threads), s.
@@ -153,6 +161,7 @@ impl<'a> Sampler<'a> {
             wall_start: now,
             wall_last: now,
             step_cpu_ms: Vec::new(),
+            stuck_steps: 0,
         }
     }
 
@@ -162,6 +171,12 @@ impl<'a> Sampler<'a> {
         self.cpu_last = self.cpu_start;
         self.wall_start = Instant::now();
         self.wall_last = self.wall_start;
+    }
+
+    /// Count a step that stopped unconverged within one iteration (see
+    /// [`RunOutput::stuck_steps`]).
+    fn solver_done(&mut self, iterations: u32, converged: bool) {
+        self.stuck_steps += usize::from(!converged && iterations <= 1);
     }
 
     /// Read the clocks after a step.
@@ -196,6 +211,11 @@ impl StepObserver for Sampler<'_> {
     fn after_step(&mut self, scene: &Scene, report: &StepReport, _: f64) -> anyhow::Result<()> {
         let dt = scene.world.dt();
         self.offer(report.time, dt, scene.world.mesh(0));
+        for (o, object) in report.objects.iter().zip(scene.world.objects()) {
+            if matches!(object, SimObject::Ribbon(_)) {
+                self.solver_done(o.iterations, o.converged);
+            }
+        }
         self.step_done();
         Ok(())
     }
@@ -229,6 +249,7 @@ pub fn execute(
         step_cpu_ms_median: percentiles(&sampler.step_cpu_ms).median,
         iterations_median: stats.solver.iterations_median,
         unconverged_steps: stats.solver.unconverged_steps,
+        stuck_steps: sampler.stuck_steps,
         isometry_error_max: stats.isometry_error_max,
         constraint_violation_max: stats.constraint_violation_max,
         finite: stats.finite,
@@ -276,6 +297,7 @@ fn execute_fem(
         step_cpu_ms_median: percentiles(&sampler.step_cpu_ms).median,
         iterations_median: percentiles(&sampler.iterations).median,
         unconverged_steps: unconverged,
+        stuck_steps: 0,
         isometry_error_max: isometry,
         constraint_violation_max: constraint,
         finite: fem.mesh().is_finite(),

@@ -8,7 +8,9 @@ use std::path::Path;
 use anyhow::Context;
 use plotters::prelude::*;
 
-use super::errors::{best_within, log_log_slope, pareto_front, RunError};
+use super::errors::{
+    best_within, error_from_halvings, halving_order, log_log_slope, pareto_front, RunError,
+};
 use super::exec::RunOutput;
 use super::plan::{Method, SceneKind, ScenePlan, Sweep};
 
@@ -29,6 +31,10 @@ pub struct SceneReport {
     /// The reference at twice its time step, compared with the reference: its error
     /// estimates the reference's own time error.
     pub reference_check: Row,
+    /// The reference at four times its time step, compared with the reference.
+    pub reference_check_coarse: Row,
+    /// The 4 dt check's distance to the 2 dt check (the reference's next halving).
+    pub reference_halving: Option<RunError>,
     /// Why the report compares over a shorter duration than the scene's, if it does.
     pub duration_note: Option<String>,
     pub rows: Vec<Row>,
@@ -74,6 +80,31 @@ impl SceneReport {
         self.reference_check.error.map(|e| e.rms_over_time)
     }
 
+    /// Local order of the reference's own halvings ([`halving_order`]): its 2 dt run's
+    /// distance to it against the 4 dt run's distance to the 2 dt run.
+    pub fn reference_order(&self) -> Option<f64> {
+        halving_order(
+            self.reference_error_estimate()?,
+            self.reference_halving?.rms_over_time,
+        )
+    }
+
+    /// The reference's time error implied by its halvings, m ([`error_from_halvings`]):
+    /// None when they do not converge (the reference's error is then not bounded by
+    /// this report).
+    pub fn reference_error_bound(&self) -> Option<f64> {
+        error_from_halvings(self.reference_error_estimate()?, self.reference_order())
+    }
+
+    /// The reference and its 2 dt and 4 dt checks.
+    pub fn reference_rows(&self) -> [&Row; 3] {
+        [
+            &self.reference,
+            &self.reference_check,
+            &self.reference_check_coarse,
+        ]
+    }
+
     fn methods(&self) -> Vec<Method> {
         let mut m: Vec<Method> = self.rows.iter().map(|r| r.run.spec.method).collect();
         m.sort();
@@ -82,16 +113,13 @@ impl SceneReport {
     }
 }
 
-pub const CSV_HEADER: &str = "scene,method,sweep,dt_s,resolution,tolerance,steps,error_rms_m,error_end_m,points_compared,isometry_error_max,constraint_violation_max_m,wall_s,wall_per_simulated_s,cpu_s,cpu_per_simulated_s,step_ms_median,step_cpu_ms_median,iterations_median,unconverged_steps,finite";
+pub const CSV_HEADER: &str = "scene,method,sweep,dt_s,resolution,tolerance,steps,error_rms_m,error_end_m,points_compared,isometry_error_max,constraint_violation_max_m,wall_s,wall_per_simulated_s,cpu_s,cpu_per_simulated_s,step_ms_median,step_cpu_ms_median,iterations_median,unconverged_steps,stuck_steps,finite";
 
 pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
     let mut out = String::from(CSV_HEADER);
     out.push('\n');
     for s in scenes {
-        for row in [&s.reference, &s.reference_check]
-            .into_iter()
-            .chain(&s.rows)
-        {
+        for row in s.reference_rows().into_iter().chain(&s.rows) {
             let r = &row.run;
             let (e_rms, e_end, used) = match row.error {
                 Some(e) => (
@@ -103,7 +131,7 @@ pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
             };
             writeln!(
                 out,
-                "{},{},{},{},{},{:e},{},{},{},{},{:.6e},{:.6e},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{},{}",
+                "{},{},{},{},{},{:e},{},{},{},{},{:.6e},{:.6e},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{},{},{}",
                 s.name,
                 r.spec.method.name(),
                 r.spec.sweep.name(),
@@ -124,6 +152,7 @@ pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
                 r.step_cpu_ms_median,
                 r.iterations_median,
                 r.unconverged_steps,
+                r.stuck_steps,
                 r.finite
             )?;
         }
@@ -155,7 +184,8 @@ fn register_font() {
 
 /// Log-log error (RMS over time) against run time (process CPU time), one line per
 /// method (its dt sweep), the other sweeps as hollow markers; a dashed line at the
-/// reference's estimated own error.
+/// reference's estimated own error ([`SceneReport::reference_error_bound`], or its 2 dt
+/// distance as a lower bound when its halvings do not converge).
 pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
     register_font();
     let (w, h) = (900u32, 600u32);
@@ -173,11 +203,21 @@ pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
         y0 = y0.min(*y);
         y1 = y1.max(*y);
     }
-    let reference_error = s
-        .reference_error_estimate()
-        .filter(|e| *e > 0.0 && e.is_finite());
+    let (reference_error, reference_label) = match s.reference_error_bound() {
+        Some(b) if s.reference_order().is_some_and(|p| p < 0.8) => (
+            Some(b),
+            "reference's own error (from its 2 dt and 4 dt runs)",
+        ),
+        Some(b) => (Some(b), "reference's own error (vs its 2 dt run)"),
+        None => (
+            s.reference_error_estimate(),
+            "reference's own error: lower bound (not converged)",
+        ),
+    };
+    let reference_error = reference_error.filter(|e| *e > 0.0 && e.is_finite());
     if let Some(e) = reference_error {
         y0 = y0.min(e);
+        y1 = y1.max(e);
     }
     let (x0, x1, y0, y1) = (x0 / 1.5, x1 * 1.5, y0 / 1.5, y1 * 1.5);
     let mut buf = vec![255u8; (w * h * 3) as usize];
@@ -242,7 +282,7 @@ pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
             chart
                 .draw_series(dashes)
                 .map_err(|e| anyhow::anyhow!("{e:?}"))?
-                .label("reference's own error (vs its 2 dt run)")
+                .label(reference_label)
                 .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
         }
         chart
@@ -272,7 +312,7 @@ fn sci(v: f64) -> String {
 /// Runs whose process CPU time exceeds their wall time by more than 5 % (+ 5 ms of
 /// clock granularity): they used more than one thread.
 pub fn multithreaded_runs(s: &SceneReport) -> Vec<&Row> {
-    [&s.reference, &s.reference_check]
+    s.reference_rows()
         .into_iter()
         .chain(&s.rows)
         .filter(|r| r.run.cpu_s > 1.05 * r.run.wall_s + 5e-3)
@@ -374,7 +414,8 @@ pub fn write_summary(
             md,
             "Simulated {} s, compared at {} times ({}) on {} material points. Reference: \
              `{}`, dt = {} s (the sample interval / {}), resolution {} (default \
-             {}), tolerance {:e}; its run took {:.2} s CPU.\n",
+             {}), tolerance {:e}; its run took {:.2} s CPU, {} of its {} steps stopped \
+             unconverged ({} of them stuck: no step found from the start).\n",
             d.duration,
             s.plan.sample_times.len(),
             s.plan
@@ -390,20 +431,67 @@ pub fn write_summary(
             r.resolution,
             d.resolution,
             r.tolerance,
-            s.reference.run.cpu_s
+            s.reference.run.cpu_s,
+            s.reference.run.unconverged_steps,
+            s.reference.run.steps,
+            s.reference.run.stuck_steps,
         )?;
         if let Some(e) = s.reference_error_estimate() {
-            writeln!(
+            write!(
                 md,
                 "**The reference's own error**: the same run at twice its dt \
-                 (`reference_2dt`) is {} m from it (RMS over time; {} at the end). For \
-                 implicit Euler (first order) e(2h) - e(h) ~ e(h), so errors below ~{} \
-                 m are not resolved by this reference.\n",
+                 (`reference_2dt`) is {} m from it (RMS over time; {} at the end), and \
+                 the run at four times its dt (`reference_4dt`) is {} m from the 2 dt \
+                 run: local order of the reference's halvings {}. ",
                 sci(e),
                 s.reference_check
                     .error
                     .map_or("-".into(), |e| sci(e.at_end)),
-                sci(e)
+                s.reference_halving
+                    .map_or("-".into(), |e| sci(e.rms_over_time)),
+                s.reference_order()
+                    .map_or("n/a".into(), |p| format!("**{p:.2}**")),
+            )?;
+            match (s.reference_order(), s.reference_error_bound()) {
+                (Some(p), Some(b)) if p < 0.8 => writeln!(
+                    md,
+                    "Below first order, so the 2 dt distance understates the \
+                     reference's error: if the halvings kept shrinking at this order, \
+                     e(h) ~ d / (2^p - 1) = {} m; errors below that are not resolved \
+                     by this reference.\n",
+                    sci(b)
+                )?,
+                (_, Some(_)) => writeln!(
+                    md,
+                    "For implicit Euler (first order) e(2h) - e(h) ~ e(h), so errors \
+                     below ~{} m are not resolved by this reference.\n",
+                    sci(e)
+                )?,
+                (_, None) => writeln!(
+                    md,
+                    "**Halving dt does not bring these runs closer** (order <= 0.2: \
+                     the 4 dt run is hardly farther from the 2 dt run than that is from \
+                     the reference, where first order would make it twice as far), so \
+                     the reference is not converged in dt and its error is not bounded \
+                     by this report: {} m is only a lower bound, and errors within a few \
+                     times it are not resolved.\n",
+                    sci(e)
+                )?,
+            }
+        }
+        let stuck: Vec<usize> = s
+            .reference_rows()
+            .iter()
+            .map(|r| r.run.stuck_steps)
+            .collect();
+        if stuck.iter().any(|&n| n > 0) {
+            writeln!(
+                md,
+                "**Warning**: steps stuck at their start (the solver found no step and \
+                 kept it; for a ribbon that is the previous state, so the velocity drops \
+                 to zero): reference {}, 2 dt run {}, 4 dt run {}. A run with such a step \
+                 is not a converged solution; errors against it mean little.\n",
+                stuck[0], stuck[1], stuck[2]
             )?;
         }
         if d.kind == SceneKind::Paper {
@@ -431,10 +519,7 @@ pub fn write_summary(
             "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
         )?;
         let threaded = multithreaded_runs(s);
-        for row in [&s.reference, &s.reference_check]
-            .into_iter()
-            .chain(&s.rows)
-        {
+        for row in s.reference_rows().into_iter().chain(&s.rows) {
             let r = &row.run;
             let (e, e_end) = row
                 .error
@@ -445,9 +530,14 @@ pub fn write_summary(
             } else {
                 ""
             };
+            let unconverged = if r.stuck_steps > 0 {
+                format!("{} ({} stuck)", r.unconverged_steps, r.stuck_steps)
+            } else {
+                r.unconverged_steps.to_string()
+            };
             writeln!(
                 md,
-                "| {} | {} | {:.6} | {} | {:e} | {e} | {e_end} | {} | {} | {:.3}{mark} | {:.3} | {:.3} | {:.3} | {} | {} |",
+                "| {} | {} | {:.6} | {} | {:e} | {e} | {e_end} | {} | {} | {:.3}{mark} | {:.3} | {:.3} | {:.3} | {} | {unconverged} |",
                 r.spec.method.name(),
                 r.spec.sweep.name(),
                 r.spec.dt,
@@ -460,7 +550,6 @@ pub fn write_summary(
                 r.wall_s,
                 r.step_cpu_ms_median,
                 r.iterations_median,
-                r.unconverged_steps
             )?;
         }
         let fast = s.fast_method();
@@ -555,6 +644,25 @@ pub fn write_summary(
                 )?;
             }
             writeln!(md)?;
+            match (fast_err, s.reference_error_bound()) {
+                (Some(f), Some(b)) if f < 3.0 * b => writeln!(
+                    md,
+                    "The `{}` error within budget ({} m) is less than 3x the \
+                     reference's own error ({} m, above): the ratios at this budget are \
+                     not resolved.\n",
+                    fast.name(),
+                    sci(f),
+                    sci(b)
+                )?,
+                (Some(_), None) if s.reference_error_estimate().is_some() => writeln!(
+                    md,
+                    "The reference is not converged in dt (above): the errors and ratios \
+                     at this budget hold only where they are well above its {} m lower \
+                     bound.\n",
+                    sci(s.reference_error_estimate().unwrap_or(f64::NAN))
+                )?,
+                _ => {}
+            }
         }
     }
     let mut f =

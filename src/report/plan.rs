@@ -36,6 +36,10 @@ pub enum Sweep {
     /// The reference at twice its time step: its distance to the reference estimates
     /// the reference's own time error (first order: e(2h) - e(h) ~ e(h)).
     ReferenceCheck,
+    /// The reference at four times its time step: its distance to the 2 dt run,
+    /// against the 2 dt run's distance to the reference, gives the order of the
+    /// reference's own halvings, i.e. whether the 2 dt estimate holds.
+    ReferenceCheckCoarse,
     TimeStep,
     Resolution,
     Tolerance,
@@ -46,6 +50,7 @@ impl Sweep {
         match self {
             Sweep::Reference => "reference",
             Sweep::ReferenceCheck => "reference_2dt",
+            Sweep::ReferenceCheckCoarse => "reference_4dt",
             Sweep::TimeStep => "dt",
             Sweep::Resolution => "resolution",
             Sweep::Tolerance => "tolerance",
@@ -96,6 +101,8 @@ pub struct ScenePlan {
     pub reference: RunSpec,
     /// The reference at twice its time step (see [`Sweep::ReferenceCheck`]).
     pub reference_check: RunSpec,
+    /// The reference at four times its time step (see [`Sweep::ReferenceCheckCoarse`]).
+    pub reference_check_coarse: RunSpec,
     pub runs: Vec<RunSpec>,
 }
 
@@ -111,11 +118,17 @@ impl ScenePlan {
             dt: 2.0 * reference.dt,
             ..reference.clone()
         };
+        let reference_check_coarse = RunSpec {
+            sweep: Sweep::ReferenceCheckCoarse,
+            dt: 4.0 * reference.dt,
+            ..reference.clone()
+        };
         ScenePlan {
             defaults,
             sample_times,
             reference,
             reference_check,
+            reference_check_coarse,
             runs,
         }
     }
@@ -133,8 +146,9 @@ fn dts(interval: f64, divisors: &[u32]) -> Vec<f64> {
 /// model, up to 4 of L-BFGS-B, up to 3 of the conforming FEM (~100x a ribbon step),
 /// all at least 4x the reference's dt, resolution and tolerance sweeps of the fast
 /// solver at its middle dt, and a reference at 1/`reference_divisor` of the sample
-/// interval (default 64 for ribbons, 72 for paper; it must be even) and
-/// `reference_refinement` (default 2) times the resolution.
+/// interval (default 64 for ribbons, 72 for paper; a multiple of 4, so the reference's
+/// 2 dt and 4 dt checks land on the sample times too) and `reference_refinement`
+/// (default 2) times the resolution.
 pub fn plan(
     defaults: SceneDefaults,
     quick: bool,
@@ -332,7 +346,11 @@ mod tests {
                     None,
                     None,
                 );
-                for run in p.runs.iter().chain([&p.reference, &p.reference_check]) {
+                for run in p.runs.iter().chain([
+                    &p.reference,
+                    &p.reference_check,
+                    &p.reference_check_coarse,
+                ]) {
                     for t in &p.sample_times {
                         let steps = t / run.dt;
                         assert!((steps - steps.round()).abs() < 1e-9, "{run:?} at {t}");
@@ -386,6 +404,9 @@ mod full_plan_tests {
         };
         assert_eq!((n(Method::GaussNewton), n(Method::Lbfgsb)), (5, 4));
         assert_eq!(p.reference_check.dt, 2.0 * p.reference.dt);
+        assert_eq!(p.reference_check_coarse.dt, 4.0 * p.reference.dt);
+        // the 4 dt check may coincide with the finest swept dt, never be finer
+        assert!(p.reference_check_coarse.dt <= finest + 1e-15);
         assert!((p.reference.dt - 0.04 / 32.0).abs() < 1e-15);
     }
 }
