@@ -92,16 +92,11 @@ pub const DEFAULT_SCENES: [ReportScene; 3] = [
         name: "ribbon_helix_unrolling",
         quick_duration: 0.05,
         full_duration: Some(0.1),
-        // dt 156 us. At 78 us (and 39, 20 us) one step of the reference is stuck: at
-        // t = 0.072 s (0.073, 0.075 s) its Newton solve finds no step from its start
-        // (the previous state) in its first iteration and keeps it, so the velocity
-        // drops to zero (at 78 us 0.61 J of kinetic energy lost in one step) and the
-        // run is 0.12 m from its own run at 2 dt; the runs at 156, 312 and 625 us have
-        // no stuck step. Their other unconverged steps (12 of 640 at 156 us) stop on the
-        // 200-iteration limit of one augmented-Lagrangian round; 2000 iterations, or
-        // tolerance 1e-6 or 1e-8, move the run at 156 us by < 3e-5 m.
-        // `solver.extrapolate` avoids the stuck step at 50 elements but diverges at 100
-        // (the energy grows to 2.5e2-2.5e13 J at dt 78-312 us), so it is not used.
+        // dt 156 us. Before session 4's solver fallback (a scaled gradient step where the
+        // Hessian stays indefinite at 100x its diagonal) one step at 78 us (and 39,
+        // 20 us) was stuck at its start, zeroing the velocity; with it, the runs at 625
+        // to 39 us have no unconverged step, yet successive halvings stay 1.1-1.6 cm
+        // apart at 0.1 s (RMS of the final vertices), so a finer reference buys nothing.
         reference_divisor: 64,
         // the scene's 50 elements: at 100 (half-length creases) the 78 us reference also
         // loses > 3 % of its energy in one step (73 of 1280 steps unconverged)
@@ -110,17 +105,14 @@ pub const DEFAULT_SCENES: [ReportScene; 3] = [
               helix whips open within milliseconds and implicit Euler follows that \
               whip only at dt below ~1 ms (over 0.3 s, runs at dt 1.9 and 0.94 ms end \
               0.26 m apart, and a reference at 3.75 ms is 0.3 m off). The reference is \
-              at the scene's 50 elements and dt 156 us: at 78 us (and 39, 20 us) one \
-              step's solver found no step from its start and kept it, stopping the \
-              ribbon at t = 0.072-0.075 s (at 78 us 0.61 J of kinetic energy lost in \
-              one step), which put the earlier 78 us reference 0.12 m from its run at \
-              2 dt. Below ~0.6 ms the runs do not converge in dt (below 156 us measured \
-              with `solver.extrapolate`, which avoids the stuck step at 50 elements \
-              and moves the runs at 156 and 312 us by < 1e-4 m): halvings from dt 625 \
-              to 20 us stay 8-13 mm apart (RMS over 0.1 s) and drift one way, and the \
-              energy left at 0.1 s still rises as dt falls (0.65 J at 625 us, 0.72 J \
-              at 156 us, 0.78 J at 20 us, of 1.28 J at release: implicit Euler's \
-              damping of the whip still changes with dt). Every run at dt 1.25 ms and \
+              at the scene's 50 elements and dt 156 us. Below ~0.6 ms the runs do not \
+              converge in dt: halvings from dt 625 to 20 us stay 8-16 mm apart and \
+              drift one way, and the energy left at 0.1 s still rises as dt falls \
+              (0.65 J at 625 us, 0.72 J at 156 us, 0.75 J at 39 us, of 1.28 J at \
+              release: implicit Euler's damping of the whip still changes with dt; \
+              measured with no unconverged step since the solver's fallback for \
+              indefinite Hessians, which ended a stuck step at 78 us that had zeroed \
+              the velocity). Every run at dt 1.25 ms and \
               below, this reference included, is 2.8-3.6 cm from a run at dt 20 us, so \
               only errors well above ~3 cm (dt 2.5 ms and up) are resolved",
     },
