@@ -171,6 +171,8 @@ impl ProjectedNewton {
             }
             let pg_before = pg;
             let mut escalated = false;
+            // whether this iteration's direction is the scaled-gradient fallback
+            let mut fallback = false;
             let mut step_ok = false;
             // At most a few rounds of binding: each drops from the free set the variables
             // that sit on a bound while the Newton step points out of the box, and solves
@@ -209,6 +211,7 @@ impl ProjectedNewton {
                         // state, and zero the velocity (seen once in a helix run at
                         // dt 78 us: kinetic energy 0.62 J -> 0 in one step).
                         ok = self.scaled_gradient_step();
+                        fallback = true;
                     }
                     ok
                 };
@@ -332,7 +335,9 @@ impl ProjectedNewton {
             chord &= pg <= 0.25 * pg_before;
             if pg <= pgtol {
                 converged = true;
-            } else if (f_old - f) <= options.ftol * f_old.abs().max(f.abs()).max(1.0) {
+            } else if !fallback && (f_old - f) <= options.ftol * f_old.abs().max(f.abs()).max(1.0) {
+                // (not after a fallback step: a gradient step's small decrease says
+                // nothing about stationarity)
                 // after any accepted step, as L-BFGS-B applies `factr`: where the
                 // resampling operator's kinks stall the projected gradient above its
                 // tolerance, the line search keeps passing steps of alpha ~1e-3 that
@@ -407,6 +412,16 @@ impl ProjectedNewton {
     fn scaled_gradient_step(&mut self) -> bool {
         let n = self.h.nrows();
         let h = self.h.as_slice();
+        // A Hessian beyond 1e150 squares past f64's range in the factorization: the
+        // objective itself is out of range (an absurd force), not merely indefinite,
+        // and no step is taken (the caller keeps the last valid state and says so).
+        let out_of_range = self
+            .free
+            .iter()
+            .any(|&j| self.free.iter().any(|&i| !(h[j * n + i].abs() < 1e150)));
+        if out_of_range {
+            return false;
+        }
         let scale = self
             .free
             .iter()
