@@ -336,13 +336,12 @@ impl ProjectedNewton {
             if pg <= pgtol {
                 converged = true;
             } else if !fallback && (f_old - f) <= options.ftol * f_old.abs().max(f.abs()).max(1.0) {
-                // (not after a fallback step: a gradient step's small decrease says
-                // nothing about stationarity)
-                // after any accepted step, as L-BFGS-B applies `factr`: where the
+                // After any accepted Newton step, as L-BFGS-B applies `factr`: where the
                 // resampling operator's kinks stall the projected gradient above its
                 // tolerance, the line search keeps passing steps of alpha ~1e-3 that
                 // change f only in its last digits (17 iterations for nothing on a
-                // Moebius loop before this)
+                // Moebius loop before this). Not after a fallback step: a gradient
+                // step's small decrease says nothing about stationarity.
                 converged = true;
             }
         }
