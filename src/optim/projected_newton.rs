@@ -457,12 +457,19 @@ impl ProjectedNewton {
             let (tail, lij) = (&d[j + 1..], &col[j + 1..]);
             let mut acc = [0.0; 4];
             let chunks = tail.len() / 4 * 4;
-            for (x, y) in tail[..chunks].chunks_exact(4).zip(lij[..chunks].chunks_exact(4)) {
+            for (x, y) in tail[..chunks]
+                .chunks_exact(4)
+                .zip(lij[..chunks].chunks_exact(4))
+            {
                 for k in 0..4 {
                     acc[k] += x[k] * y[k];
                 }
             }
-            let rest: f64 = tail[chunks..].iter().zip(&lij[chunks..]).map(|(x, y)| x * y).sum();
+            let rest: f64 = tail[chunks..]
+                .iter()
+                .zip(&lij[chunks..])
+                .map(|(x, y)| x * y)
+                .sum();
             let dot = (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest;
             d[j] = (d[j] - dot) / col[j];
         }
