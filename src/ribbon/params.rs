@@ -58,7 +58,9 @@ pub struct SolverSettings {
     pub tolerance: f64,
     /// Inner iteration limit per augmented-Lagrangian round.
     pub max_iterations: u32,
-    /// Augmented-Lagrangian penalty mu (paper: 1e3), in J/m^2 for position constraints.
+    /// Augmented-Lagrangian penalty mu (paper: 1e3), in J/m^2 for position constraints:
+    /// the L-BFGS-B baseline keeps it fixed; our solver starts from it and raises it up
+    /// to 100x where an outer round stalls (see `ribbon::step`).
     pub penalty: f64,
     /// Outer stop: ||q_k - q_{k-1}||_inf below this (paper: 1e-4).
     pub outer_tolerance: f64,
