@@ -37,6 +37,8 @@ pub struct SceneReport {
     pub reference_halving: Option<RunError>,
     /// Why the report compares over a shorter duration than the scene's, if it does.
     pub duration_note: Option<String>,
+    /// Why the reference's halvings do not converge in dt, where that was measured.
+    pub reference_note: Option<String>,
     pub rows: Vec<Row>,
     /// Material points compared at each sample time.
     pub points_total: usize,
@@ -482,6 +484,9 @@ pub fn write_summary(
                     sci(e)
                 )?,
             }
+        }
+        if let Some(note) = &s.reference_note {
+            writeln!(md, "**Why the reference does not converge in dt**: {note}.\n")?;
         }
         let stuck: Vec<usize> = s
             .reference_rows()
