@@ -37,6 +37,8 @@ pub struct SceneReport {
     pub reference_halving: Option<RunError>,
     /// Why the report compares over a shorter duration than the scene's, if it does.
     pub duration_note: Option<String>,
+    /// Why the reference's halvings do not converge in dt, where that was measured.
+    pub reference_note: Option<String>,
     pub rows: Vec<Row>,
     /// Material points compared at each sample time.
     pub points_total: usize,
@@ -482,6 +484,17 @@ pub fn write_summary(
                     sci(e)
                 )?,
             }
+        }
+        // measured separately (see the README); shown where this run's halvings agree
+        if let Some(note) = s
+            .reference_note
+            .as_ref()
+            .filter(|_| s.reference_order().is_none_or(|p| p < 0.8))
+        {
+            writeln!(
+                md,
+                "**Why the reference does not converge in dt**: {note}.\n"
+            )?;
         }
         let stuck: Vec<usize> = s
             .reference_rows()
