@@ -143,7 +143,11 @@ fn moebius_band_closes_with_a_half_twist() {
     // scene's fixed mu): every step, that one included, must converge within the
     // scene's 50 rounds
     assert_eq!(stats.solver.unconverged_steps, 0, "{:?}", stats.solver);
-    assert!(stats.constraint_violation_max < 1e-6, "{}", stats.constraint_violation_max);
+    assert!(
+        stats.constraint_violation_max < 1e-6,
+        "{}",
+        stats.constraint_violation_max
+    );
     let f = ribbon(&s).frames();
     let n = 50;
     // non-orientable closure: x_0 = y_n, y_0 = x_n, n_0 = -n_{n-1} (AL tolerance 1e-6 m,
