@@ -16,7 +16,9 @@ use developable_sim::ros::names::NodeNames;
 use developable_sim::ros::node::{Lockstep, NodeConfig, Pacing, SimNode};
 use developable_sim::ros::params::{self, Params};
 use developable_sim::ros::session::MarkerStyle;
+use developable_sim::runner::StepObserver;
 use developable_sim::scene::Scene;
+use developable_sim::sim::{ReachWatch, StepReport};
 use developable_sim::{runner, scene};
 
 #[derive(Parser)]
@@ -492,10 +494,11 @@ fn run_command(
         }
         None => None,
     };
-    let result = match recorder.as_mut() {
-        Some(r) => runner::run(&mut loaded, r, &|| stop.load(Ordering::Relaxed)),
-        None => runner::run(&mut loaded, &mut (), &|| stop.load(Ordering::Relaxed)),
+    let mut observer = CliObserver {
+        recorder: recorder.as_mut(),
+        reach: ReachWatch::default(),
     };
+    let result = runner::run(&mut loaded, &mut observer, &|| stop.load(Ordering::Relaxed));
     // close the bag whatever happened
     let closed = recorder.map(|r| r.close()).transpose();
     let run_stats = result?;
@@ -888,4 +891,33 @@ fn report_command(
     developable_sim::report::run_report(&options, &command)?;
     println!("wrote {}", out.join("summary.md").display());
     Ok(())
+}
+
+/// The `run` command's observer: records when asked, and says on stderr when a handle
+/// target goes out of reach and when it is reached again (as the node does).
+struct CliObserver<'a> {
+    recorder: Option<&'a mut RunRecorder>,
+    reach: ReachWatch,
+}
+
+impl StepObserver for CliObserver<'_> {
+    fn after_step(
+        &mut self,
+        scene: &Scene,
+        report: &StepReport,
+        step_ms: f64,
+    ) -> anyhow::Result<()> {
+        let world = &scene.world;
+        for m in self
+            .reach
+            .update(report, world.object_names(), world.handles(), world.time())
+        {
+            let level = if m.out_of_reach { "warning: " } else { "" };
+            eprintln!("{level}{}", m.text);
+        }
+        match self.recorder.as_deref_mut() {
+            Some(r) => r.after_step(scene, report, step_ms),
+            None => Ok(()),
+        }
+    }
 }

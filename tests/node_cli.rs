@@ -1,5 +1,6 @@
 //! Bad parameters and arguments fail before the node joins DDS, with a message that
-//! names the file (or the command line) and the key, and exit code 2.
+//! names the file (or the command line) and the key, and exit code 2; a handle target
+//! the object cannot reach is named while the node goes on.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -171,5 +172,45 @@ fn a_bag_folder_in_use_is_refused() {
         ],
         &[],
         &["already exists"],
+    );
+}
+
+#[test]
+fn an_unreachable_handle_target_is_named_once_and_the_node_goes_on() {
+    // Two grippers pull a 1 m inextensible ribbon to 1.5 m apart (the stress suite's
+    // over-stretch): the node must say which handle cannot reach its target, once, and
+    // keep stepping to the end of its duration. A random-ish domain id keeps parallel
+    // runs apart (this one joins DDS).
+    let scene = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/config/stress/ribbon_over_stretch.yaml"
+    );
+    let domain = (100 + std::process::id() % 100).to_string();
+    let (code, err) = run(
+        &[
+            "node",
+            scene,
+            "--as-fast-as-possible",
+            "--duration",
+            "1",
+            "--domain-id",
+            &domain,
+        ],
+        &[],
+    );
+    assert_eq!(code, 0, "{err}");
+    let warnings: Vec<&str> = err
+        .lines()
+        .filter(|l| l.contains("cannot reach its target"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{err}");
+    assert!(
+        warnings[0].starts_with("[developable_sim] warning: ribbon: handle '"),
+        "{}",
+        warnings[0]
+    );
+    assert!(
+        err.contains("stopped at t = 1.000 s after 100 steps"),
+        "{err}"
     );
 }

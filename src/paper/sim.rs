@@ -271,6 +271,7 @@ impl PaperSim {
             energies: self.energies(),
             isometry_error: self.mesh.isometry_error(),
             constraint_violation: violation,
+            violation_handle: None,
             singular_points: self.singular.len(),
             work_bound: fem.handle_work,
         }

@@ -404,6 +404,9 @@ impl RibbonSim {
             converged: outcome.converged && finite,
             kept_previous_state: !finite,
             constraint_violation: outcome.constraint_violation,
+            violation_handle: outcome
+                .worst_equality
+                .and_then(|e| self.equality_handles.get(e).copied().flatten()),
             ..Default::default()
         };
         if finite {
@@ -420,6 +423,7 @@ impl RibbonSim {
             self.terms = saved_terms;
             self.previous_history.clone_from(&self.history);
             report.constraint_violation = f64::NAN;
+            report.violation_handle = None;
         }
         self.loaded_before = loaded_before;
         self.last_outcome = outcome;

@@ -50,6 +50,8 @@ pub struct SolveOutcome {
     pub converged: bool,
     /// Largest position-constraint residual after the solve, m.
     pub constraint_violation: f64,
+    /// Index (in `StepTerms::equalities`) of the equality with that residual.
+    pub worst_equality: Option<usize>,
     /// Largest rotation-constraint residual (Frobenius entries), dimensionless.
     pub orientation_violation: f64,
     /// Final objective value, J.
@@ -344,11 +346,13 @@ impl StepSolver {
             let mut residual = [0.0; 9];
             let mut max_pos: f64 = 0.0;
             let mut max_rot: f64 = 0.0;
+            let mut worst: Option<usize> = None;
             let mut updates: Vec<Vec<f64>> = Vec::with_capacity(objective_terms.equalities.len());
-            for (eq, lambda) in objective_terms
+            for (index, (eq, lambda)) in objective_terms
                 .equalities
                 .iter()
                 .zip(&objective_terms.multipliers)
+                .enumerate()
             {
                 let rows = eq.rows();
                 objective.equality_residual(&self.workspace, eq, &mut residual[..rows]);
@@ -360,8 +364,9 @@ impl StepSolver {
                 for (i, r) in residual[..rows].iter().enumerate() {
                     if is_rotation_row(i) {
                         max_rot = max_rot.max(r.abs());
-                    } else {
-                        max_pos = max_pos.max(r.abs());
+                    } else if r.abs() > max_pos {
+                        max_pos = r.abs();
+                        worst = Some(index);
                     }
                 }
                 updates.push(
@@ -387,6 +392,7 @@ impl StepSolver {
             objective_terms.multipliers = updates;
             objective_terms.end_crease_multipliers = end;
             outcome.constraint_violation = max_pos;
+            outcome.worst_equality = worst;
             outcome.orientation_violation = max_rot;
             let change = q
                 .iter()

@@ -34,7 +34,7 @@ use crate::record::bag::BagOptions;
 use crate::record::metadata::Qos;
 use crate::record::recorder::{recorded_content, SessionRecorder};
 use crate::scene::Scene;
-use crate::sim::StepReport;
+use crate::sim::{ReachWatch, StepReport};
 
 /// How ticks are paced.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -198,6 +198,8 @@ pub struct SimNode {
     lockstep: Lockstep,
     names: NodeNames,
     // state
+    /// Says when a handle target goes out of reach and when it is reached again.
+    reach: ReachWatch,
     last_report: Option<StepReport>,
     last_step_duration: f64,
     pending_input: Vec<Option<Instant>>,
@@ -527,6 +529,7 @@ impl SimNode {
             pacing: cfg.pacing,
             lockstep: cfg.lockstep,
             names,
+            reach: ReachWatch::default(),
             last_report: None,
             last_step_duration: 0.0,
             pending_input: vec![None; n_handles],
@@ -639,6 +642,17 @@ impl SimNode {
     /// One step now; `trigger` is when the tick started or the lock-step input came.
     fn tick(&mut self, trigger: Instant) {
         let (report, step_s) = self.session.step();
+        let world = &self.session.scene.world;
+        for m in self
+            .reach
+            .update(&report, world.object_names(), world.handles(), world.time())
+        {
+            if m.out_of_reach {
+                eprintln!("[developable_sim] warning: {}", m.text);
+            } else {
+                eprintln!("[developable_sim] {}", m.text);
+            }
+        }
         self.step_ms.push(step_s * 1e3);
         self.stats.steps += 1;
         self.window_steps += 1;
@@ -758,6 +772,7 @@ impl SimNode {
     fn drain_services(&mut self, next_tick: &mut Instant) {
         while let Ok(Some((id, _req))) = self.reset_srv.receive_request() {
             self.session.reset();
+            self.reach.clear();
             self.last_report = None;
             self.last_step_duration = 0.0;
             for p in &mut self.pending_input {

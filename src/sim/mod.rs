@@ -5,9 +5,11 @@
 //! read meshes, singular points and the [`StepReport`]. Pure: no I/O, no ROS, no serde.
 
 pub mod handle;
+pub mod reach;
 mod world;
 
 pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
+pub use reach::{ReachMessage, ReachWatch};
 pub use world::{
     ContactStepReport, Energies, NoClock, ObjectKind, ObjectStepReport, Phase, PhaseClock,
     SimObject, SingularPoint, StepReport, World,

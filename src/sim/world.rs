@@ -55,6 +55,9 @@ pub struct ObjectStepReport {
     pub isometry_error: f64,
     /// Largest handle / loop constraint violation, m.
     pub constraint_violation: f64,
+    /// The world handle whose grasp point is that far from its target (None when the
+    /// largest violation is a loop closure's, or the object does not say).
+    pub violation_handle: Option<usize>,
     /// Number of singular points after the step.
     pub singular_points: usize,
     /// Upper bound on the work the handles and point forces did on the object during

@@ -1,0 +1,163 @@
+//! Handle targets an object cannot reach: an inextensible ribbon pulled past its length,
+//! a grasp point sent farther in one tick than the step can follow. The solver keeps
+//! the object as close as it can and reports the distance (`constraint_violation`);
+//! [`ReachWatch`] turns that number into a sentence when it starts and when it ends, so
+//! that an edge (the node, the CLI) can say what is wrong instead of only counting it.
+
+use super::{HandleSpec, StepReport};
+
+/// A grasp point farther than this from its target is out of reach, m: 1000x the
+/// solver's default constraint tolerance (1e-6 m), so no converging step comes near it,
+/// and small next to a gripper's own precision (~1 mm).
+pub const OUT_OF_REACH: f64 = 1e-3;
+
+/// Back in reach below half of [`OUT_OF_REACH`] (hysteresis: a violation hovering at
+/// the threshold does not repeat the message every tick).
+pub const BACK_IN_REACH: f64 = 0.5 * OUT_OF_REACH;
+
+/// Per object: whether its handles are out of reach now.
+#[derive(Clone, Debug, Default)]
+pub struct ReachWatch {
+    out: Vec<bool>,
+}
+
+impl ReachWatch {
+    /// The messages this step warrants (one per object whose state changed), in object
+    /// order. `time` is the simulation time after the step, s.
+    pub fn update(
+        &mut self,
+        report: &StepReport,
+        object_names: &[String],
+        handles: &[HandleSpec],
+        time: f64,
+    ) -> Vec<ReachMessage> {
+        self.out.resize(report.objects.len(), false);
+        let mut messages = Vec::new();
+        for (i, o) in report.objects.iter().enumerate() {
+            let name = object_names.get(i).map_or("object", String::as_str);
+            let v = o.constraint_violation;
+            if !v.is_finite() {
+                continue;
+            }
+            if !self.out[i] && v > OUT_OF_REACH {
+                self.out[i] = true;
+                let what = match o.violation_handle.and_then(|h| handles.get(h)) {
+                    Some(h) => format!(
+                        "handle '{}' cannot reach its target: its grasp point is {v:.4} m \
+                         from it",
+                        h.name
+                    ),
+                    None => format!("a constraint is violated by {v:.4} m"),
+                };
+                messages.push(ReachMessage {
+                    object: i,
+                    out_of_reach: true,
+                    text: format!(
+                        "{name}: {what} at t = {time:.3} s; the object is kept as close \
+                         as it allows (reported as constraint_violation in its status)"
+                    ),
+                });
+            } else if self.out[i] && v < BACK_IN_REACH {
+                self.out[i] = false;
+                messages.push(ReachMessage {
+                    object: i,
+                    out_of_reach: false,
+                    text: format!(
+                        "{name}: back within {BACK_IN_REACH} m of every handle target at \
+                         t = {time:.3} s"
+                    ),
+                });
+            }
+        }
+        messages
+    }
+
+    /// Forget every state (after a reset).
+    pub fn clear(&mut self) {
+        self.out.clear();
+    }
+}
+
+/// One change of an object's reach.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ReachMessage {
+    pub object: usize,
+    /// True: it went out of reach; false: it came back.
+    pub out_of_reach: bool,
+    pub text: String,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Point2;
+    use crate::sim::{ObjectStepReport, OrientationMode, Trajectory};
+
+    fn report(violation: f64, handle: Option<usize>) -> StepReport {
+        StepReport {
+            time: 0.0,
+            objects: vec![ObjectStepReport {
+                constraint_violation: violation,
+                violation_handle: handle,
+                ..Default::default()
+            }],
+            contact: None,
+        }
+    }
+
+    fn gripper() -> HandleSpec {
+        HandleSpec {
+            name: "right".into(),
+            object: 0,
+            material_point: Point2::new(1.0, 0.0),
+            position_axes: [true; 3],
+            orientation: OrientationMode::Free,
+            trajectory: Trajectory::fixed(crate::geometry::Pose::identity()),
+        }
+    }
+
+    #[test]
+    fn says_once_when_a_handle_goes_out_of_reach_and_once_when_it_is_back() {
+        let names = vec!["ribbon".to_string()];
+        let handles = vec![gripper()];
+        let mut watch = ReachWatch::default();
+        // within tolerance: nothing
+        assert!(watch
+            .update(&report(1e-6, Some(0)), &names, &handles, 0.1)
+            .is_empty());
+        // out of reach: one message naming object, handle and distance
+        let m = watch.update(&report(0.25, Some(0)), &names, &handles, 0.2);
+        assert_eq!(m.len(), 1);
+        assert!(m[0].out_of_reach);
+        assert!(
+            m[0].text
+                .starts_with("ribbon: handle 'right' cannot reach its target")
+                && m[0].text.contains("0.2500 m")
+                && m[0].text.contains("t = 0.200 s"),
+            "{}",
+            m[0].text
+        );
+        // still out, or hovering between the two thresholds: no repetition
+        assert!(watch
+            .update(&report(0.25, Some(0)), &names, &handles, 0.3)
+            .is_empty());
+        assert!(watch
+            .update(&report(0.8e-3, Some(0)), &names, &handles, 0.4)
+            .is_empty());
+        // back: one message
+        let m = watch.update(&report(1e-6, Some(0)), &names, &handles, 0.5);
+        assert_eq!(m.len(), 1);
+        assert!(
+            !m[0].out_of_reach && m[0].text.starts_with("ribbon: back"),
+            "{}",
+            m[0].text
+        );
+        // a loop closure (no handle) is named as a constraint
+        let m = watch.update(&report(2e-3, None), &names, &handles, 0.6);
+        assert!(
+            m[0].text.contains("a constraint is violated by 0.0020 m"),
+            "{}",
+            m[0].text
+        );
+    }
+}
