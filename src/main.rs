@@ -910,10 +910,9 @@ impl StepObserver for CliObserver<'_> {
         let world = &scene.world;
         for m in self
             .reach
-            .update(report, world.object_names(), world.handles(), world.time())
+            .update(report, world.object_names(), world.handles())
         {
-            let level = if m.out_of_reach { "warning: " } else { "" };
-            eprintln!("{level}{}", m.text);
+            eprintln!("{m}");
         }
         match self.recorder.as_deref_mut() {
             Some(r) => r.after_step(scene, report, step_ms),

@@ -207,6 +207,16 @@ impl Equality {
             Equality::Orientation { .. } | Equality::Loop(_) => 9,
         }
     }
+    /// Whether residual row `i` is a rotation row (dimensionless) rather than a
+    /// position row (m): every row of an orientation, rows 6.. of a loop (3 + 3
+    /// position rows for the two rim points, then the normals).
+    pub fn is_rotation_row(&self, i: usize) -> bool {
+        match self {
+            Equality::Position { .. } => false,
+            Equality::Orientation { .. } => true,
+            Equality::Loop(_) => i >= 6,
+        }
+    }
 }
 
 /// Everything that defines one step's objective except q.

@@ -16,9 +16,7 @@
 
 use nalgebra::DMatrix;
 
-use super::objective::{
-    Equality, GradientMode, Layout, Objective, RimHistory, StepTerms, Workspace,
-};
+use super::objective::{GradientMode, Layout, Objective, RimHistory, StepTerms, Workspace};
 use super::params::{SolverKind, SolverSettings};
 use super::reconstruct::Strip;
 use crate::geometry::Pose;
@@ -32,8 +30,9 @@ use crate::optim::{BoxProblem, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNe
 pub const FTOL: f64 = 1e-12;
 
 /// Factor by which our solver raises the augmented-Lagrangian penalty mu after a round
-/// that did not shrink the largest constraint residual 4x, and by which the next step
-/// starts lower again (see `StepSolver::solve`).
+/// that stalled (did not shrink the largest constraint residual 4x, or moved q less
+/// than the outer tolerance), and by which it relaxes after a step that did not raise
+/// it (see `StepSolver::solve`).
 pub const PENALTY_GROWTH: f64 = 10.0;
 
 /// Cap of the adaptive penalty, a factor on the scene's mu (`solver.penalty`): 1e5 J/m^2
@@ -356,13 +355,8 @@ impl StepSolver {
             {
                 let rows = eq.rows();
                 objective.equality_residual(&self.workspace, eq, &mut residual[..rows]);
-                let is_rotation_row = |i: usize| match eq {
-                    Equality::Position { .. } => false,
-                    Equality::Orientation { .. } => true,
-                    Equality::Loop(_) => i >= 6,
-                };
                 for (i, r) in residual[..rows].iter().enumerate() {
-                    if is_rotation_row(i) {
+                    if eq.is_rotation_row(i) {
                         max_rot = max_rot.max(r.abs());
                     } else if r.abs() > max_pos {
                         max_pos = r.abs();
@@ -447,13 +441,10 @@ impl StepSolver {
                 .iter()
                 .zip(&objective_terms.multipliers)
             {
-                let position_rows = match eq {
-                    Equality::Position { .. } => lambda.len(),
-                    Equality::Orientation { .. } => 0,
-                    Equality::Loop(_) => 6.min(lambda.len()),
-                };
-                for l in &lambda[..position_rows] {
-                    largest_force = largest_force.max(l.abs());
+                for (i, l) in lambda.iter().enumerate() {
+                    if !eq.is_rotation_row(i) {
+                        largest_force = largest_force.max(l.abs());
+                    }
                 }
             }
             let floor = (largest_force / element)

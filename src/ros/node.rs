@@ -645,13 +645,9 @@ impl SimNode {
         let world = &self.session.scene.world;
         for m in self
             .reach
-            .update(&report, world.object_names(), world.handles(), world.time())
+            .update(&report, world.object_names(), world.handles())
         {
-            if m.out_of_reach {
-                eprintln!("[developable_sim] warning: {}", m.text);
-            } else {
-                eprintln!("[developable_sim] {}", m.text);
-            }
+            eprintln!("[developable_sim] {m}");
         }
         self.step_ms.push(step_s * 1e3);
         self.stats.steps += 1;

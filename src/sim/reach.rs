@@ -23,14 +23,14 @@ pub struct ReachWatch {
 
 impl ReachWatch {
     /// The messages this step warrants (one per object whose state changed), in object
-    /// order. `time` is the simulation time after the step, s.
+    /// order, stamped with the report's simulation time.
     pub fn update(
         &mut self,
         report: &StepReport,
         object_names: &[String],
         handles: &[HandleSpec],
-        time: f64,
     ) -> Vec<ReachMessage> {
+        let time = report.time;
         self.out.resize(report.objects.len(), false);
         let mut messages = Vec::new();
         for (i, o) in report.objects.iter().enumerate() {
@@ -87,15 +87,25 @@ pub struct ReachMessage {
     pub text: String,
 }
 
+impl std::fmt::Display for ReachMessage {
+    /// The log line: `warning: ` before an object going out of reach.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.out_of_reach {
+            f.write_str("warning: ")?;
+        }
+        f.write_str(&self.text)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::Point2;
     use crate::sim::{ObjectStepReport, OrientationMode, Trajectory};
 
-    fn report(violation: f64, handle: Option<usize>) -> StepReport {
+    fn report(violation: f64, handle: Option<usize>, time: f64) -> StepReport {
         StepReport {
-            time: 0.0,
+            time,
             objects: vec![ObjectStepReport {
                 constraint_violation: violation,
                 violation_handle: handle,
@@ -123,10 +133,10 @@ mod tests {
         let mut watch = ReachWatch::default();
         // within tolerance: nothing
         assert!(watch
-            .update(&report(1e-6, Some(0)), &names, &handles, 0.1)
+            .update(&report(1e-6, Some(0), 0.1), &names, &handles)
             .is_empty());
         // out of reach: one message naming object, handle and distance
-        let m = watch.update(&report(0.25, Some(0)), &names, &handles, 0.2);
+        let m = watch.update(&report(0.25, Some(0), 0.2), &names, &handles);
         assert_eq!(m.len(), 1);
         assert!(m[0].out_of_reach);
         assert!(
@@ -139,13 +149,13 @@ mod tests {
         );
         // still out, or hovering between the two thresholds: no repetition
         assert!(watch
-            .update(&report(0.25, Some(0)), &names, &handles, 0.3)
+            .update(&report(0.25, Some(0), 0.3), &names, &handles)
             .is_empty());
         assert!(watch
-            .update(&report(0.8e-3, Some(0)), &names, &handles, 0.4)
+            .update(&report(0.8e-3, Some(0), 0.4), &names, &handles)
             .is_empty());
         // back: one message
-        let m = watch.update(&report(1e-6, Some(0)), &names, &handles, 0.5);
+        let m = watch.update(&report(1e-6, Some(0), 0.5), &names, &handles);
         assert_eq!(m.len(), 1);
         assert!(
             !m[0].out_of_reach && m[0].text.starts_with("ribbon: back"),
@@ -153,7 +163,7 @@ mod tests {
             m[0].text
         );
         // a loop closure (no handle) is named as a constraint
-        let m = watch.update(&report(2e-3, None), &names, &handles, 0.6);
+        let m = watch.update(&report(2e-3, None, 0.6), &names, &handles);
         assert!(
             m[0].text.contains("a constraint is violated by 0.0020 m"),
             "{}",
