@@ -16,3 +16,4 @@ pub mod params;
 pub mod reply;
 pub mod schema;
 pub mod session;
+pub mod tf;
