@@ -12,6 +12,7 @@ pub mod introspect;
 pub mod msgs;
 pub mod names;
 pub mod node;
+pub mod node_stats;
 pub mod params;
 pub mod reply;
 pub mod schema;

@@ -140,8 +140,7 @@ impl TfBuffer {
             }
             Stamp::At(Timestamp::from_nanos(ns as u64))
         };
-        let rotation =
-            TfQuaternion::from_wxyz(q.w / norm, q.x / norm, q.y / norm, q.z / norm);
+        let rotation = TfQuaternion::from_wxyz(q.w / norm, q.x / norm, q.y / norm, q.z / norm);
         let tf = Transform::new(
             parent,
             child,

@@ -51,7 +51,13 @@ fn tree() -> TfBuffer {
     b.insert_all(
         &[
             tf("base", "gripper", 100 * S, [0.0, 0.0, 0.0], 0.0),
-            tf("/base", "/gripper", 101 * S, [1.0, 0.0, 0.0], std::f64::consts::FRAC_PI_2),
+            tf(
+                "/base",
+                "/gripper",
+                101 * S,
+                [1.0, 0.0, 0.0],
+                std::f64::consts::FRAC_PI_2,
+            ),
         ],
         false,
     );
@@ -99,7 +105,9 @@ fn no_extrapolation_before_the_buffer_or_far_after_it() {
     // within max_lag after the newest stamp: the newest transform (no extrapolation)
     let p = b.lookup("world", "gripper", 101 * S + S / 5, LAG).unwrap();
     assert!(close(p.translation.vector.x, 2.0));
-    let e = b.lookup("world", "gripper", 101 * S + S / 2, LAG).unwrap_err();
+    let e = b
+        .lookup("world", "gripper", 101 * S + S / 2, LAG)
+        .unwrap_err();
     assert_eq!(
         e,
         LookupError::TooNew {
@@ -116,7 +124,10 @@ fn no_extrapolation_before_the_buffer_or_far_after_it() {
 #[test]
 fn keeps_ten_seconds_behind_the_newest_stamp() {
     let mut b = tree();
-    b.insert_all(&[tf("base", "gripper", 111 * S, [3.0, 0.0, 0.0], 0.0)], false);
+    b.insert_all(
+        &[tf("base", "gripper", 111 * S, [3.0, 0.0, 0.0], 0.0)],
+        false,
+    );
     // 111 - 10 = 101: the sample at 100 s is gone, the one at 101 s stays
     assert!(matches!(
         b.lookup("world", "gripper", 100 * S + S / 2, LAG),
@@ -146,7 +157,10 @@ fn bad_transforms_are_counted_not_stored_and_frames_may_change_parent() {
     b.insert_all(&[t], true);
     assert_eq!(b.rejected, 5);
     // the gripper moves from base to table (the newest parent wins)
-    b.insert_all(&[tf("table", "gripper", 102 * S, [0.0, 5.0, 0.0], 0.0)], false);
+    b.insert_all(
+        &[tf("table", "gripper", 102 * S, [0.0, 5.0, 0.0], 0.0)],
+        false,
+    );
     let p = b.lookup("world", "gripper", 102 * S, LAG).unwrap();
     assert!(close(p.translation.vector.y, 5.0), "{p}");
 }
