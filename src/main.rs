@@ -623,13 +623,6 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
     for i in &a.ros.ignored {
         eprintln!("[developable_sim] note: ROS argument `{i}` is accepted and ignored");
     }
-    if p.bool("use_sim_time") == Some(true) {
-        eprintln!(
-            "[developable_sim] note: use_sim_time is ignored: this node owns simulation time and \
-             publishes /clock"
-        );
-    }
-
     let scene_path = match (a.scene, p.string("scene").filter(|s| !s.is_empty())) {
         (Some(s), _) => s,
         (None, Some(s)) => PathBuf::from(s),
@@ -649,6 +642,13 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
             Ok(v)
         } else {
             Err(p.invalid(name, format!("must be > 0, got {v}")).into())
+        }
+    };
+    let non_negative = |name: &str, v: f64| -> anyhow::Result<f64> {
+        if v >= 0.0 && v.is_finite() {
+            Ok(v)
+        } else {
+            Err(p.invalid(name, format!("must be >= 0, got {v}")).into())
         }
     };
     let duration = match a.duration {
@@ -776,6 +776,12 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
         start_paused,
         policy,
         style,
+        use_sim_time: p.bool("use_sim_time").unwrap_or(false),
+        tf_max_lag: non_negative(
+            "tf_max_lag",
+            p.double("tf_max_lag")
+                .unwrap_or(developable_sim::ros::tf::DEFAULT_MAX_LAG),
+        )?,
     })?;
     let stop = Arc::new(AtomicBool::new(false));
     {

@@ -66,6 +66,8 @@ pub struct HandleInput {
     pub rejected_stale_stamp: u64,
     pub rejected_unknown_frame: u64,
     pub rejected_future_stamp: u64,
+    /// TF lookups that failed for this handle (see `ros::graph`).
+    pub rejected_tf_lookup: u64,
 }
 
 impl HandleInput {
@@ -116,6 +118,7 @@ impl HandleInput {
         s.rejected_stale_stamp = self.rejected_stale_stamp;
         s.rejected_unknown_frame = self.rejected_unknown_frame;
         s.rejected_future_stamp = self.rejected_future_stamp;
+        s.rejected_tf_lookup = self.rejected_tf_lookup;
     }
 
     pub fn rejected(&self) -> u64 {
@@ -124,6 +127,7 @@ impl HandleInput {
             + self.rejected_stale_stamp
             + self.rejected_unknown_frame
             + self.rejected_future_stamp
+            + self.rejected_tf_lookup
     }
 }
 

@@ -7,6 +7,8 @@
 
 pub mod cdr;
 pub mod convert;
+pub mod frames;
+pub mod graph;
 pub mod input;
 pub mod introspect;
 pub mod msgs;

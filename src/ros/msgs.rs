@@ -347,6 +347,8 @@ pub struct HandleStatus {
     pub rejected_stale_stamp: u64,
     pub rejected_unknown_frame: u64,
     pub rejected_future_stamp: u64,
+    pub tf_frame: String,
+    pub rejected_tf_lookup: u64,
 }
 
 impl HandleStatus {
@@ -357,6 +359,7 @@ impl HandleStatus {
             + self.rejected_stale_stamp
             + self.rejected_unknown_frame
             + self.rejected_future_stamp
+            + self.rejected_tf_lookup
     }
 }
 

@@ -30,6 +30,9 @@ pub struct NodeNames {
     /// Per object: (markers, singular_points, status).
     pub objects: Vec<ObjectTopics>,
     pub clock: String,
+    /// `/tf` and `/tf_static` (TF in; `/tf` also TF out).
+    pub tf: String,
+    pub tf_static: String,
     /// The colliders' markers (published only when the scene has colliders).
     pub colliders: String,
     pub reset: String,
@@ -96,6 +99,8 @@ impl NodeNames {
         Ok(NodeNames {
             node: node.to_string(),
             clock: resolve("/clock")?,
+            tf: resolve("/tf")?,
+            tf_static: resolve("/tf_static")?,
             colliders: resolve("colliders")?,
             reset: resolve("~/reset")?,
             set_paused: resolve("~/set_paused")?,

@@ -22,10 +22,11 @@ use ros2_client::{
 };
 use serde::Serialize;
 
+use super::graph::{tf_pose, ClockIn, TfIn};
 use super::input::InputPolicy;
 use super::msgs::{
     Clock, MarkerArray, PoseStamped, RosMessage, SetBoolRequest, SetBoolResponse, SimStatus,
-    SingularPoints, TriggerRequest, TriggerResponse,
+    SingularPoints, TFMessage, TriggerRequest, TriggerResponse,
 };
 use super::names::NodeNames;
 pub use super::node_stats::{rss_kib, LatencyStats, NodeStats, Window};
@@ -70,6 +71,10 @@ pub struct NodeConfig {
     pub start_paused: bool,
     pub policy: InputPolicy,
     pub style: MarkerStyle,
+    /// Follow an external `/clock` (and publish none) instead of owning time.
+    pub use_sim_time: bool,
+    /// s, a TF lookup at most this long after a chain's newest transform takes the newest.
+    pub tf_max_lag: f64,
 }
 
 /// A problem starting or running the node.
@@ -83,12 +88,16 @@ pub enum NodeError {
     Poll(#[from] std::io::Error),
 }
 
-fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> NodeError + '_ {
+pub(super) fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> NodeError + '_ {
     move |e| NodeError::Dds(format!("{what}: {e:?}"))
 }
 
 const WAKE: Token = Token(usize::MAX - 1);
 const SERVICE_TOKEN_BASE: usize = 1 << 20;
+const GRAPH_TOKEN_BASE: usize = 1 << 21;
+/// Under use_sim_time, at most this many catch-up steps run between two polls (inputs
+/// and services stay served while the node catches up with a clock far ahead).
+const CATCH_UP_BATCH: usize = 100;
 
 struct ObjectPubs {
     markers: Option<Publisher<MarkerArray>>,
@@ -99,9 +108,22 @@ struct ObjectPubs {
 /// The running node.
 pub struct SimNode {
     // field order = drop order: DDS entities, then the node, then the context
-    subs: Vec<Subscription<PoseStamped>>,
+    /// (handle index, its pose subscription); TF-driven handles have none.
+    subs: Vec<(usize, Subscription<PoseStamped>)>,
     pubs: Vec<ObjectPubs>,
     clock: Option<Publisher<Clock>>,
+    /// TF in (a scene with handles), TF out (`outputs.tf`), an external clock.
+    tf_in: Option<TfIn>,
+    tf_out: Option<Publisher<TFMessage>>,
+    clock_in: Option<ClockIn>,
+    /// (handle index, TF frame) of the handles that follow TF frames.
+    tf_handles: Vec<(usize, String)>,
+    /// Per TF handle: whether its last lookup failed (said once, and when it recovers).
+    tf_failing: Vec<bool>,
+    /// s of simulated time between two published markers (None: every tick), and when
+    /// the last went out.
+    markers_period: Option<f64>,
+    last_markers: Option<f64>,
     /// The colliders' markers (only for a scene with colliders and markers on).
     colliders: Option<Publisher<MarkerArray>>,
     reset_srv: Server<TriggerRequest, TriggerResponse>,
@@ -177,7 +199,7 @@ fn writer_topic(
 
 /// A publisher on `topic` (a resolved ROS name) whose writer history is bounded by its
 /// QoS depth (see [`writer_topic`]). `what` names it in errors.
-fn bounded_publisher<M: RosMessage + Serialize>(
+pub(super) fn bounded_publisher<M: RosMessage + Serialize>(
     node: &mut Node,
     context: &Context,
     node_name: &NodeName,
@@ -194,7 +216,7 @@ fn bounded_publisher<M: RosMessage + Serialize>(
 
 /// The DDS QoS of a recorded-QoS description. Reliable writers never block the loop:
 /// a full window fails the publication (counted) instead.
-fn qos(q: Qos) -> QosProfile {
+pub(super) fn qos(q: Qos) -> QosProfile {
     let p = QosProfile::subscription_default().history(History::KeepLast {
         depth: q.depth as usize,
     });
@@ -210,7 +232,7 @@ fn qos(q: Qos) -> QosProfile {
     })
 }
 
-fn topic_type<M: RosMessage>() -> MessageTypeName {
+pub(super) fn topic_type<M: RosMessage>() -> MessageTypeName {
     let mut parts = M::TYPE.split('/');
     let pkg = parts.next().unwrap_or("");
     let ty = parts.nth(1).unwrap_or("");
@@ -256,7 +278,16 @@ impl SimNode {
         let waker = Arc::new(Waker::new(poll.registry(), WAKE)?);
 
         let mut subs = Vec::new();
+        let tf_handles: Vec<(usize, String)> = scene
+            .handle_tf_frames
+            .iter()
+            .enumerate()
+            .filter_map(|(i, f)| f.clone().map(|f| (i, f)))
+            .collect();
         for (i, t) in names.handles.iter().enumerate() {
+            if tf_handles.iter().any(|(h, _)| *h == i) {
+                continue;
+            }
             let topic = node
                 .create_topic(
                     &name(t)?,
@@ -269,8 +300,39 @@ impl SimNode {
                 .map_err(dds("handle subscription"))?;
             poll.registry()
                 .register(&mut sub, Token(i), Interest::READABLE)?;
-            subs.push(sub);
+            subs.push((i, sub));
         }
+        // TF in for every scene with handles: TF-driven handles, and poses in another
+        // frame of the tree
+        let tf_in = (!names.handles.is_empty())
+            .then(|| {
+                TfIn::new(
+                    &mut node,
+                    &names.tf,
+                    &names.tf_static,
+                    &poll,
+                    GRAPH_TOKEN_BASE,
+                    Duration::from_secs_f64(cfg.tf_max_lag),
+                )
+            })
+            .transpose()?;
+        let clock_in = cfg
+            .use_sim_time
+            .then(|| ClockIn::new(&mut node, &names.clock, &poll, GRAPH_TOKEN_BASE + 2))
+            .transpose()?;
+        let tf_out = outputs
+            .tf
+            .then(|| {
+                bounded_publisher(
+                    &mut node,
+                    &context,
+                    &node_name,
+                    &names.tf,
+                    super::graph::TF_QOS,
+                    "tf",
+                )
+            })
+            .transpose()?;
         let mut pubs = Vec::new();
         for o in &names.objects {
             let markers = outputs
@@ -318,8 +380,8 @@ impl SimNode {
                 status,
             });
         }
-        let clock = outputs
-            .clock
+        // under use_sim_time another node owns /clock
+        let clock = (outputs.clock && !cfg.use_sim_time)
             .then(|| {
                 bounded_publisher(
                     &mut node,
@@ -405,7 +467,11 @@ impl SimNode {
             Interest::READABLE,
         )?;
 
-        let mut session = Session::new(scene, cfg.policy, names.handles.clone());
+        let mut handle_topics = names.handles.clone();
+        for (h, _) in &tf_handles {
+            handle_topics[*h] = names.tf.clone();
+        }
+        let mut session = Session::new(scene, cfg.policy, handle_topics);
         session.style = cfg.style;
         session.paused = cfg.start_paused;
         let recorder = match &cfg.record {
@@ -415,7 +481,7 @@ impl SimNode {
                 &session,
                 &names,
                 published,
-                outputs.clock,
+                outputs.clock && !cfg.use_sim_time,
             )?),
             None => None,
         };
@@ -431,10 +497,18 @@ impl SimNode {
             dt: session.scene.world.dt(),
             ..NodeStats::default()
         };
+        let markers_period = outputs.markers_rate.map(|r| 1.0 / r);
         Ok(SimNode {
             subs,
             pubs,
             clock,
+            tf_in,
+            tf_out,
+            clock_in,
+            tf_failing: vec![false; tf_handles.len()],
+            tf_handles,
+            markers_period,
+            last_markers: None,
             colliders,
             reset_srv,
             pause_srv,
@@ -506,10 +580,14 @@ impl SimNode {
         let period = self.period();
         let mut next_tick = Instant::now() + period;
         let mut events = Events::with_capacity(64);
-        let free_running = self.lockstep == Lockstep::Off;
+        // under use_sim_time the external clock drives the steps
+        let free_running = self.lockstep == Lockstep::Off && self.clock_in.is_none();
+        let mut behind_clock = false;
         while !stop.load(Ordering::SeqCst) && !self.done() {
             let now = Instant::now();
-            let timeout = if free_running && !self.session.paused {
+            let timeout = if behind_clock {
+                Duration::ZERO
+            } else if free_running && !self.session.paused {
                 next_tick.saturating_duration_since(now)
             } else {
                 Duration::from_millis(200)
@@ -526,10 +604,14 @@ impl SimNode {
                 }
             }
             // edge-triggered sources: drain all of them whatever woke us
+            self.drain_graph();
             self.drain_inputs();
             self.drain_services(&mut next_tick);
             if stop.load(Ordering::SeqCst) || self.done() {
                 break;
+            }
+            if self.lockstep == Lockstep::Off {
+                behind_clock = self.follow_clock();
             }
             let now = Instant::now();
             if free_running && !self.session.paused && now >= next_tick {
@@ -565,8 +647,98 @@ impl SimNode {
         }
     }
 
+    /// TF and the external clock: take what arrived.
+    fn drain_graph(&mut self) {
+        if let Some(tf) = &mut self.tf_in {
+            tf.drain();
+        }
+        if let Some(c) = &mut self.clock_in {
+            c.drain();
+        }
+    }
+
+    /// Under use_sim_time: step (at most [`CATCH_UP_BATCH`] times) while the next state's
+    /// time is not after the external clock. Returns whether the node is still behind.
+    fn follow_clock(&mut self) -> bool {
+        let Some(clock_ns) = self.clock_in.as_ref().and_then(|c| c.now_ns) else {
+            return false;
+        };
+        let world = &self.session.scene.world;
+        let (dt, clock) = (world.dt(), clock_ns as f64 * 1e-9);
+        let due = |w: &crate::sim::World| w.time() + 0.5 * dt <= clock;
+        for _ in 0..CATCH_UP_BATCH {
+            if self.session.paused || self.done() || !due(&self.session.scene.world) {
+                return false;
+            }
+            self.tick(Instant::now());
+        }
+        due(&self.session.scene.world)
+    }
+
+    /// The time TF is looked up at for the state a tick computes, ns: the wall clock when
+    /// the node owns time (everyone else stamps in wall time), the state's simulated time
+    /// under use_sim_time (the graph's clock; see `graph`).
+    fn lookup_time_ns(&self) -> u64 {
+        if self.clock_in.is_some() {
+            let w = &self.session.scene.world;
+            ((w.time() + w.dt()) * 1e9).round().max(0.0) as u64
+        } else {
+            crate::record::bag::now_ns()
+        }
+    }
+
+    /// The targets of TF-driven handles for the coming step: each frame looked up in the
+    /// scene frame, offered (and recorded) as a pose of its handle; a failed lookup is
+    /// counted and the handle keeps its last target.
+    fn offer_tf_targets(&mut self) {
+        let Some(tf) = &self.tf_in else {
+            return;
+        };
+        if self.tf_handles.is_empty() {
+            return;
+        }
+        let at = self.lookup_time_ns();
+        let scene_frame = self.session.scene.frame_id.clone();
+        let looked_up: Vec<_> = self
+            .tf_handles
+            .iter()
+            .map(|(h, frame)| (*h, tf_pose(tf, &scene_frame, frame, at)))
+            .collect();
+        for (k, (h, result)) in looked_up.into_iter().enumerate() {
+            let frame = &self.tf_handles[k].1;
+            match result {
+                Ok(msg) => {
+                    if self.tf_failing[k] {
+                        eprintln!(
+                            "[developable_sim] handle {}: TF frame {frame} found again",
+                            self.session.scene.world.handles()[h].name
+                        );
+                        self.tf_failing[k] = false;
+                    }
+                    let arrival_ns = crate::record::bag::now_ns();
+                    self.record(|r| r.record_input(h, &msg, arrival_ns, None));
+                    if self.session.offer(h, &msg, arrival_ns).is_err() {
+                        self.stats.inputs_rejected += 1;
+                    }
+                }
+                Err(e) => {
+                    if !self.tf_failing[k] {
+                        eprintln!(
+                            "[developable_sim] warning: handle {}: TF frame {frame} in {scene_frame}: {e}; the handle keeps its last target",
+                            self.session.scene.world.handles()[h].name
+                        );
+                        self.tf_failing[k] = true;
+                    }
+                    self.session.reject_tf(h);
+                    self.stats.inputs_rejected += 1;
+                }
+            }
+        }
+    }
+
     /// One step now; `trigger` is when the tick started or the lock-step input came.
     fn tick(&mut self, trigger: Instant) {
+        self.offer_tf_targets();
         let (report, step_s) = self.session.step();
         let world = &self.session.scene.world;
         for m in self
@@ -590,10 +762,22 @@ impl SimNode {
         if let Some(c) = &self.clock {
             dropped += c.publish(frame.clock).is_err() as u64;
         }
+        let t = self.session.scene.world.time();
+        let markers_due = match (self.markers_period, self.last_markers) {
+            (Some(period), Some(last)) => t - last >= period - 0.5 * self.session.scene.world.dt(),
+            _ => true,
+        };
+        if markers_due && frame.objects.iter().any(|o| o.markers.is_some()) {
+            self.last_markers = Some(t);
+        }
         for (o, p) in frame.objects.iter().zip(&self.pubs) {
-            if let (Some(m), Some(publisher)) = (&o.markers, &p.markers) {
+            if let (Some(m), Some(publisher), true) = (&o.markers, &p.markers, markers_due) {
                 dropped += publisher.publish(m.clone()).is_err() as u64;
             }
+        }
+        if let Some(publisher) = &self.tf_out {
+            let tf = super::frames::tf_message(&self.session, frame.stamp);
+            dropped += publisher.publish(tf).is_err() as u64;
         }
         if let (Some(m), Some(publisher)) = (&frame.colliders, &self.colliders) {
             dropped += publisher.publish(m.clone()).is_err() as u64;
@@ -647,9 +831,10 @@ impl SimNode {
     }
 
     fn drain_inputs(&mut self) {
-        for h in 0..self.subs.len() {
+        for k in 0..self.subs.len() {
+            let h = self.subs[k].0;
             loop {
-                let taken = match self.subs[h].take() {
+                let taken = match self.subs[k].1.take() {
                     Ok(Some(x)) => x,
                     Ok(None) => break,
                     Err(e) => {
@@ -663,6 +848,25 @@ impl SimNode {
                 };
                 let received = Instant::now();
                 let (msg, info) = taken;
+                // a pose in another frame of the TF tree, in the scene frame at its stamp
+                let msg = match self
+                    .tf_in
+                    .as_ref()
+                    .map(|tf| tf.to_scene(&self.session.scene.frame_id, &msg))
+                {
+                    Some(Ok(Some(transformed))) => transformed,
+                    Some(Err(
+                        super::tf::LookupError::TooOld { .. }
+                        | super::tf::LookupError::TooNew { .. },
+                    )) => {
+                        self.stats.inputs_received += 1;
+                        self.stats.inputs_rejected += 1;
+                        self.session.reject_tf(h);
+                        continue;
+                    }
+                    // unknown frames are the input filter's to reject
+                    _ => msg,
+                };
                 self.stats.inputs_received += 1;
                 self.window_inputs += 1;
                 let publish_ns = info
@@ -695,6 +899,7 @@ impl SimNode {
         while let Ok(Some((id, _req))) = self.reset_srv.receive_request() {
             self.session.reset();
             self.reach.clear();
+            self.last_markers = None;
             self.last_report = None;
             self.last_step_duration = 0.0;
             for p in &mut self.pending_input {
@@ -872,6 +1077,9 @@ impl Drop for SimNode {
         self.subs.clear();
         self.pubs.clear();
         self.clock = None;
+        self.tf_in = None;
+        self.tf_out = None;
+        self.clock_in = None;
         drop(self.node.take());
         if let Some(s) = self.spinner.take() {
             let _ = s.join();

@@ -146,8 +146,18 @@ pub const DECLARED: &[Declared] = &[
         name: "use_sim_time",
         ty: ParamType::Bool,
         default: "false",
-        doc: "Standard ROS parameter; this node owns simulation time and publishes /clock, \
-              so it is accepted and ignored.",
+        doc: "Standard ROS parameter. false: the node owns time and publishes /clock (sim \
+              time from 0). true: it follows an external /clock (ClockQoS), stepping as \
+              many dt as needed to catch up, never backwards, and publishes no /clock.",
+    },
+    Declared {
+        name: "tf_max_lag",
+        ty: ParamType::Double,
+        default: "0.25",
+        doc: "s, >= 0: a TF lookup (a tf_frame handle at a tick, a pose in another frame) \
+              at most this long after the newest transform of its chain takes that newest \
+              transform; later, or older than the 10 s TF buffer, it is a counted \
+              rejection (rejected_tf_lookup) and the handle keeps its last target.",
     },
 ];
 

@@ -132,6 +132,11 @@ impl Session {
         self.inputs[handle].offer(&self.policy, msg, received_ns)
     }
 
+    /// Count a failed TF lookup for handle `handle` (its target stays).
+    pub fn reject_tf(&mut self, handle: usize) {
+        self.inputs[handle].rejected_tf_lookup += 1;
+    }
+
     pub fn inputs(&self) -> &[HandleInput] {
         &self.inputs
     }
@@ -288,6 +293,13 @@ impl Session {
             let mut hs = HandleStatus {
                 name: spec.name.clone(),
                 topic: self.handle_topics.get(h).cloned().unwrap_or_default(),
+                tf_frame: self
+                    .scene
+                    .handle_tf_frames
+                    .get(h)
+                    .cloned()
+                    .flatten()
+                    .unwrap_or_default(),
                 target: pose(&target),
                 ..HandleStatus::default()
             };

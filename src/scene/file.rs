@@ -311,6 +311,10 @@ pub struct HandleFile {
     /// ROS topic. Default `/handles/<name>`.
     #[serde(default)]
     pub topic: Option<String>,
+    /// TF frame the handle follows instead of a pose topic: looked up from `/tf` and
+    /// `/tf_static` in the scene's `frame_id` at each tick. Default: none (the topic).
+    #[serde(default)]
+    pub tf_frame: Option<String>,
     /// Scripted target when nobody publishes.
     #[serde(default)]
     pub trajectory: TrajectoryFile,
@@ -398,6 +402,14 @@ pub struct OutputsFile {
     /// `/clock` when the node owns time. Default true.
     #[serde(default = "d_true")]
     pub clock: bool,
+    /// `/tf`: each object's grasp frames `<object>/<handle>` and end frames
+    /// `<object>/start`, `<object>/end`, parent `frame_id`. Default false.
+    #[serde(default)]
+    pub tf: bool,
+    /// Hz, at most this many markers messages per second per object (the mesh is the
+    /// largest output). Default: every tick.
+    #[serde(default)]
+    pub markers_rate: Option<f64>,
 }
 impl Default for OutputsFile {
     fn default() -> Self {
@@ -406,6 +418,8 @@ impl Default for OutputsFile {
             singular_points: true,
             status: true,
             clock: true,
+            tf: false,
+            markers_rate: None,
         }
     }
 }
@@ -577,6 +591,16 @@ pub(super) fn parse_handle(
             format!("`{topic}` is not an absolute ROS topic name"),
         ));
     }
+    if let Some(f) = &h.tf_frame {
+        let k = format!("{key}.tf_frame");
+        if h.topic.is_some() {
+            return Err(ck.fail(&k, "a handle follows either a `topic` or a `tf_frame`"));
+        }
+        let bare = f.strip_prefix('/').unwrap_or(f);
+        if bare.is_empty() || f.chars().any(char::is_whitespace) {
+            return Err(ck.fail(&k, format!("`{f}` is not a TF frame id")));
+        }
+    }
     Ok((
         HandleSpec {
             name: h.name.clone(),
@@ -609,6 +633,9 @@ impl SceneFile {
         let gravity = ck.vec3("gravity", self.gravity)?;
         if self.frame_id.trim().is_empty() {
             return Err(ck.fail("frame_id", "must not be empty"));
+        }
+        if let Some(rate) = self.outputs.markers_rate {
+            ck.positive("outputs.markers_rate", rate)?;
         }
         let solver = self.solver_settings(&ck)?;
         if self.paper.is_some() {
@@ -1079,7 +1106,10 @@ impl SceneFile {
                 singular_points: self.outputs.singular_points,
                 status: self.outputs.status,
                 clock: self.outputs.clock,
+                tf: self.outputs.tf,
+                markers_rate: self.outputs.markers_rate,
             },
+            handle_tf_frames: self.handles.iter().map(|h| h.tf_frame.clone()).collect(),
             source: self,
         }
     }

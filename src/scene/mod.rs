@@ -55,17 +55,24 @@ pub struct Scene {
     /// ROS topic of each handle (same order as `world.handles()`).
     pub handle_topics: Vec<String>,
     pub outputs: Outputs,
+    /// TF frame each handle follows instead of its topic (same order as
+    /// `world.handles()`; None: the topic).
+    pub handle_tf_frames: Vec<Option<String>>,
     /// The scene as parsed after overrides, for provenance (stats, bags).
     pub source: SceneFile,
 }
 
 /// Which outputs the scene asks for (nothing else is published).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Outputs {
     pub markers: bool,
     pub singular_points: bool,
     pub status: bool,
     pub clock: bool,
+    /// Grasp and end frames on `/tf`.
+    pub tf: bool,
+    /// Hz, the most markers messages per second per object (None: every tick).
+    pub markers_rate: Option<f64>,
 }
 
 /// Read, override (`key.path=value`, value parsed as YAML), validate and build.

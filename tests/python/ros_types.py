@@ -149,6 +149,8 @@ class HandleStatus(IdlStruct, typename="developable_sim::msg::dds_::HandleStatus
     rejected_stale_stamp: t.uint64 = 0
     rejected_unknown_frame: t.uint64 = 0
     rejected_future_stamp: t.uint64 = 0
+    tf_frame: str = ""
+    rejected_tf_lookup: t.uint64 = 0
 
 
 @dataclass
@@ -213,3 +215,21 @@ class SetBoolResponse(IdlStruct, typename="std_srvs::srv::dds_::SetBool_Response
     sequence_number: t.int64 = 0
     success: bool = False
     message: str = ""
+
+
+@dataclass
+class Transform(IdlStruct, typename="geometry_msgs::msg::dds_::Transform_"):
+    translation: Vector3 = field(default_factory=Vector3)
+    rotation: Quaternion = field(default_factory=Quaternion)
+
+
+@dataclass
+class TransformStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TransformStamped_"):
+    header: Header = field(default_factory=Header)
+    child_frame_id: str = ""
+    transform: Transform = field(default_factory=Transform)
+
+
+@dataclass
+class TFMessage(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
+    transforms: t.sequence[TransformStamped] = field(default_factory=list)
