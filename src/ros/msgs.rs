@@ -396,5 +396,5 @@ pub struct SimStatus {
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_196dc28e15f83c0e9ae398b58431264ce438aaa75d442cd4323ffe1fa954f35b"
+    "RIHS01_701045a6aa651ea3a3694896febf1045c7b5f9190b65413a088775518b898c2b"
 );
