@@ -14,7 +14,7 @@ use developable_sim::record::{read, replay};
 use developable_sim::ros::input::InputPolicy;
 use developable_sim::ros::names::NodeNames;
 use developable_sim::ros::node::{Lockstep, NodeConfig, Pacing, SimNode};
-use developable_sim::ros::params::{self, Params};
+use developable_sim::ros::params::{self, ParamValue, Params};
 use developable_sim::ros::session::MarkerStyle;
 use developable_sim::runner::StepObserver;
 use developable_sim::scene::Scene;
@@ -756,6 +756,24 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
         &lockstep,
         record.as_deref(),
     );
+    let use_sim_time = p.bool("use_sim_time").unwrap_or(false);
+    let tf_max_lag = non_negative(
+        "tf_max_lag",
+        p.double("tf_max_lag")
+            .unwrap_or(developable_sim::ros::tf::DEFAULT_MAX_LAG),
+    )?;
+    if let Some(r) = p.double("markers_rate") {
+        non_negative("markers_rate", r)?;
+    }
+    p.set_effective(
+        "scene",
+        ParamValue::String(scene_path.display().to_string()),
+    );
+    p.set_effective("duration", ParamValue::Double(duration));
+    p.set_effective("lockstep", ParamValue::String(lockstep_spec.clone()));
+    if let Some(r) = &record {
+        p.set_effective("record", ParamValue::String(r.display().to_string()));
+    }
     let node = SimNode::new(NodeConfig {
         scene,
         names,
@@ -776,12 +794,9 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
         start_paused,
         policy,
         style,
-        use_sim_time: p.bool("use_sim_time").unwrap_or(false),
-        tf_max_lag: non_negative(
-            "tf_max_lag",
-            p.double("tf_max_lag")
-                .unwrap_or(developable_sim::ros::tf::DEFAULT_MAX_LAG),
-        )?,
+        use_sim_time,
+        tf_max_lag,
+        params: p,
     })?;
     let stop = Arc::new(AtomicBool::new(false));
     {

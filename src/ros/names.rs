@@ -38,6 +38,19 @@ pub struct NodeNames {
     pub reset: String,
     pub set_paused: String,
     pub step: String,
+    /// The rcl_interfaces parameter services.
+    pub parameters: ParameterServices,
+}
+
+/// `~/list_parameters`, `~/get_parameters`, `~/set_parameters`, `~/describe_parameters`,
+/// `~/get_parameter_types`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ParameterServices {
+    pub list: String,
+    pub get: String,
+    pub set: String,
+    pub describe: String,
+    pub get_types: String,
 }
 
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -105,6 +118,13 @@ impl NodeNames {
             reset: resolve("~/reset")?,
             set_paused: resolve("~/set_paused")?,
             step: resolve("~/step")?,
+            parameters: ParameterServices {
+                list: resolve("~/list_parameters")?,
+                get: resolve("~/get_parameters")?,
+                set: resolve("~/set_parameters")?,
+                describe: resolve("~/describe_parameters")?,
+                get_types: resolve("~/get_parameter_types")?,
+            },
             namespace,
             handles,
             objects,

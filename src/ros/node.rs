@@ -18,19 +18,26 @@ use ros2_client::dds::rustdds::mio1::{Events, Interest, Poll, Token, Waker};
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
     Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher,
-    QosProfile, Server, ServiceMapping, ServiceTypeName, Subscription,
+    QosProfile, Subscription,
 };
 use serde::Serialize;
 
 use super::graph::{tf_pose, ClockIn, TfIn};
 use super::input::InputPolicy;
 use super::msgs::{
-    Clock, MarkerArray, PoseStamped, RosMessage, SetBoolRequest, SetBoolResponse, SimStatus,
-    SingularPoints, TFMessage, TriggerRequest, TriggerResponse,
+    Clock, MarkerArray, PoseStamped, RosMessage, SetBoolResponse, SimStatus, SingularPoints,
+    TFMessage, TriggerResponse,
 };
 use super::names::NodeNames;
 pub use super::node_stats::{rss_kib, LatencyStats, NodeStats, Window};
-use super::reply::{ClientReaders, Flushed, HeldReplies};
+use super::param_msgs::{
+    DescribeParametersResponse, GetParameterTypesResponse, GetParametersResponse,
+    ListParametersResponse, SetParametersResponse, SetParametersResult,
+};
+use super::param_server::ParamTable;
+use super::params::{ParamValue, Params};
+use super::reply::Flushed;
+use super::services::Services;
 use super::session::{Frame, FrameContent, MarkerStyle, Session};
 use crate::record::bag::BagOptions;
 use crate::record::metadata::Qos;
@@ -75,6 +82,9 @@ pub struct NodeConfig {
     pub use_sim_time: bool,
     /// s, a TF lookup at most this long after a chain's newest transform takes the newest.
     pub tf_max_lag: f64,
+    /// The parameters as read (the parameter services report them; the node's own
+    /// settings above win where they differ).
+    pub params: Params,
 }
 
 /// A problem starting or running the node.
@@ -126,13 +136,9 @@ pub struct SimNode {
     last_markers: Option<f64>,
     /// The colliders' markers (only for a scene with colliders and markers on).
     colliders: Option<Publisher<MarkerArray>>,
-    reset_srv: Server<TriggerRequest, TriggerResponse>,
-    pause_srv: Server<SetBoolRequest, SetBoolResponse>,
-    step_srv: Server<TriggerRequest, TriggerResponse>,
-    reset_replies: HeldReplies<TriggerResponse>,
-    pause_replies: HeldReplies<SetBoolResponse>,
-    step_replies: HeldReplies<TriggerResponse>,
-    client_readers: ClientReaders,
+    services: Services,
+    /// The parameters as the parameter services report them.
+    params: ParamTable,
     node: Option<Node>,
     spinner: Option<std::thread::JoinHandle<()>>,
     _context: Context,
@@ -409,63 +415,7 @@ impl SimNode {
                 )
             })
             .transpose()?;
-        let srv_qos = QosProfile::publisher_default()
-            .reliability_reliable(WhenFull::Fail)
-            .durability(Durability::Volatile)
-            .history(History::KeepLast { depth: 10 });
-        let trigger = ServiceTypeName::new("std_srvs", "Trigger");
-        let held = |s: &str| -> Result<_, NodeError> {
-            let n = name(s)?;
-            Ok(HeldReplies::new(
-                n.to_dds_name("rq", &node_name, "Request"),
-                n.to_dds_name("rr", &node_name, "Reply"),
-            ))
-        };
-        let reset_replies = held(&names.reset)?;
-        let pause_replies = held(&names.set_paused)?;
-        let step_replies = held(&names.step)?;
-        let mut reset_srv = node
-            .create_server::<TriggerRequest, TriggerResponse>(
-                ServiceMapping::Cyclone,
-                &name(&names.reset)?,
-                &trigger,
-                srv_qos.clone(),
-                srv_qos.clone(),
-            )
-            .map_err(dds("reset service"))?;
-        let mut pause_srv = node
-            .create_server::<SetBoolRequest, SetBoolResponse>(
-                ServiceMapping::Cyclone,
-                &name(&names.set_paused)?,
-                &ServiceTypeName::new("std_srvs", "SetBool"),
-                srv_qos.clone(),
-                srv_qos.clone(),
-            )
-            .map_err(dds("set_paused service"))?;
-        let mut step_srv = node
-            .create_server::<TriggerRequest, TriggerResponse>(
-                ServiceMapping::Cyclone,
-                &name(&names.step)?,
-                &trigger,
-                srv_qos.clone(),
-                srv_qos,
-            )
-            .map_err(dds("step service"))?;
-        poll.registry().register(
-            &mut reset_srv,
-            Token(SERVICE_TOKEN_BASE),
-            Interest::READABLE,
-        )?;
-        poll.registry().register(
-            &mut pause_srv,
-            Token(SERVICE_TOKEN_BASE + 1),
-            Interest::READABLE,
-        )?;
-        poll.registry().register(
-            &mut step_srv,
-            Token(SERVICE_TOKEN_BASE + 2),
-            Interest::READABLE,
-        )?;
+        let services = Services::new(&mut node, &node_name, &names, &poll, SERVICE_TOKEN_BASE)?;
 
         let mut handle_topics = names.handles.clone();
         for (h, _) in &tf_handles {
@@ -497,7 +447,21 @@ impl SimNode {
             dt: session.scene.world.dt(),
             ..NodeStats::default()
         };
-        let markers_period = outputs.markers_rate.map(|r| 1.0 / r);
+        let mut params = ParamTable::new(&cfg.params);
+        // the parameters in effect (flags and the scene may have set them)
+        let markers_rate = match cfg.params.double("markers_rate") {
+            Some(r) => r,
+            None => outputs.markers_rate.unwrap_or(0.0),
+        };
+        params.store("markers_rate", ParamValue::Double(markers_rate));
+        params.store("paused", ParamValue::Bool(cfg.start_paused));
+        params.store("start_paused", ParamValue::Bool(cfg.start_paused));
+        params.store("use_sim_time", ParamValue::Bool(cfg.use_sim_time));
+        params.store("tf_max_lag", ParamValue::Double(cfg.tf_max_lag));
+        if let Pacing::RealTime { factor } = cfg.pacing {
+            params.store("real_time_factor", ParamValue::Double(factor));
+        }
+        let markers_period = (markers_rate > 0.0).then(|| 1.0 / markers_rate);
         Ok(SimNode {
             subs,
             pubs,
@@ -510,13 +474,8 @@ impl SimNode {
             markers_period,
             last_markers: None,
             colliders,
-            reset_srv,
-            pause_srv,
-            step_srv,
-            reset_replies,
-            pause_replies,
-            step_replies,
-            client_readers: ClientReaders::default(),
+            services,
+            params,
             node: Some(node),
             spinner: Some(spinner),
             _context: context,
@@ -577,8 +536,7 @@ impl SimNode {
         self.window_start = self.started;
         let frame = self.session.frame(None, 0.0, self.content());
         self.emit(&frame, None);
-        let period = self.period();
-        let mut next_tick = Instant::now() + period;
+        let mut next_tick = Instant::now() + self.period();
         let mut events = Events::with_capacity(64);
         // under use_sim_time the external clock drives the steps
         let free_running = self.lockstep == Lockstep::Off && self.clock_in.is_none();
@@ -615,6 +573,8 @@ impl SimNode {
             }
             let now = Instant::now();
             if free_running && !self.session.paused && now >= next_tick {
+                // real_time_factor may change at run time
+                let period = self.period();
                 self.tick(now);
                 next_tick += period;
                 let after = Instant::now();
@@ -896,7 +856,7 @@ impl SimNode {
     }
 
     fn drain_services(&mut self, next_tick: &mut Instant) {
-        while let Ok(Some((id, _req))) = self.reset_srv.receive_request() {
+        while let Some((id, _req)) = self.services.reset.receive() {
             self.session.reset();
             self.reach.clear();
             self.last_markers = None;
@@ -912,26 +872,10 @@ impl SimNode {
                 success: true,
                 message: format!("reset to t = 0 s (episode {})", self.session.episode),
             };
-            self.reset_replies.hold(id, resp);
+            self.services.reset.reply(id, resp);
         }
-        while let Ok(Some((id, req))) = self.pause_srv.receive_request() {
-            let was = self.session.paused;
-            self.session.paused = req.data;
-            if was && !req.data {
-                *next_tick = Instant::now() + self.period();
-            }
-            if was != req.data {
-                // a fresh status so subscribers see `paused` change
-                let content = FrameContent {
-                    markers: false,
-                    singular_points: false,
-                    status: true,
-                };
-                let frame =
-                    self.session
-                        .frame(self.last_report.as_ref(), self.last_step_duration, content);
-                self.emit(&frame, None);
-            }
+        while let Some((id, req)) = self.services.set_paused.receive() {
+            self.set_paused(req.data, next_tick);
             let t = self.session.scene.world.time();
             let resp = SetBoolResponse {
                 success: true,
@@ -941,9 +885,9 @@ impl SimNode {
                     format!("running from t = {t:.6} s")
                 },
             };
-            self.pause_replies.hold(id, resp);
+            self.services.set_paused.reply(id, resp);
         }
-        while let Ok(Some((id, _req))) = self.step_srv.receive_request() {
+        while let Some((id, _req)) = self.services.step.receive() {
             let resp = if self.lockstep == Lockstep::Service || self.session.paused {
                 self.tick(Instant::now());
                 TriggerResponse {
@@ -962,49 +906,132 @@ impl SimNode {
                         .into(),
                 }
             };
-            self.step_replies.hold(id, resp);
+            self.services.step.reply(id, resp);
         }
+        self.drain_parameter_services(next_tick);
         self.flush_replies();
     }
 
     fn replies_waiting(&self) -> bool {
-        !(self.reset_replies.is_empty()
-            && self.pause_replies.is_empty()
-            && self.step_replies.is_empty())
+        self.services.waiting()
+    }
+
+    /// Pause or resume; a change sends a fresh status so subscribers see `paused`.
+    fn set_paused(&mut self, paused: bool, next_tick: &mut Instant) {
+        let was = self.session.paused;
+        self.session.paused = paused;
+        self.params.store("paused", ParamValue::Bool(paused));
+        if was && !paused {
+            *next_tick = Instant::now() + self.period();
+        }
+        if was != paused {
+            let content = FrameContent {
+                markers: false,
+                singular_points: false,
+                status: true,
+            };
+            let frame =
+                self.session
+                    .frame(self.last_report.as_ref(), self.last_step_duration, content);
+            self.emit(&frame, None);
+        }
+    }
+
+    /// Answer the rcl_interfaces parameter services; apply what `set_parameters` changed.
+    fn drain_parameter_services(&mut self, next_tick: &mut Instant) {
+        let s = &mut self.services;
+        while let Some((id, req)) = s.list_parameters.receive() {
+            let result = self.params.list(&req);
+            s.list_parameters
+                .reply(id, ListParametersResponse { result });
+        }
+        while let Some((id, req)) = s.get_parameters.receive() {
+            let values = self.params.values(&req.names);
+            s.get_parameters.reply(id, GetParametersResponse { values });
+        }
+        while let Some((id, req)) = s.describe_parameters.receive() {
+            let descriptors = self.params.describe(&req.names);
+            s.describe_parameters
+                .reply(id, DescribeParametersResponse { descriptors });
+        }
+        while let Some((id, req)) = s.get_parameter_types.receive() {
+            let types = self.params.types(&req.names);
+            s.get_parameter_types
+                .reply(id, GetParameterTypesResponse { types });
+        }
+        while let Some((id, req)) = self.services.set_parameters.receive() {
+            let results = req
+                .parameters
+                .iter()
+                .map(|p| match self.params.check(p) {
+                    Ok(v) => {
+                        self.apply_parameter(&p.name, &v, next_tick);
+                        self.params.store(&p.name, v);
+                        SetParametersResult {
+                            successful: true,
+                            reason: String::new(),
+                        }
+                    }
+                    Err(reason) => SetParametersResult {
+                        successful: false,
+                        reason,
+                    },
+                })
+                .collect();
+            self.services
+                .set_parameters
+                .reply(id, SetParametersResponse { results });
+        }
+    }
+
+    /// Make a checked run-time parameter take effect (see `param_server::RUNTIME`).
+    fn apply_parameter(&mut self, name: &str, v: &ParamValue, next_tick: &mut Instant) {
+        let (b, x) = match v {
+            ParamValue::Bool(b) => (*b, 0.0),
+            ParamValue::Double(x) => (false, *x),
+            _ => (false, 0.0),
+        };
+        match name {
+            "paused" => self.set_paused(b, next_tick),
+            "markers_rate" => self.markers_period = (x > 0.0).then(|| 1.0 / x),
+            "accept_empty_frame_id" => self.session.policy.accept_empty_frame_id = b,
+            "max_stamp_lead" => self.session.policy.max_stamp_lead = x,
+            "tf_max_lag" => {
+                if let Some(tf) = &mut self.tf_in {
+                    tf.max_lag = Duration::from_secs_f64(x);
+                }
+            }
+            "real_time_factor" => {
+                if let Pacing::RealTime { factor } = &mut self.pacing {
+                    *factor = x;
+                    *next_tick = Instant::now() + self.period();
+                }
+            }
+            "marker.line_width" => self.session.style.line_width = x,
+            "marker.sphere_diameter" => self.session.style.sphere_diameter = x,
+            _ => {}
+        }
     }
 
     /// Send the held replies whose clients can receive them (see `reply`).
     fn flush_replies(&mut self) {
-        if !self.replies_waiting() {
-            return;
-        }
-        let now = Instant::now();
-        self.client_readers
-            .refresh(&self._context.domain_participant(), now);
-        let r = &self.client_readers;
-        let done = [
-            self.reset_replies.flush(&self.reset_srv, r, now),
-            self.pause_replies.flush(&self.pause_srv, r, now),
-            self.step_replies.flush(&self.step_srv, r, now),
-        ];
-        for d in done {
-            let Flushed {
-                sent,
+        let participant = self._context.domain_participant();
+        let Flushed {
+            sent,
+            sent_unseen,
+            failed,
+        } = self.services.flush(&participant, Instant::now());
+        self.stats.service_replies += sent + sent_unseen;
+        self.stats.service_replies_unseen += sent_unseen + failed;
+        if sent_unseen + failed > 0 {
+            eprintln!(
+                "[developable_sim] warning: {} service repl{} sent although the \
+                 client's reply reader was not discovered within {} s, {failed} failed \
+                 (is the client on the Cyclone DDS service mapping?)",
                 sent_unseen,
-                failed,
-            } = d;
-            self.stats.service_replies += sent + sent_unseen;
-            self.stats.service_replies_unseen += sent_unseen + failed;
-            if sent_unseen + failed > 0 {
-                eprintln!(
-                    "[developable_sim] warning: {} service repl{} sent although the \
-                     client's reply reader was not discovered within {} s, {failed} failed \
-                     (is the client on the Cyclone DDS service mapping?)",
-                    sent_unseen,
-                    if sent_unseen == 1 { "y" } else { "ies" },
-                    super::reply::GIVE_UP.as_secs()
-                );
-            }
+                if sent_unseen == 1 { "y" } else { "ies" },
+                super::reply::GIVE_UP.as_secs()
+            );
         }
     }
 

@@ -151,6 +151,28 @@ pub const DECLARED: &[Declared] = &[
               many dt as needed to catch up, never backwards, and publishes no /clock.",
     },
     Declared {
+        name: "paused",
+        ty: ParamType::Bool,
+        default: "false",
+        doc: "Run-time: true pauses the simulation, false resumes it (as ~/set_paused); \
+              starts as start_paused.",
+    },
+    Declared {
+        name: "markers_rate",
+        ty: ParamType::Double,
+        default: "0.0",
+        doc: "Hz, >= 0, run-time: at most this many markers messages per second of \
+              simulated time per object; 0: every tick. Set: overrides the scene's \
+              outputs.markers_rate.",
+    },
+    Declared {
+        name: "foxglove_port",
+        ty: ParamType::Integer,
+        default: "0",
+        doc: "TCP port of the live Foxglove WebSocket server on 127.0.0.1 (as --foxglove \
+              PORT); 0: none.",
+    },
+    Declared {
         name: "tf_max_lag",
         ty: ParamType::Double,
         default: "0.25",
@@ -224,6 +246,13 @@ impl Params {
             Some(ParamValue::StringArray(s)) => Some(s),
             _ => None,
         }
+    }
+
+    /// Record the value in effect for `name` when a command-line flag or argument set it
+    /// (`--duration`, the SCENE argument), so the parameter services report it.
+    pub fn set_effective(&mut self, name: &str, value: ParamValue) {
+        self.values
+            .insert(name.to_string(), (value, "command line".to_string()));
     }
 
     /// An error about parameter `name`, naming where it was set.

@@ -233,3 +233,135 @@ class TransformStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TransformS
 @dataclass
 class TFMessage(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
     transforms: t.sequence[TransformStamped] = field(default_factory=list)
+
+
+# rcl_interfaces (parameter services), on the rmw_cyclonedds service wire format
+
+
+@dataclass
+class ParameterValue(IdlStruct, typename="rcl_interfaces::msg::dds_::ParameterValue_"):
+    type: t.uint8 = 0
+    bool_value: bool = False
+    integer_value: t.int64 = 0
+    double_value: t.float64 = 0.0
+    string_value: str = ""
+    byte_array_value: t.sequence[t.uint8] = field(default_factory=list)
+    bool_array_value: t.sequence[bool] = field(default_factory=list)
+    integer_array_value: t.sequence[t.int64] = field(default_factory=list)
+    double_array_value: t.sequence[t.float64] = field(default_factory=list)
+    string_array_value: t.sequence[str] = field(default_factory=list)
+
+
+@dataclass
+class Parameter(IdlStruct, typename="rcl_interfaces::msg::dds_::Parameter_"):
+    name: str = ""
+    value: ParameterValue = field(default_factory=ParameterValue)
+
+
+@dataclass
+class FloatingPointRange(IdlStruct, typename="rcl_interfaces::msg::dds_::FloatingPointRange_"):
+    from_value: t.float64 = 0.0
+    to_value: t.float64 = 0.0
+    step: t.float64 = 0.0
+
+
+@dataclass
+class IntegerRange(IdlStruct, typename="rcl_interfaces::msg::dds_::IntegerRange_"):
+    from_value: t.int64 = 0
+    to_value: t.int64 = 0
+    step: t.uint64 = 0
+
+
+@dataclass
+class ParameterDescriptor(IdlStruct, typename="rcl_interfaces::msg::dds_::ParameterDescriptor_"):
+    name: str = ""
+    type: t.uint8 = 0
+    description: str = ""
+    additional_constraints: str = ""
+    read_only: bool = False
+    dynamic_typing: bool = False
+    floating_point_range: t.sequence[FloatingPointRange, 1] = field(default_factory=list)
+    integer_range: t.sequence[IntegerRange, 1] = field(default_factory=list)
+
+
+@dataclass
+class SetParametersResult(IdlStruct, typename="rcl_interfaces::msg::dds_::SetParametersResult_"):
+    successful: bool = False
+    reason: str = ""
+
+
+@dataclass
+class ListParametersResult(IdlStruct, typename="rcl_interfaces::msg::dds_::ListParametersResult_"):
+    names: t.sequence[str] = field(default_factory=list)
+    prefixes: t.sequence[str] = field(default_factory=list)
+
+
+@dataclass
+class ListParametersRequest(IdlStruct, typename="rcl_interfaces::srv::dds_::ListParameters_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    prefixes: t.sequence[str] = field(default_factory=list)
+    depth: t.uint64 = 0
+
+
+@dataclass
+class ListParametersResponse(IdlStruct, typename="rcl_interfaces::srv::dds_::ListParameters_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    result: ListParametersResult = field(default_factory=ListParametersResult)
+
+
+@dataclass
+class GetParametersRequest(IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameters_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    names: t.sequence[str] = field(default_factory=list)
+
+
+@dataclass
+class GetParametersResponse(IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameters_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    values: t.sequence[ParameterValue] = field(default_factory=list)
+
+
+@dataclass
+class SetParametersRequest(IdlStruct, typename="rcl_interfaces::srv::dds_::SetParameters_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    parameters: t.sequence[Parameter] = field(default_factory=list)
+
+
+@dataclass
+class SetParametersResponse(IdlStruct, typename="rcl_interfaces::srv::dds_::SetParameters_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    results: t.sequence[SetParametersResult] = field(default_factory=list)
+
+
+@dataclass
+class DescribeParametersRequest(IdlStruct, typename="rcl_interfaces::srv::dds_::DescribeParameters_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    names: t.sequence[str] = field(default_factory=list)
+
+
+@dataclass
+class DescribeParametersResponse(IdlStruct, typename="rcl_interfaces::srv::dds_::DescribeParameters_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    descriptors: t.sequence[ParameterDescriptor] = field(default_factory=list)
+
+
+@dataclass
+class GetParameterTypesRequest(IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameterTypes_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    names: t.sequence[str] = field(default_factory=list)
+
+
+@dataclass
+class GetParameterTypesResponse(IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameterTypes_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    types: t.sequence[t.uint8] = field(default_factory=list)

@@ -1,0 +1,190 @@
+//! The node's services on the Cyclone DDS service mapping (as rclpy on rmw_cyclonedds
+//! calls them): `~/reset`, `~/set_paused`, `~/step` (std_srvs) and the parameter
+//! services `~/list_parameters`, `~/get_parameters`, `~/set_parameters`,
+//! `~/describe_parameters`, `~/get_parameter_types` (rcl_interfaces). Every reply is
+//! held until the client's reply reader is discovered ([`super::reply`]).
+//!
+//! ros2-client's own parameter services are hard-wired to the Enhanced (Fast DDS)
+//! mapping, which Cyclone clients cannot call; the node turns them off
+//! (`start_parameter_services(false)`), so these are the only ones on those names.
+
+use std::time::Instant;
+
+use ros2_client::dds::rustdds::mio1::{Interest, Poll, Token};
+use ros2_client::qos::{Durability, History, WhenFull};
+use ros2_client::{
+    Message, Name, Node, NodeName, QosProfile, RmwRequestId, Server, ServiceMapping,
+    ServiceTypeName,
+};
+
+use super::msgs::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
+use super::names::NodeNames;
+use super::node::{dds, NodeError};
+use super::param_msgs::*;
+use super::reply::{ClientReaders, Flushed, HeldReplies};
+
+/// One server and the replies it holds.
+pub struct Service<Req: Message + 'static, Resp: Message + 'static> {
+    server: Server<Req, Resp>,
+    replies: HeldReplies<Resp>,
+}
+
+impl<Req: Message + Clone + 'static, Resp: Message + 'static> Service<Req, Resp> {
+    fn new(
+        ctx: &mut Ctx,
+        name: &str,
+        type_name: (&str, &str),
+        what: &str,
+    ) -> Result<Self, NodeError> {
+        let n = Name::parse(name).map_err(dds("service name"))?;
+        let qos = QosProfile::publisher_default()
+            .reliability_reliable(WhenFull::Fail)
+            .durability(Durability::Volatile)
+            .history(History::KeepLast { depth: 10 });
+        let mut server = ctx
+            .node
+            .create_server::<Req, Resp>(
+                ServiceMapping::Cyclone,
+                &n,
+                &ServiceTypeName::new(type_name.0, type_name.1),
+                qos.clone(),
+                qos,
+            )
+            .map_err(|e| NodeError::Dds(format!("{what} service: {e:?}")))?;
+        ctx.poll
+            .registry()
+            .register(&mut server, Token(ctx.token), Interest::READABLE)?;
+        ctx.token += 1;
+        let replies = HeldReplies::new(
+            n.to_dds_name("rq", ctx.node_name, "Request"),
+            n.to_dds_name("rr", ctx.node_name, "Reply"),
+        );
+        Ok(Service { server, replies })
+    }
+
+    /// The next request, if any.
+    pub fn receive(&mut self) -> Option<(RmwRequestId, Req)> {
+        self.server.receive_request().ok().flatten()
+    }
+
+    /// Hold the reply to `id` until its client can receive it.
+    pub fn reply(&mut self, id: RmwRequestId, response: Resp) {
+        self.replies.hold(id, response);
+    }
+
+    fn flush(&mut self, readers: &ClientReaders, now: Instant) -> Flushed {
+        self.replies.flush(&self.server, readers, now)
+    }
+}
+
+struct Ctx<'a> {
+    node: &'a mut Node,
+    node_name: &'a NodeName,
+    poll: &'a Poll,
+    token: usize,
+}
+
+/// Every service of the node.
+pub struct Services {
+    pub reset: Service<TriggerRequest, TriggerResponse>,
+    pub set_paused: Service<SetBoolRequest, SetBoolResponse>,
+    pub step: Service<TriggerRequest, TriggerResponse>,
+    pub list_parameters: Service<ListParametersRequest, ListParametersResponse>,
+    pub get_parameters: Service<NamesRequest, GetParametersResponse>,
+    pub set_parameters: Service<SetParametersRequest, SetParametersResponse>,
+    pub describe_parameters: Service<NamesRequest, DescribeParametersResponse>,
+    pub get_parameter_types: Service<NamesRequest, GetParameterTypesResponse>,
+    client_readers: ClientReaders,
+}
+
+impl Services {
+    /// Create every server; they wake `poll` on tokens from `token` on.
+    pub fn new(
+        node: &mut Node,
+        node_name: &NodeName,
+        names: &NodeNames,
+        poll: &Poll,
+        token: usize,
+    ) -> Result<Services, NodeError> {
+        let mut c = Ctx {
+            node,
+            node_name,
+            poll,
+            token,
+        };
+        let trigger = ("std_srvs", "Trigger");
+        let rcl = |t| ("rcl_interfaces", t);
+        let p = &names.parameters;
+        Ok(Services {
+            reset: Service::new(&mut c, &names.reset, trigger, "reset")?,
+            set_paused: Service::new(
+                &mut c,
+                &names.set_paused,
+                ("std_srvs", "SetBool"),
+                "set_paused",
+            )?,
+            step: Service::new(&mut c, &names.step, trigger, "step")?,
+            list_parameters: Service::new(
+                &mut c,
+                &p.list,
+                rcl("ListParameters"),
+                "list_parameters",
+            )?,
+            get_parameters: Service::new(&mut c, &p.get, rcl("GetParameters"), "get_parameters")?,
+            set_parameters: Service::new(&mut c, &p.set, rcl("SetParameters"), "set_parameters")?,
+            describe_parameters: Service::new(
+                &mut c,
+                &p.describe,
+                rcl("DescribeParameters"),
+                "describe_parameters",
+            )?,
+            get_parameter_types: Service::new(
+                &mut c,
+                &p.get_types,
+                rcl("GetParameterTypes"),
+                "get_parameter_types",
+            )?,
+            client_readers: ClientReaders::default(),
+        })
+    }
+
+    /// Whether any reply is held.
+    pub fn waiting(&self) -> bool {
+        !(self.reset.replies.is_empty()
+            && self.set_paused.replies.is_empty()
+            && self.step.replies.is_empty()
+            && self.list_parameters.replies.is_empty()
+            && self.get_parameters.replies.is_empty()
+            && self.set_parameters.replies.is_empty()
+            && self.describe_parameters.replies.is_empty()
+            && self.get_parameter_types.replies.is_empty())
+    }
+
+    /// Send the held replies whose clients can receive them; what was sent, summed.
+    pub fn flush(
+        &mut self,
+        participant: &ros2_client::dds::rustdds::DomainParticipant,
+        now: Instant,
+    ) -> Flushed {
+        if !self.waiting() {
+            return Flushed::default();
+        }
+        self.client_readers.refresh(participant, now);
+        let r = &self.client_readers;
+        let all = [
+            self.reset.flush(r, now),
+            self.set_paused.flush(r, now),
+            self.step.flush(r, now),
+            self.list_parameters.flush(r, now),
+            self.get_parameters.flush(r, now),
+            self.set_parameters.flush(r, now),
+            self.describe_parameters.flush(r, now),
+            self.get_parameter_types.flush(r, now),
+        ];
+        all.iter().fold(Flushed::default(), |a, d| Flushed {
+            sent: a.sent + d.sent,
+            sent_unseen: a.sent_unseen + d.sent_unseen,
+            failed: a.failed + d.failed,
+        })
+    }
+}
