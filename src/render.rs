@@ -165,9 +165,9 @@ impl Camera {
             .filter(|p| p.iter().all(|x| x.is_finite()))
             .collect();
         let first = *points.first()?;
-        let (lo, hi) = points.iter().fold((first, first), |(lo, hi), p| {
-            (lo.inf(p), hi.sup(p))
-        });
+        let (lo, hi) = points
+            .iter()
+            .fold((first, first), |(lo, hi), p| (lo.inf(p), hi.sup(p)));
         let center = (lo + hi) / 2.0;
         let radius = ((hi - lo).norm() / 2.0).max(1e-6);
         let forward = view.normalize();
@@ -240,7 +240,10 @@ fn region_color(m: &SurfaceMesh, t: &[u32; 3]) -> [f64; 3] {
         .iter()
         .filter(|&&i| {
             !matches!(
-                m.regions.get(i as usize).copied().unwrap_or(VertexRegion::Flat),
+                m.regions
+                    .get(i as usize)
+                    .copied()
+                    .unwrap_or(VertexRegion::Flat),
                 VertexRegion::Flat
             )
         })
@@ -391,8 +394,8 @@ impl Raster {
     /// what is drawn + `bias` (m); `bias` > 0 draws onto a coplanar surface without
     /// changing its depth.
     fn fill(&mut self, p: &[[f64; 3]; 3], color: [f64; 3], bias: f64) {
-        let area = (p[1][0] - p[0][0]) * (p[2][1] - p[0][1])
-            - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
+        let area =
+            (p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) - (p[2][0] - p[0][0]) * (p[1][1] - p[0][1]);
         if !area.is_finite() || area.abs() < 1e-12 {
             return;
         }
@@ -519,7 +522,11 @@ impl Raster {
                 rgb.extend(sum.map(|s| (s / n).round().clamp(0.0, 255.0) as u8));
             }
         }
-        Image { width: w, height: h, rgb }
+        Image {
+            width: w,
+            height: h,
+            rgb,
+        }
     }
 }
 
@@ -556,12 +563,17 @@ mod tests {
     #[test]
     fn the_two_sides_of_the_surface_have_different_tints() {
         let m = square(0.0, VertexRegion::Flat, vec![]);
-        let top = render(&[&m], &opts([0.0, 0.0, -1.0])).unwrap().pixel(20, 20);
+        let top = render(&[&m], &opts([0.0, 0.0, -1.0]))
+            .unwrap()
+            .pixel(20, 20);
         let bottom = render(&[&m], &opts([0.0, 0.0, 1.0])).unwrap().pixel(20, 20);
         // the material +z side in the flat colour (blue), the other side greyed
         let saturation = |c: [u8; 3]| c.iter().max().unwrap() - c.iter().min().unwrap();
         assert!(top[2] > top[0] + 60, "{top:?}");
-        assert!(2 * saturation(bottom) < saturation(top), "{top:?} vs {bottom:?}");
+        assert!(
+            2 * saturation(bottom) < saturation(top),
+            "{top:?} vs {bottom:?}"
+        );
     }
 
     #[test]
@@ -587,7 +599,10 @@ mod tests {
         // screen rows run down: the +y face is the upper half
         let towards = brightness(img.pixel(32, 20));
         let away = brightness(img.pixel(32, 44));
-        assert!(towards > away + 30, "towards the light {towards}, away {away}");
+        assert!(
+            towards > away + 30,
+            "towards the light {towards}, away {away}"
+        );
     }
 
     #[test]
@@ -606,13 +621,18 @@ mod tests {
         }
         let img = render(&[&ruled, &cover], &opts([0.0, 0.0, -1.0])).unwrap();
         let (c, near) = (img.pixel(32, 32), img.pixel(36, 32));
-        assert!(brightness(c).abs_diff(brightness(near)) < 6, "{c:?} vs {near:?}");
+        assert!(
+            brightness(c).abs_diff(brightness(near)) < 6,
+            "{c:?} vs {near:?}"
+        );
     }
 
     #[test]
     fn bent_parts_and_singular_points_have_their_colours() {
         let curved = square(0.0, VertexRegion::Curved, vec![]);
-        let c = render(&[&curved], &opts([0.0, 0.0, -1.0])).unwrap().pixel(20, 20);
+        let c = render(&[&curved], &opts([0.0, 0.0, -1.0]))
+            .unwrap()
+            .pixel(20, 20);
         assert!(c[0] > c[2] + 60, "orange, got {c:?}");
         let mut m = square(0.0, VertexRegion::Flat, vec![]);
         m.regions[2] = VertexRegion::Singular;
@@ -630,7 +650,10 @@ mod tests {
     fn bad_sizes_and_views_are_refused() {
         assert_eq!(parse_size("640x480").unwrap(), (640, 480));
         for bad in ["640", "640x", "x480", "0x480", "640x-1", "99999x10"] {
-            assert!(matches!(parse_size(bad), Err(RenderError::Size(_))), "{bad}");
+            assert!(
+                matches!(parse_size(bad), Err(RenderError::Size(_))),
+                "{bad}"
+            );
         }
         let m = square(0.0, VertexRegion::Flat, vec![]);
         assert!(matches!(
