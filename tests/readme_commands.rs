@@ -129,17 +129,20 @@ fn simple_commands(line: &str) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// The arguments after our program, if `cmd` runs it.
+/// The arguments after our program, if `cmd` runs it (a bare mention of the program's
+/// name, or `cargo run --release -- ...`, is not a command).
 fn our_args(cmd: &[String]) -> Option<Vec<String>> {
     let program = cmd.first()?;
-    if program == "developable_sim" || program.ends_with("target/release/developable_sim") {
-        return Some(cmd[1..].to_vec());
-    }
-    if program == "cargo" && cmd.get(1).map(String::as_str) == Some("run") {
-        let dashes = cmd.iter().position(|w| w == "--")?;
-        return Some(cmd[dashes + 1..].to_vec());
-    }
-    None
+    let args =
+        if program == "developable_sim" || program.ends_with("target/release/developable_sim") {
+            cmd[1..].to_vec()
+        } else if program == "cargo" && cmd.get(1).map(String::as_str) == Some("run") {
+            let dashes = cmd.iter().position(|w| w == "--")?;
+            cmd[dashes + 1..].to_vec()
+        } else {
+            return None;
+        };
+    (!args.is_empty() && args[0] != "...").then_some(args)
 }
 
 fn quoted_commands(name: &str, md: &str, inline: bool) -> Vec<Quoted> {
@@ -336,7 +339,7 @@ fn the_check_accepts_the_forms_the_readme_uses() {
         developable_sim node S.yaml --ros-args --params-file p.yaml -r __ns:=/x\n\
         developable_sim bag info BAG_DIR > out.txt 2>&1\n\
         ```\n\
-        Inline: `developable_sim stress --quick --out target/stress`.\n";
+        Inline: `developable_sim stress --quick --out target/stress`, not `developable_sim`.\n";
     let quoted = quoted_commands("test.md", md, true);
     assert_eq!(quoted.len(), 7, "{quoted:#?}");
     assert_eq!(
