@@ -226,7 +226,9 @@ pub struct StepTerms {
     pub h: f64,
     pub kinetic: KineticModel,
     pub density: f64,
-    pub bending_stiffness: f64,
+    /// Bending weight of crease k (k = 1..n-1; n + 1 entries), J: the crease's energy
+    /// is `crease_bending[k] (1 + c_k^2) psi_k^2` (see [`super::bending`]).
+    pub crease_bending: Vec<f64>,
     pub crease_regularizer: f64,
     pub gravity: Vector3,
     pub normal_guides: Vec<NormalGuide>,
@@ -632,8 +634,6 @@ impl<'a> Objective<'a> {
         }
 
         // --- bending, regularizer, end-crease inequality: direct in (c, psi) ---
-        let nf = n as f64;
-        let bend_k = t.bending_stiffness * nf * self.strip.width / self.strip.length;
         let direct = |idx: usize, value: f64, g: &mut Option<(&mut [f64], GradientMode)>| {
             if let Some((gg, _)) = g.as_mut() {
                 gg[idx] += value;
@@ -643,6 +643,7 @@ impl<'a> Objective<'a> {
             let c = acc.coords.crease_direction[k];
             let psi = acc.coords.bending_angle[k];
             let s = 1.0 + c * c;
+            let bend_k = t.crease_bending[k];
             ws.parts.elastic += bend_k * s * psi * psi + t.crease_regularizer * c * c;
             let (ic, ip) = (self.layout.c(k), self.layout.psi(k));
             direct(
@@ -713,12 +714,11 @@ impl<'a> Objective<'a> {
             hm.as_mut_slice().fill(0.0);
         }
         let t = self.terms;
-        let nf = n as f64;
-        let bend_k = t.bending_stiffness * nf * self.strip.width / self.strip.length;
         for k in 1..n {
             let c = ws.coords.crease_direction[k];
             let psi = ws.coords.bending_angle[k];
             let s = 1.0 + c * c;
+            let bend_k = t.crease_bending[k];
             let (ic, ip) = (self.layout.c(k), self.layout.psi(k));
             // Exact Hessian of k (1+c^2) psi^2, clamped to PSD (it is indefinite for
             // c^2 > 1/3), plus 2 beta on c.
@@ -1665,7 +1665,15 @@ mod tests {
             h: 0.01,
             kinetic,
             density: 0.3,
-            bending_stiffness: 0.02,
+            // 0.02 J with a clamp-like weight on crease 1 (any positive weights work)
+            crease_bending: (0..=n)
+                .map(|k| match k {
+                    0 => 0.0,
+                    1 => 0.02 * n as f64 * 0.08 / 1.5,
+                    k if k == n => 0.0,
+                    _ => 0.02 * n as f64 * 0.08,
+                })
+                .collect(),
             crease_regularizer: 0.1,
             gravity: Vector3::new(0.0, 0.0, -9.81),
             normal_guides: vec![NormalGuide {
