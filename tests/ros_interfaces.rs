@@ -145,6 +145,14 @@ fn every_message_struct_matches_its_msg_definition() {
         &mut seen,
     );
     root(to_value(&Clock::default()).unwrap(), Clock::TYPE, &mut seen);
+    root(
+        to_value(&TFMessage {
+            transforms: vec![TransformStamped::default()],
+        })
+        .unwrap(),
+        TFMessage::TYPE,
+        &mut seen,
+    );
     let all: BTreeSet<String> = DEFINITIONS.iter().map(|(n, _)| n.to_string()).collect();
     assert_eq!(seen, all, "every embedded definition has a checked struct");
 }

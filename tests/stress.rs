@@ -86,8 +86,8 @@ fn a_half_metre_handle_jump_in_one_tick_stays_finite_and_bounded() {
         // the jump injects energy through the handle, and the bound accounts for it
         assert!(r.energy_rise_max > 0.0 && r.work_bound > 0.0, "{r:#?}");
         // and the grasp point is on its target at the end of the jump step itself
-        // (constraint tolerance 1e-6 m; at the fixed mu of session 4 it lagged 0.25 m
-        // at dt 0.001 s, a 1 mm bound would have caught it)
+        // (constraint tolerance 1e-6 m; at the paper's fixed mu, commit d7b920a, it
+        // lagged 0.25 m at dt 0.001 s, a 1 mm bound would have caught it)
         assert!(r.constraint_violation_max < 1e-3, "{r:#?}");
     }
 }

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Numbers of the README's "Paper simulator" section, from one run of the release binary:
+# Numbers of docs/paper_simulator.md ("Measured figures"), from one run of the release binary:
 #   tools/paper_measure.sh [BIN]   (default ./target/release/developable_sim)
 # 1. paper_cylinder_then_bend: frame times and compression (stats JSON, printed whole)
 # 2. paper_first_singularity over seeds 0-19: first singular point (material u, v; time)

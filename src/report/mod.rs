@@ -96,7 +96,7 @@ pub const DEFAULT_SCENES: [ReportScene; 3] = [
         name: "ribbon_helix_unrolling",
         quick_duration: 0.05,
         full_duration: Some(0.1),
-        // dt 156 us. Before session 4's solver fallback (a scaled gradient step where the
+        // dt 156 us. Before the solver fallback of commit d1f23c0 (a scaled gradient step where the
         // Hessian stays indefinite at 100x its diagonal) one step at 78 us (and 39,
         // 20 us) was stuck at its start, zeroing the velocity; with it, the runs at 625
         // to 39 us have no unconverged step, yet successive halvings stay 1.1-1.6 cm
@@ -111,7 +111,7 @@ pub const DEFAULT_SCENES: [ReportScene; 3] = [
               0.26 m apart, and a reference at 3.75 ms is 0.3 m off). The reference is \
               at the scene's 50 elements and dt 156 us; a shorter window does not make \
               it converge (below)",
-        // measured with examples of session 6 (not kept): runs of report::exec::execute
+        // measured 2026-12-01 with examples (not kept): runs of report::exec::execute
         // at halved dt, compared by report::errors::error_against
         reference_note: "the resampling R of the kinetic term (eq. 4), not the solver \
               and not only a too large dt. Over the first 2 ms (4 sample times) \

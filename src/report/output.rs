@@ -485,7 +485,7 @@ pub fn write_summary(
                 )?,
             }
         }
-        // measured separately (see the README); shown where this run's halvings agree
+        // measured separately (see docs/accuracy.md); shown where this run's halvings agree
         if let Some(note) = s
             .reference_note
             .as_ref()

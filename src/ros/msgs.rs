@@ -161,6 +161,34 @@ ros_message!(
     "RIHS01_10f3786d7d40fd2b54367835614bff85d4ad3b5dab62bf8bca0cc232d73b4cd8"
 );
 
+/// `geometry_msgs/msg/Transform`: `parent_from_child` (m, unit quaternion).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Transform {
+    pub translation: Vector3,
+    pub rotation: Quaternion,
+}
+
+/// `geometry_msgs/msg/TransformStamped`: `header.frame_id` is the parent frame.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TransformStamped {
+    pub header: Header,
+    pub child_frame_id: String,
+    pub transform: Transform,
+}
+
+// ---------------------------------------------------------------- tf2_msgs
+
+/// `tf2_msgs/msg/TFMessage`: what `/tf` and `/tf_static` carry.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct TFMessage {
+    pub transforms: Vec<TransformStamped>,
+}
+ros_message!(
+    TFMessage,
+    "tf2_msgs/msg/TFMessage",
+    "RIHS01_e369d0f05a23ae52508854b66f6aa0437f3449d652e8cbf22d5abe85d020f087"
+);
+
 // ---------------------------------------------------------------- sensor_msgs
 
 /// `sensor_msgs/msg/CompressedImage` (a Marker field; always empty here).

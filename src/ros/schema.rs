@@ -79,6 +79,18 @@ pub const DEFINITIONS: &[(&str, &str)] = &[
         include_str!("interfaces/visualization_msgs/MarkerArray.msg"),
     ),
     (
+        "geometry_msgs/msg/Transform",
+        include_str!("interfaces/geometry_msgs/Transform.msg"),
+    ),
+    (
+        "geometry_msgs/msg/TransformStamped",
+        include_str!("interfaces/geometry_msgs/TransformStamped.msg"),
+    ),
+    (
+        "tf2_msgs/msg/TFMessage",
+        include_str!("interfaces/tf2_msgs/TFMessage.msg"),
+    ),
+    (
         "rosgraph_msgs/msg/Clock",
         include_str!("interfaces/rosgraph_msgs/Clock.msg"),
     ),

@@ -62,7 +62,7 @@ def test_every_output_decodes_and_is_well_formed(start_node, ros, domain_id):
     # The torsion has singular points only from t = 0.60 to 0.87 s and from 1.31 to
     # 1.33 s. Run as fast as possible from start-up, those frames went out within ~0.1 s,
     # often before readers created after "ready" were matched (the test failed about
-    # every other run in session 6). So: start paused, create the readers, wait until
+    # every other run on 2026-12-01, commit 94f6be3). So: start paused, create the readers, wait until
     # each has matched the node's writer, resume by the service, run in real time.
     start_node(domain_id, TORSION, "--paused", "--duration", "3")
     readers = {
