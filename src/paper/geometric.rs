@@ -251,6 +251,97 @@ pub fn edge_key(a: u32, b: u32) -> (u32, u32) {
     }
 }
 
+/// The arc lengths of the S_G boundary vertices, m: corners, handle anchors and the
+/// boundary ends of rulings and creases, sorted and merged within [`MERGE_ARC`]. An
+/// error when two are closer than the layer's `min_boundary_spacing`.
+fn boundary_arcs(layer: &GeometricLayer, pattern: &Pattern) -> Result<Vec<f64>, MeshError> {
+    let mut arcs: Vec<f64> = (0..pattern.corners().len())
+        .map(|i| pattern.corner_arc(i))
+        .collect();
+    arcs.extend(layer.anchors.iter().map(|&s| pattern.wrap(s)));
+    let push_end = |e: &Endpoint, arcs: &mut Vec<f64>| {
+        if let Endpoint::Boundary(s) = e {
+            arcs.push(pattern.wrap(*s));
+        }
+    };
+    for r in &layer.regions {
+        for ru in &r.rulings {
+            push_end(&ru.a, &mut arcs);
+            push_end(&ru.b, &mut arcs);
+        }
+    }
+    for c in &layer.creases {
+        push_end(&c.a, &mut arcs);
+        push_end(&c.b, &mut arcs);
+    }
+    arcs.sort_by(f64::total_cmp);
+    let per = pattern.perimeter();
+    let mut merged: Vec<f64> = Vec::with_capacity(arcs.len());
+    for s in arcs {
+        if merged.last().is_none_or(|&l| s - l > MERGE_ARC) {
+            merged.push(s);
+        }
+    }
+    if merged.len() > 1 && per - merged[merged.len() - 1] + merged[0] <= MERGE_ARC {
+        merged.pop();
+    }
+    if layer.min_boundary_spacing > 0.0 && merged.len() > 1 {
+        for i in 0..merged.len() {
+            let next = if i + 1 < merged.len() {
+                merged[i + 1]
+            } else {
+                merged[0] + per
+            };
+            if next - merged[i] < layer.min_boundary_spacing {
+                return Err(MeshError::BadFace(format!(
+                    "boundary vertices {} m apart (< {} m)",
+                    next - merged[i],
+                    layer.min_boundary_spacing
+                )));
+            }
+        }
+    }
+    Ok(merged)
+}
+
+/// The S_G vertex an endpoint stands for: `merged` holds the boundary vertices' arc
+/// lengths (vertex i at merged[i]), `singular_index` the singular vertices' indices.
+fn endpoint_index(
+    e: &Endpoint,
+    pattern: &Pattern,
+    merged: &[f64],
+    singular_index: &BTreeMap<u64, u32>,
+) -> Result<u32, MeshError> {
+    match e {
+        Endpoint::Boundary(s) => {
+            let per = pattern.perimeter();
+            let s = pattern.wrap(*s);
+            let i = merged.partition_point(|&x| x < s - MERGE_ARC);
+            for cand in [i, 0, merged.len().saturating_sub(1)] {
+                if let Some(&x) = merged.get(cand) {
+                    let d = (x - s).abs().min(per - (x - s).abs());
+                    if d <= MERGE_ARC * 1.5 {
+                        return Ok(cand as u32);
+                    }
+                }
+            }
+            Err(MeshError::MissingEndpoint(format!("boundary s = {s}")))
+        }
+        Endpoint::Singular(id) => singular_index
+            .get(id)
+            .copied()
+            .ok_or_else(|| MeshError::MissingEndpoint(format!("singular {id}"))),
+    }
+}
+
+/// The segments the triangulations must keep: the boundary edges first (`nb` of
+/// them), then the rulings region by region, then the creases; and each one's kind.
+struct Constraints {
+    segments: Vec<[usize; 2]>,
+    kinds: BTreeMap<(u32, u32), EdgeKind>,
+    nb: usize,
+}
+
 impl GeometricMesh {
     /// Build the mesh of `layer`. `position` gives the world position of a vertex
     /// from its kind and pattern position (the current S_P, interpolated).
@@ -259,55 +350,30 @@ impl GeometricMesh {
         pattern: &Pattern,
         position: &dyn Fn(&GVertexKind, &Point2) -> Point3,
     ) -> Result<GeometricMesh, MeshError> {
-        // 1. boundary vertices: corners, anchors, boundary endpoints
-        let mut arcs: Vec<f64> = (0..pattern.corners().len())
-            .map(|i| pattern.corner_arc(i))
-            .collect();
-        arcs.extend(layer.anchors.iter().map(|&s| pattern.wrap(s)));
-        let push_end = |e: &Endpoint, arcs: &mut Vec<f64>| {
-            if let Endpoint::Boundary(s) = e {
-                arcs.push(pattern.wrap(*s));
-            }
-        };
-        for r in &layer.regions {
-            for ru in &r.rulings {
-                push_end(&ru.a, &mut arcs);
-                push_end(&ru.b, &mut arcs);
-            }
-        }
-        for c in &layer.creases {
-            push_end(&c.a, &mut arcs);
-            push_end(&c.b, &mut arcs);
-        }
-        arcs.sort_by(f64::total_cmp);
-        let per = pattern.perimeter();
-        let mut merged: Vec<f64> = Vec::with_capacity(arcs.len());
-        for s in arcs {
-            if merged.last().is_none_or(|&l| s - l > MERGE_ARC) {
-                merged.push(s);
-            }
-        }
-        if merged.len() > 1 && per - merged[merged.len() - 1] + merged[0] <= MERGE_ARC {
-            merged.pop();
-        }
-        if layer.min_boundary_spacing > 0.0 && merged.len() > 1 {
-            for i in 0..merged.len() {
-                let next = if i + 1 < merged.len() {
-                    merged[i + 1]
-                } else {
-                    merged[0] + per
-                };
-                if next - merged[i] < layer.min_boundary_spacing {
-                    return Err(MeshError::BadFace(format!(
-                        "boundary vertices {} m apart (< {} m)",
-                        next - merged[i],
-                        layer.min_boundary_spacing
-                    )));
-                }
-            }
-        }
+        let merged = boundary_arcs(layer, pattern)?;
+        let (mut mesh, singular_index) =
+            GeometricMesh::with_vertices(layer, pattern, &merged, position);
+        let index_of = |e: &Endpoint| endpoint_index(e, pattern, &merged, &singular_index);
+        let constraints = mesh.constraint_segments(layer, &index_of)?;
+        let seg_pts = mesh.check_segments(pattern, &constraints)?;
+        let cdt = mesh.triangulate(&constraints)?;
+        let curved = mesh.curved_faces(layer, constraints.nb)?;
+        mesh.add_faces(&cdt, curved, &seg_pts)?;
+        mesh.add_edges_and_normals(&constraints.kinds)?;
+        Ok(mesh)
+    }
+
+    /// A mesh holding only the vertices: the boundary vertices at the arc lengths
+    /// `merged` (in that order), then the singular vertices; and the singular
+    /// vertices' indices by id.
+    fn with_vertices(
+        layer: &GeometricLayer,
+        pattern: &Pattern,
+        merged: &[f64],
+        position: &dyn Fn(&GVertexKind, &Point2) -> Point3,
+    ) -> (GeometricMesh, BTreeMap<u64, u32>) {
         let mut mesh = GeometricMesh::default();
-        for &s in &merged {
+        for &s in merged {
             let m = pattern.point_at(s);
             let kind = GVertexKind::Boundary { s };
             mesh.vertices.push(GVertex {
@@ -327,35 +393,23 @@ impl GeometricMesh {
                 kind,
             });
         }
-        let index_of = |e: &Endpoint| -> Result<u32, MeshError> {
-            match e {
-                Endpoint::Boundary(s) => {
-                    let s = pattern.wrap(*s);
-                    let i = merged.partition_point(|&x| x < s - MERGE_ARC);
-                    for cand in [i, 0, merged.len().saturating_sub(1)] {
-                        if let Some(&x) = merged.get(cand) {
-                            let d = (x - s).abs().min(per - (x - s).abs());
-                            if d <= MERGE_ARC * 1.5 {
-                                return Ok(cand as u32);
-                            }
-                        }
-                    }
-                    Err(MeshError::MissingEndpoint(format!("boundary s = {s}")))
-                }
-                Endpoint::Singular(id) => singular_index
-                    .get(id)
-                    .copied()
-                    .ok_or_else(|| MeshError::MissingEndpoint(format!("singular {id}"))),
-            }
-        };
+        (mesh, singular_index)
+    }
 
-        // 2. constraint segments
-        let nb = merged.len();
-        let mut constraints: Vec<[usize; 2]> = Vec::new();
+    /// The boundary edges, rulings and creases as vertex pairs (fills
+    /// `ruling_vertices` and `crease_vertices`); an error for a ruling or crease with
+    /// equal ends, on the boundary, or duplicating another edge.
+    fn constraint_segments(
+        &mut self,
+        layer: &GeometricLayer,
+        index_of: &dyn Fn(&Endpoint) -> Result<u32, MeshError>,
+    ) -> Result<Constraints, MeshError> {
+        let nb = self.boundary.len();
+        let mut segments: Vec<[usize; 2]> = Vec::new();
         let mut kinds: BTreeMap<(u32, u32), EdgeKind> = BTreeMap::new();
         for i in 0..nb {
             let (a, b) = (i as u32, ((i + 1) % nb) as u32);
-            constraints.push([a as usize, b as usize]);
+            segments.push([a as usize, b as usize]);
             kinds.insert(edge_key(a, b), EdgeKind::Boundary);
         }
         for (ri, r) in layer.regions.iter().enumerate() {
@@ -383,9 +437,9 @@ impl GeometricMesh {
                         index: k,
                     },
                 );
-                constraints.push([a as usize, b as usize]);
+                segments.push([a as usize, b as usize]);
             }
-            mesh.ruling_vertices.push(rv);
+            self.ruling_vertices.push(rv);
         }
         for (ci, c) in layer.creases.iter().enumerate() {
             let (a, b) = (index_of(&c.a)?, index_of(&c.b)?);
@@ -397,15 +451,29 @@ impl GeometricMesh {
                 return Err(MeshError::Crossing("a crease duplicates an edge".into()));
             }
             kinds.insert(key, EdgeKind::Crease { index: ci });
-            constraints.push([a as usize, b as usize]);
-            mesh.crease_vertices.push([a, b]);
+            segments.push([a as usize, b as usize]);
+            self.crease_vertices.push([a, b]);
         }
+        Ok(Constraints {
+            segments,
+            kinds,
+            nb,
+        })
+    }
 
-        // 3. segments must not cross nor pass through a vertex
+    /// The rulings and creases in the pattern; an error when two cross, when one
+    /// passes through a vertex or when one is not inside the sheet.
+    fn check_segments(
+        &self,
+        pattern: &Pattern,
+        constraints: &Constraints,
+    ) -> Result<Vec<[Point2; 2]>, MeshError> {
+        let nb = constraints.nb;
         let seg_pts: Vec<[Point2; 2]> = constraints
+            .segments
             .iter()
             .skip(nb)
-            .map(|[a, b]| [mesh.vertices[*a].material, mesh.vertices[*b].material])
+            .map(|[a, b]| [self.vertices[*a].material, self.vertices[*b].material])
             .collect();
         for i in 0..seg_pts.len() {
             for j in 0..i {
@@ -419,8 +487,8 @@ impl GeometricMesh {
                     return Err(MeshError::Crossing(format!("segments {i} and {j}")));
                 }
             }
-            let [a, b] = constraints[nb + i];
-            for (vi, v) in mesh.vertices.iter().enumerate() {
+            let [a, b] = constraints.segments[nb + i];
+            for (vi, v) in self.vertices.iter().enumerate() {
                 if vi == a || vi == b {
                     continue;
                 }
@@ -439,9 +507,15 @@ impl GeometricMesh {
                 )));
             }
         }
+        Ok(seg_pts)
+    }
 
-        // 4. constrained Delaunay triangulation of everything
-        let pts: Vec<spade::Point2<f64>> = mesh
+    /// The constrained Delaunay triangulation of the vertices with every segment.
+    fn triangulate(
+        &self,
+        constraints: &Constraints,
+    ) -> Result<spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>, MeshError> {
+        let pts: Vec<spade::Point2<f64>> = self
             .vertices
             .iter()
             .map(|v| spade::Point2::new(v.material.x, v.material.y))
@@ -449,7 +523,7 @@ impl GeometricMesh {
         let mut conflict = false;
         let cdt = spade::ConstrainedDelaunayTriangulation::<spade::Point2<f64>>::try_bulk_load_cdt(
             pts,
-            constraints.clone(),
+            constraints.segments.clone(),
             |_| conflict = true,
         )
         .map_err(|e| MeshError::Triangulation(format!("{e:?}")))?;
@@ -459,13 +533,21 @@ impl GeometricMesh {
             ));
         }
         use spade::Triangulation;
-        if cdt.num_vertices() != mesh.vertices.len() {
+        if cdt.num_vertices() != self.vertices.len() {
             return Err(MeshError::Triangulation("duplicate vertices".into()));
         }
+        Ok(cdt)
+    }
 
-        // 5. curved faces between consecutive rulings
+    /// The curved faces between consecutive rulings of each region, counter-clockwise
+    /// in the pattern (`nb` boundary vertices).
+    fn curved_faces(
+        &self,
+        layer: &GeometricLayer,
+        nb: usize,
+    ) -> Result<Vec<(Vec<u32>, FaceKind)>, MeshError> {
         let mut curved_polys: Vec<(Vec<u32>, FaceKind)> = Vec::new();
-        for (ri, rv) in mesh.ruling_vertices.iter().enumerate() {
+        for (ri, rv) in self.ruling_vertices.iter().enumerate() {
             for k in 0..rv.len().saturating_sub(1) {
                 let [a0, b0] = rv[k];
                 let [a1, b1] = rv[k + 1];
@@ -478,8 +560,8 @@ impl GeometricMesh {
                     .filter(|&v| v != a0 && v != a1)
                     .collect();
                 others.retain(|&v| v != b0 && v != b1);
-                let chain_a = mesh.boundary_chain(a0, a1, &avoid_a, nb)?;
-                let chain_b = mesh.boundary_chain(b1, b0, &others, nb)?;
+                let chain_a = self.boundary_chain(a0, a1, &avoid_a, nb)?;
+                let chain_b = self.boundary_chain(b1, b0, &others, nb)?;
                 let mut poly: Vec<u32> = chain_a;
                 poly.extend(chain_b);
                 poly.dedup();
@@ -494,7 +576,7 @@ impl GeometricMesh {
                 }
                 let mat: Vec<Point2> = poly
                     .iter()
-                    .map(|&v| mesh.vertices[v as usize].material)
+                    .map(|&v| self.vertices[v as usize].material)
                     .collect();
                 let area = polygon_area(&mat);
                 if area.abs() < 1e-12 {
@@ -515,11 +597,24 @@ impl GeometricMesh {
                 ));
             }
         }
+        Ok(curved_polys)
+    }
+
+    /// The faces: the curved ones, then the triangles of `cdt` outside them (flat).
+    /// An error when a segment runs through a curved face or when the triangles do
+    /// not tile a curved face exactly (it is not convex or holds a vertex).
+    fn add_faces(
+        &mut self,
+        cdt: &spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>,
+        curved_polys: Vec<(Vec<u32>, FaceKind)>,
+        seg_pts: &[[Point2; 2]],
+    ) -> Result<(), MeshError> {
+        use spade::Triangulation;
         let curved_mats: Vec<Vec<Point2>> = curved_polys
             .iter()
             .map(|(p, _)| {
                 p.iter()
-                    .map(|&v| mesh.vertices[v as usize].material)
+                    .map(|&v| self.vertices[v as usize].material)
                     .collect()
             })
             .collect();
@@ -541,7 +636,7 @@ impl GeometricMesh {
         let mut flat = Vec::new();
         for f in cdt.inner_faces() {
             let vs = f.vertices().map(|v| v.fix().index() as u32);
-            let m = vs.map(|v| mesh.vertices[v as usize].material);
+            let m = vs.map(|v| self.vertices[v as usize].material);
             let c = Point2::from((m[0].coords + m[1].coords + m[2].coords) / 3.0);
             let area = polygon_area(&m);
             match curved_mats
@@ -561,25 +656,31 @@ impl GeometricMesh {
             }
         }
         for (poly, kind) in curved_polys {
-            mesh.faces.push(GFace {
+            self.faces.push(GFace {
                 vertices: poly,
                 kind,
             });
         }
         for vs in flat {
-            mesh.faces.push(GFace {
+            self.faces.push(GFace {
                 vertices: vs.to_vec(),
                 kind: FaceKind::Flat,
             });
         }
+        Ok(())
+    }
 
-        // 6. edges and normals
-        for (fi, f) in mesh.faces.iter().enumerate() {
+    /// Edges (with their faces and `kinds`, plain otherwise) and face normals.
+    fn add_edges_and_normals(
+        &mut self,
+        kinds: &BTreeMap<(u32, u32), EdgeKind>,
+    ) -> Result<(), MeshError> {
+        for (fi, f) in self.faces.iter().enumerate() {
             let n = f.vertices.len();
             for i in 0..n {
                 let key = edge_key(f.vertices[i], f.vertices[(i + 1) % n]);
                 let kind = kinds.get(&key).copied().unwrap_or(EdgeKind::Plain);
-                let e = mesh.edges.entry(key).or_insert(GEdge {
+                let e = self.edges.entry(key).or_insert(GEdge {
                     faces: [None, None],
                     kind,
                 });
@@ -592,19 +693,19 @@ impl GeometricMesh {
                 }
             }
         }
-        mesh.normals = mesh
+        self.normals = self
             .faces
             .iter()
             .map(|f| {
                 let pts: Vec<Point3> = f
                     .vertices
                     .iter()
-                    .map(|&v| mesh.vertices[v as usize].position)
+                    .map(|&v| self.vertices[v as usize].position)
                     .collect();
                 newell_normal(&pts)
             })
             .collect();
-        Ok(mesh)
+        Ok(())
     }
 
     /// The boundary vertices from `from` to `to` (both included) along ∂S̄, in the

@@ -137,6 +137,19 @@ impl<'a> Interpolator<'a> {
         }
     }
 
+    /// World position of the S_G vertex of kind `k` at pattern point `m`, m: the S_P
+    /// vertex there if any, else on the boundary curve (boundary vertices) or inside
+    /// S_P (singular vertices).
+    pub fn geometric_vertex(&self, k: &GVertexKind, m: &Point2) -> Point3 {
+        match k {
+            GVertexKind::Boundary { s } => match self.vertex_at(m) {
+                Some(v) => self.mesh.position[v as usize],
+                None => self.boundary_position(*s),
+            },
+            GVertexKind::Singular { .. } => self.position(m),
+        }
+    }
+
     /// Velocity at pattern point `m`, m/s.
     pub fn velocity(&self, m: &Point2) -> Vector3 {
         if let Some(v) = self.vertex_at(m) {
@@ -238,181 +251,63 @@ pub fn build_physical(
         sp.position.push(v.position);
         sp.kind.push(SampleKind::Geometric);
     }
-
-    // boundary samples: a fixed lattice of arc lengths (temporal coherence), kept away
-    // from the S_G boundary vertices
-    let per = pattern.perimeter();
-    let nsamples = ((per * params.boundary_density).round() as usize).max(4);
-    let spacing = per / nsamples as f64;
-    let gap = 0.4 * spacing;
-    let gb: Vec<(f64, u32)> = gmesh
-        .boundary
-        .iter()
-        .map(|&v| match gmesh.vertices[v as usize].kind {
-            GVertexKind::Boundary { s } => (s, v),
-            GVertexKind::Singular { .. } => (f64::NAN, v),
-        })
-        .collect();
-    let mut boundary: Vec<(f64, u32)> = gb.clone();
-    for k in 0..nsamples {
-        let s = k as f64 * spacing;
-        // the S_G boundary edge holding s
-        let i = match gb.partition_point(|&(x, _)| x <= s) {
-            0 => gb.len() - 1,
-            i => i - 1,
-        };
-        let j = (i + 1) % gb.len();
-        let (s0, v0) = gb[i];
-        let (s1, v1) = gb[j];
-        let d0 = pattern.arc_ccw(s0, s);
-        let d1 = pattern.arc_ccw(s, s1);
-        if d0 < gap || d1 < gap {
-            continue;
-        }
-        let faces = gmesh.edge_faces(v0, v1);
-        let flat = faces
-            .iter()
-            .flatten()
-            .all(|&f| gmesh.faces[f].kind == FaceKind::Flat);
-        let m = pattern.point_at(s);
-        let pos = if flat {
-            let t = d0 / (d0 + d1);
-            Point3::from(
-                gmesh.vertices[v0 as usize].position.coords * (1.0 - t)
-                    + gmesh.vertices[v1 as usize].position.coords * t,
-            )
-        } else {
-            boundary_curve(s)
-        };
-        boundary.push((s, sp.material.len() as u32));
-        sp.material.push(m);
-        sp.position.push(pos);
-        sp.kind.push(SampleKind::BoundarySample { s });
-    }
-    boundary.sort_by(|a, b| a.0.total_cmp(&b.0));
-    sp.boundary = boundary.iter().map(|&(_, v)| v).collect();
-    sp.boundary_arc = boundary.iter().map(|&(s, _)| s).collect();
-
-    // interior samples: a fixed triangular lattice of spacing d, area per sample
-    // (sqrt 3 / 2) d^2 = 1 / rho_int, kept in the flat faces away from S_G edges
-    let d = (2.0 / (3f64.sqrt() * params.interior_density)).sqrt();
-    let row = 0.5 * 3f64.sqrt() * d;
-    let corners = pattern.corners();
-    let (mut lo, mut hi) = (corners[0], corners[0]);
-    for c in corners {
-        lo = Point2::new(lo.x.min(c.x), lo.y.min(c.y));
-        hi = Point2::new(hi.x.max(c.x), hi.y.max(c.y));
-    }
-    // structural S_G edges (rulings, creases) are kept in S_P; the plain edges of the
-    // flat triangulation are not (they would stiffen the flat regions along arbitrary
-    // lines, and a flat region must be free to bend in any direction, sec. 3.1)
-    let mut gedges: Vec<[Point2; 2]> = Vec::new();
-    for (&(a, b), e) in &gmesh.edges {
-        if matches!(e.kind, EdgeKind::Ruling { .. } | EdgeKind::Crease { .. }) {
-            gedges.push([
-                gmesh.vertices[a as usize].material,
-                gmesh.vertices[b as usize].material,
-            ]);
-        }
-    }
-    let curved_polys: Vec<Vec<Point2>> = gmesh
-        .faces
-        .iter()
-        .filter(|f| f.kind != FaceKind::Flat)
-        .map(|f| {
-            f.vertices
-                .iter()
-                .map(|&v| gmesh.vertices[v as usize].material)
-                .collect()
-        })
-        .collect();
-    let nrows = ((hi.y - lo.y) / row).ceil() as i64 + 1;
-    let ncols = ((hi.x - lo.x) / d).ceil() as i64 + 2;
-    for j in 0..nrows {
-        let y = lo.y + 0.5 * row + j as f64 * row;
-        let shift = if j % 2 == 0 { 0.25 * d } else { 0.75 * d };
-        for i in 0..ncols {
-            let p = Point2::new(lo.x + shift + i as f64 * d, y);
-            if pattern.signed_inside_distance(&p) < 0.4 * d {
-                continue;
-            }
-            if gmesh
-                .vertices
-                .iter()
-                .any(|v| (v.material - p).norm() < 0.4 * d)
-            {
-                continue;
-            }
-            if gedges
-                .iter()
-                .any(|[a, b]| point_segment(&p, a, b).0 < 0.25 * d)
-            {
-                continue;
-            }
-            if curved_polys
-                .iter()
-                .any(|poly| in_convex_polygon(poly, &p, -1e-12))
-            {
-                continue;
-            }
-            let Some(f) = gmesh.flat_face_at(&p) else {
-                continue;
-            };
-            let [a, b, c] = [0, 1, 2].map(|k| gmesh.faces[f].vertices[k] as usize);
-            let (ma, mb, mc) = (
-                gmesh.vertices[a].material,
-                gmesh.vertices[b].material,
-                gmesh.vertices[c].material,
-            );
-            let det = orient(&ma, &mb, &mc);
-            let l1 = orient(&ma, &p, &mc) / det;
-            let l2 = orient(&ma, &mb, &p) / det;
-            let l0 = 1.0 - l1 - l2;
-            let pos = Point3::from(
-                gmesh.vertices[a].position.coords * l0
-                    + gmesh.vertices[b].position.coords * l1
-                    + gmesh.vertices[c].position.coords * l2,
-            );
-            sp.material.push(p);
-            sp.position.push(pos);
-            sp.kind.push(SampleKind::InteriorSample);
-        }
-    }
-
-    // constrained Delaunay triangulation with every S_G edge (boundary split at samples)
-    let nb = sp.boundary.len();
-    let mut constraints: Vec<[usize; 2]> = (0..nb)
-        .map(|i| [sp.boundary[i] as usize, sp.boundary[(i + 1) % nb] as usize])
-        .collect();
-    for (&(a, b), e) in &gmesh.edges {
-        if matches!(e.kind, EdgeKind::Ruling { .. } | EdgeKind::Crease { .. }) {
-            constraints.push([a as usize, b as usize]);
-        }
-    }
-    let pts: Vec<spade::Point2<f64>> = sp
-        .material
-        .iter()
-        .map(|m| spade::Point2::new(m.x, m.y))
-        .collect();
-    let mut conflict = false;
-    let cdt = spade::ConstrainedDelaunayTriangulation::<spade::Point2<f64>>::try_bulk_load_cdt(
-        pts,
-        constraints,
-        |_| conflict = true,
-    )
-    .map_err(|e| format!("{e:?}"))?;
-    use spade::Triangulation;
-    if conflict || cdt.num_vertices() != sp.material.len() {
-        return Err("S_P triangulation: conflicting constraints or duplicate samples".into());
-    }
-    // curved faces: replace their triangles by a fan around the barycenter
+    let boundary = sp.add_boundary_samples(gmesh, pattern, params, boundary_curve);
+    sp.add_interior_samples(gmesh, pattern, params);
+    let cdt = sp.triangulate(gmesh)?;
+    let curved_faces = curved_face_polygons(gmesh, pattern, &boundary);
     let mut curved_of_vertex = vec![false; sp.material.len()];
+    for (poly, _) in &curved_faces {
+        for &v in poly {
+            curved_of_vertex[v as usize] = true;
+        }
+    }
+    sp.add_triangles(&cdt, &curved_faces);
+    curved_of_vertex.resize(sp.material.len(), true);
+    // orientation: counter-clockwise in the pattern
+    for t in sp.triangles.iter_mut() {
+        let [a, b, c] = t.map(|i| sp.material[i as usize]);
+        if orient(&a, &b, &c) < 0.0 {
+            t.swap(1, 2);
+        }
+    }
+    sp.velocity = vec![Vector3::zeros(); sp.material.len()];
+    sp.region = (0..sp.material.len())
+        .map(|v| {
+            if v < ng {
+                if let GVertexKind::Singular { .. } = gmesh.vertices[v].kind {
+                    return VertexRegion::Singular;
+                }
+            }
+            if curved_of_vertex[v] {
+                VertexRegion::Curved
+            } else {
+                VertexRegion::Flat
+            }
+        })
+        .collect();
+    for rv in &gmesh.ruling_vertices {
+        sp.rulings.extend(rv.iter().copied());
+    }
+    sp.rulings.extend(gmesh.crease_vertices.iter().copied());
+    sp.finish_topology(layer, gmesh, params);
+    Ok(sp)
+}
+
+/// The polygon of each curved S_G face in S_P vertices (its corners with the boundary
+/// samples lying on its boundary edges, in order) and its corners' pattern points.
+/// `boundary`: every S_P boundary vertex with its arc length, sorted.
+fn curved_face_polygons(
+    gmesh: &GeometricMesh,
+    pattern: &Pattern,
+    boundary: &[(f64, u32)],
+) -> Vec<(Vec<u32>, Vec<Point2>)> {
+    let ng = gmesh.vertices.len();
+    let per = pattern.perimeter();
     let mut curved_faces: Vec<(Vec<u32>, Vec<Point2>)> = Vec::new();
     for f in &gmesh.faces {
         if f.kind == FaceKind::Flat {
             continue;
         }
-        // the face polygon with the boundary samples lying on its edges
         let mut poly: Vec<u32> = Vec::new();
         let n = f.vertices.len();
         for i in 0..n {
@@ -457,82 +352,257 @@ pub fn build_physical(
             .iter()
             .map(|&v| gmesh.vertices[v as usize].material)
             .collect();
-        for &v in &poly {
-            curved_of_vertex[v as usize] = true;
-        }
         curved_faces.push((poly, mats));
     }
-    let curved_polys_2d: Vec<Vec<Point2>> = curved_faces.iter().map(|(_, m)| m.clone()).collect();
-    for face in cdt.inner_faces() {
-        let vs = face.vertices().map(|v| v.fix().index() as u32);
-        let m = vs.map(|v| sp.material[v as usize]);
-        let c = Point2::from((m[0].coords + m[1].coords + m[2].coords) / 3.0);
-        if curved_polys_2d
-            .iter()
-            .any(|p| in_convex_polygon(p, &c, 0.0))
-        {
-            continue;
-        }
-        sp.triangles.push(vs);
-    }
-    for (poly, _) in &curved_faces {
-        if poly.len() == 3 {
-            sp.triangles.push([poly[0], poly[1], poly[2]]);
-            continue;
-        }
-        let k = poly.len() as f64;
-        // barycenter of the S_G face (its corners), not of the samples
-        let mut m = nalgebra::Vector2::zeros();
-        let mut p = Vector3::zeros();
-        let mut count = 0.0;
-        for &v in poly {
-            if (v as usize) < ng {
-                m += sp.material[v as usize].coords;
-                p += sp.position[v as usize].coords;
-                count += 1.0;
-            }
-        }
-        let _ = k;
-        let c = sp.material.len() as u32;
-        sp.material.push(Point2::from(m / count));
-        sp.position.push(Point3::from(p / count));
-        sp.kind.push(SampleKind::Barycenter);
-        curved_of_vertex.push(true);
-        for i in 0..poly.len() {
-            sp.triangles.push([c, poly[i], poly[(i + 1) % poly.len()]]);
-        }
-    }
-    // orientation: counter-clockwise in the pattern
-    for t in sp.triangles.iter_mut() {
-        let [a, b, c] = t.map(|i| sp.material[i as usize]);
-        if orient(&a, &b, &c) < 0.0 {
-            t.swap(1, 2);
-        }
-    }
-    sp.velocity = vec![Vector3::zeros(); sp.material.len()];
-    sp.region = (0..sp.material.len())
-        .map(|v| {
-            if v < ng {
-                if let GVertexKind::Singular { .. } = gmesh.vertices[v].kind {
-                    return VertexRegion::Singular;
-                }
-            }
-            if curved_of_vertex[v] {
-                VertexRegion::Curved
-            } else {
-                VertexRegion::Flat
-            }
-        })
-        .collect();
-    for rv in &gmesh.ruling_vertices {
-        sp.rulings.extend(rv.iter().copied());
-    }
-    sp.rulings.extend(gmesh.crease_vertices.iter().copied());
-    sp.finish_topology(layer, gmesh, params);
-    Ok(sp)
+    curved_faces
 }
 
 impl PhysicalMesh {
+    /// Boundary samples (rho_bound): a fixed lattice of arc lengths (temporal
+    /// coherence), kept away from the S_G boundary vertices. Sets `boundary` and
+    /// `boundary_arc`; returns every boundary vertex with its arc length, sorted.
+    fn add_boundary_samples(
+        &mut self,
+        gmesh: &GeometricMesh,
+        pattern: &Pattern,
+        params: &PaperParams,
+        boundary_curve: &dyn Fn(f64) -> Point3,
+    ) -> Vec<(f64, u32)> {
+        let per = pattern.perimeter();
+        let nsamples = ((per * params.boundary_density).round() as usize).max(4);
+        let spacing = per / nsamples as f64;
+        let gap = 0.4 * spacing;
+        let gb: Vec<(f64, u32)> = gmesh
+            .boundary
+            .iter()
+            .map(|&v| match gmesh.vertices[v as usize].kind {
+                GVertexKind::Boundary { s } => (s, v),
+                GVertexKind::Singular { .. } => (f64::NAN, v),
+            })
+            .collect();
+        let mut boundary: Vec<(f64, u32)> = gb.clone();
+        for k in 0..nsamples {
+            let s = k as f64 * spacing;
+            // the S_G boundary edge holding s
+            let i = match gb.partition_point(|&(x, _)| x <= s) {
+                0 => gb.len() - 1,
+                i => i - 1,
+            };
+            let j = (i + 1) % gb.len();
+            let (s0, v0) = gb[i];
+            let (s1, v1) = gb[j];
+            let d0 = pattern.arc_ccw(s0, s);
+            let d1 = pattern.arc_ccw(s, s1);
+            if d0 < gap || d1 < gap {
+                continue;
+            }
+            let faces = gmesh.edge_faces(v0, v1);
+            let flat = faces
+                .iter()
+                .flatten()
+                .all(|&f| gmesh.faces[f].kind == FaceKind::Flat);
+            let m = pattern.point_at(s);
+            let pos = if flat {
+                let t = d0 / (d0 + d1);
+                Point3::from(
+                    gmesh.vertices[v0 as usize].position.coords * (1.0 - t)
+                        + gmesh.vertices[v1 as usize].position.coords * t,
+                )
+            } else {
+                boundary_curve(s)
+            };
+            boundary.push((s, self.material.len() as u32));
+            self.material.push(m);
+            self.position.push(pos);
+            self.kind.push(SampleKind::BoundarySample { s });
+        }
+        boundary.sort_by(|a, b| a.0.total_cmp(&b.0));
+        self.boundary = boundary.iter().map(|&(_, v)| v).collect();
+        self.boundary_arc = boundary.iter().map(|&(s, _)| s).collect();
+        boundary
+    }
+
+    /// Interior samples (rho_int): a fixed triangular lattice of spacing d, area per
+    /// sample (sqrt 3 / 2) d^2 = 1 / rho_int, kept in the flat faces away from the
+    /// S_G vertices, rulings and creases; each lies in its flat triangle.
+    fn add_interior_samples(
+        &mut self,
+        gmesh: &GeometricMesh,
+        pattern: &Pattern,
+        params: &PaperParams,
+    ) {
+        let d = (2.0 / (3f64.sqrt() * params.interior_density)).sqrt();
+        let row = 0.5 * 3f64.sqrt() * d;
+        let corners = pattern.corners();
+        let (mut lo, mut hi) = (corners[0], corners[0]);
+        for c in corners {
+            lo = Point2::new(lo.x.min(c.x), lo.y.min(c.y));
+            hi = Point2::new(hi.x.max(c.x), hi.y.max(c.y));
+        }
+        // structural S_G edges (rulings, creases) are kept in S_P; the plain edges of
+        // the flat triangulation are not (they would stiffen the flat regions along
+        // arbitrary lines, and a flat region must be free to bend in any direction,
+        // sec. 3.1)
+        let mut gedges: Vec<[Point2; 2]> = Vec::new();
+        for (&(a, b), e) in &gmesh.edges {
+            if matches!(e.kind, EdgeKind::Ruling { .. } | EdgeKind::Crease { .. }) {
+                gedges.push([
+                    gmesh.vertices[a as usize].material,
+                    gmesh.vertices[b as usize].material,
+                ]);
+            }
+        }
+        let curved_polys: Vec<Vec<Point2>> = gmesh
+            .faces
+            .iter()
+            .filter(|f| f.kind != FaceKind::Flat)
+            .map(|f| {
+                f.vertices
+                    .iter()
+                    .map(|&v| gmesh.vertices[v as usize].material)
+                    .collect()
+            })
+            .collect();
+        let nrows = ((hi.y - lo.y) / row).ceil() as i64 + 1;
+        let ncols = ((hi.x - lo.x) / d).ceil() as i64 + 2;
+        for j in 0..nrows {
+            let y = lo.y + 0.5 * row + j as f64 * row;
+            let shift = if j % 2 == 0 { 0.25 * d } else { 0.75 * d };
+            for i in 0..ncols {
+                let p = Point2::new(lo.x + shift + i as f64 * d, y);
+                if pattern.signed_inside_distance(&p) < 0.4 * d {
+                    continue;
+                }
+                if gmesh
+                    .vertices
+                    .iter()
+                    .any(|v| (v.material - p).norm() < 0.4 * d)
+                {
+                    continue;
+                }
+                if gedges
+                    .iter()
+                    .any(|[a, b]| point_segment(&p, a, b).0 < 0.25 * d)
+                {
+                    continue;
+                }
+                if curved_polys
+                    .iter()
+                    .any(|poly| in_convex_polygon(poly, &p, -1e-12))
+                {
+                    continue;
+                }
+                let Some(f) = gmesh.flat_face_at(&p) else {
+                    continue;
+                };
+                let [a, b, c] = [0, 1, 2].map(|k| gmesh.faces[f].vertices[k] as usize);
+                let (ma, mb, mc) = (
+                    gmesh.vertices[a].material,
+                    gmesh.vertices[b].material,
+                    gmesh.vertices[c].material,
+                );
+                let det = orient(&ma, &mb, &mc);
+                let l1 = orient(&ma, &p, &mc) / det;
+                let l2 = orient(&ma, &mb, &p) / det;
+                let l0 = 1.0 - l1 - l2;
+                let pos = Point3::from(
+                    gmesh.vertices[a].position.coords * l0
+                        + gmesh.vertices[b].position.coords * l1
+                        + gmesh.vertices[c].position.coords * l2,
+                );
+                self.material.push(p);
+                self.position.push(pos);
+                self.kind.push(SampleKind::InteriorSample);
+            }
+        }
+    }
+
+    /// The constrained Delaunay triangulation of the vertices so far with the
+    /// boundary (split at the samples) and every ruling and crease of S_G.
+    fn triangulate(
+        &self,
+        gmesh: &GeometricMesh,
+    ) -> Result<spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>, String> {
+        let nb = self.boundary.len();
+        let mut constraints: Vec<[usize; 2]> = (0..nb)
+            .map(|i| {
+                [
+                    self.boundary[i] as usize,
+                    self.boundary[(i + 1) % nb] as usize,
+                ]
+            })
+            .collect();
+        for (&(a, b), e) in &gmesh.edges {
+            if matches!(e.kind, EdgeKind::Ruling { .. } | EdgeKind::Crease { .. }) {
+                constraints.push([a as usize, b as usize]);
+            }
+        }
+        let pts: Vec<spade::Point2<f64>> = self
+            .material
+            .iter()
+            .map(|m| spade::Point2::new(m.x, m.y))
+            .collect();
+        let mut conflict = false;
+        let cdt = spade::ConstrainedDelaunayTriangulation::<spade::Point2<f64>>::try_bulk_load_cdt(
+            pts,
+            constraints,
+            |_| conflict = true,
+        )
+        .map_err(|e| format!("{e:?}"))?;
+        use spade::Triangulation;
+        if conflict || cdt.num_vertices() != self.material.len() {
+            return Err("S_P triangulation: conflicting constraints or duplicate samples".into());
+        }
+        Ok(cdt)
+    }
+
+    /// The triangles: those of `cdt` outside the curved faces, then each curved face
+    /// as a fan around a new barycenter vertex (sec. 4, fig. 4), a triangle as itself.
+    fn add_triangles(
+        &mut self,
+        cdt: &spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>,
+        curved_faces: &[(Vec<u32>, Vec<Point2>)],
+    ) {
+        use spade::Triangulation;
+        let ng = self.geometric_vertices;
+        for face in cdt.inner_faces() {
+            let vs = face.vertices().map(|v| v.fix().index() as u32);
+            let m = vs.map(|v| self.material[v as usize]);
+            let c = Point2::from((m[0].coords + m[1].coords + m[2].coords) / 3.0);
+            if curved_faces
+                .iter()
+                .any(|(_, p)| in_convex_polygon(p, &c, 0.0))
+            {
+                continue;
+            }
+            self.triangles.push(vs);
+        }
+        for (poly, _) in curved_faces {
+            if poly.len() == 3 {
+                self.triangles.push([poly[0], poly[1], poly[2]]);
+                continue;
+            }
+            // barycenter of the S_G face (its corners), not of the samples
+            let mut m = nalgebra::Vector2::zeros();
+            let mut p = Vector3::zeros();
+            let mut count = 0.0;
+            for &v in poly {
+                if (v as usize) < ng {
+                    m += self.material[v as usize].coords;
+                    p += self.position[v as usize].coords;
+                    count += 1.0;
+                }
+            }
+            let c = self.material.len() as u32;
+            self.material.push(Point2::from(m / count));
+            self.position.push(Point3::from(p / count));
+            self.kind.push(SampleKind::Barycenter);
+            for i in 0..poly.len() {
+                self.triangles
+                    .push([c, poly[i], poly[(i + 1) % poly.len()]]);
+            }
+        }
+    }
     /// Edges, hinges with rest angles (eq. 1, preset creases), lumped masses.
     fn finish_topology(
         &mut self,

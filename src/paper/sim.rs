@@ -394,24 +394,28 @@ impl PaperSim {
     /// compressed by more than epsilon_c) is remeshed once with new rulings, creating
     /// singular vertices where the rulings meet constrained borders.
     pub fn remesh(&mut self) {
-        let params = self.params.clone();
-        let pattern = self.pattern.clone();
-        let sp = self.sp.clone();
-        let interp = Interpolator::new(&sp, &pattern);
-        let position = |k: &GVertexKind, m: &Point2| match k {
-            GVertexKind::Boundary { s } => match interp.vertex_at(m) {
-                Some(v) => sp.position[v as usize],
-                None => interp.boundary_position(*s),
-            },
-            GVertexKind::Singular { .. } => interp.position(m),
-        };
+        // disjoint borrows: S_P and the pattern are read while the layer changes
+        let PaperSim {
+            params,
+            pattern,
+            sp,
+            layer,
+            rng,
+            frame,
+            gmesh: kept,
+            gmesh_fresh,
+            ..
+        } = self;
+        let (params, pattern, sp): (&PaperParams, &Pattern, &PhysicalMesh) = (params, pattern, sp);
+        let interp = Interpolator::new(sp, pattern);
+        let position = |k: &GVertexKind, m: &Point2| interp.geometric_vertex(k, m);
         let ctx = CrumpleContext {
-            pattern: &pattern,
-            params: &params,
+            pattern,
+            params,
             position: &position,
         };
-        let Ok(mut gmesh) = GeometricMesh::build(&self.layer, &pattern, &position) else {
-            self.gmesh = GeometricMesh::default();
+        let Ok(mut gmesh) = GeometricMesh::build(layer, pattern, &position) else {
+            *kept = GeometricMesh::default();
             return;
         };
         // the flat regions of this frame, each remeshed at most once (sec. 5.1: "it is
@@ -464,16 +468,9 @@ impl PaperSim {
             if let Some(o) = origin_of(&strain) {
                 processed.push(o);
             }
-            let events = crumple_flat_region(
-                &ctx,
-                &mut self.layer,
-                &gmesh,
-                &labels,
-                &strain,
-                &mut self.rng,
-            );
+            let events = crumple_flat_region(&ctx, layer, &gmesh, &labels, &strain, rng);
             let face = &gmesh.faces[strain.face];
-            self.frame.crumple_attempts.push(CrumpleAttempt {
+            frame.crumple_attempts.push(CrumpleAttempt {
                 compression: strain.compression,
                 centroid: Point2::from(
                     face.vertices
@@ -488,8 +485,8 @@ impl PaperSim {
             if events.is_empty() {
                 continue;
             }
-            self.frame.crumple_events.extend(events);
-            match GeometricMesh::build(&self.layer, &pattern, &position) {
+            frame.crumple_events.extend(events);
+            match GeometricMesh::build(layer, pattern, &position) {
                 Ok(g) => gmesh = g,
                 Err(_) => {
                     gmesh = GeometricMesh::default();
@@ -497,58 +494,19 @@ impl PaperSim {
                 }
             }
         }
-        self.gmesh_fresh = !gmesh.vertices.is_empty();
-        self.gmesh = gmesh;
+        *gmesh_fresh = !gmesh.vertices.is_empty();
+        *kept = gmesh;
     }
 
     /// Step 3 (sec. 6): junction points, generalized cones, S_P from S_G, lengths.
     pub fn track(&mut self) {
-        let params = self.params.clone();
-        let pattern = self.pattern.clone();
-        let old = self.sp.clone();
-        let interp = Interpolator::new(&old, &pattern);
-        let position = |k: &GVertexKind, m: &Point2| match k {
-            GVertexKind::Boundary { s } => match interp.vertex_at(m) {
-                Some(v) => old.position[v as usize],
-                None => interp.boundary_position(*s),
-            },
-            GVertexKind::Singular { .. } => interp.position(m),
-        };
-        let ctx = CrumpleContext {
-            pattern: &pattern,
-            params: &params,
-            position: &position,
-        };
-        // the mesh of S_G that step 2 left (same structure, same S_P positions)
-        let mut gmesh = std::mem::take(&mut self.gmesh);
-        if !std::mem::take(&mut self.gmesh_fresh) || gmesh.vertices.is_empty() {
-            let Ok(g) = GeometricMesh::build(&self.layer, &pattern, &position) else {
-                return;
-            };
-            gmesh = g;
-        }
-        let (report, changed) = update_junctions(&ctx, &mut self.layer, &gmesh);
-        self.frame.junctions = report;
-        if let Some(g) = changed {
-            gmesh = g;
-        }
-        let (report, changed) = fit_cones(&ctx, &mut self.layer, &gmesh);
-        self.frame.cones = report;
-        if let Some(g) = changed {
-            gmesh = g;
-        }
-        let Ok(mut sp) = build_physical(&gmesh, &self.layer, &pattern, &params, &|s| {
-            interp.boundary_position(s)
-        }) else {
+        let Some((gmesh, sp)) = self.track_structure() else {
             return;
         };
-        for (v, m) in sp.velocity.iter_mut().zip(&sp.material) {
-            *v = interp.velocity(m);
-        }
         // the held vertices (handles and their tangent-plane neighbours, found anew in
         // the new S_P) sit at their targets and stay fixed
         let mut fixed = vec![false; sp.material.len()];
-        let old_sp = std::mem::replace(&mut self.sp, sp);
+        self.sp = sp;
         let (_, _, held) = self.handle_constraints(self.time);
         for (m, p) in &held {
             if let Some(v) = self.vertex_at(m) {
@@ -557,14 +515,64 @@ impl PaperSim {
             }
         }
         self.held = held;
-        drop(old_sp);
-        self.frame.isometry = restore_lengths(&mut self.sp, &fixed, params.isometry_max_iterations);
+        self.frame.isometry =
+            restore_lengths(&mut self.sp, &fixed, self.params.isometry_max_iterations);
         self.gmesh = gmesh;
         // S_G vertices are the first S_P vertices: their final positions
         for (v, g) in self.gmesh.vertices.iter_mut().enumerate() {
             g.position = self.sp.position[v];
         }
         self.rebuild_outputs();
+    }
+
+    /// Step 3 (e)-(g): junction points and generalized cones update the structure
+    /// from S_G's mesh (step 2's, or built anew), then S_P is rebuilt from it with
+    /// positions and velocities interpolated from the current S_P. Returns S_G's mesh
+    /// and the new S_P; None (S_G's mesh left empty) when the structure gives no mesh.
+    fn track_structure(&mut self) -> Option<(GeometricMesh, PhysicalMesh)> {
+        // disjoint borrows: the current S_P is read while the layer changes
+        let PaperSim {
+            params,
+            pattern,
+            sp: old,
+            layer,
+            frame,
+            gmesh: kept,
+            gmesh_fresh,
+            ..
+        } = self;
+        let (params, pattern, old): (&PaperParams, &Pattern, &PhysicalMesh) =
+            (params, pattern, old);
+        let interp = Interpolator::new(old, pattern);
+        let position = |k: &GVertexKind, m: &Point2| interp.geometric_vertex(k, m);
+        let ctx = CrumpleContext {
+            pattern,
+            params,
+            position: &position,
+        };
+        // the mesh of S_G that step 2 left (same structure, same S_P positions)
+        let mut gmesh = std::mem::take(kept);
+        if !std::mem::take(gmesh_fresh) || gmesh.vertices.is_empty() {
+            gmesh = GeometricMesh::build(layer, pattern, &position).ok()?;
+        }
+        let (report, changed) = update_junctions(&ctx, layer, &gmesh);
+        frame.junctions = report;
+        if let Some(g) = changed {
+            gmesh = g;
+        }
+        let (report, changed) = fit_cones(&ctx, layer, &gmesh);
+        frame.cones = report;
+        if let Some(g) = changed {
+            gmesh = g;
+        }
+        let mut sp = build_physical(&gmesh, layer, pattern, params, &|s| {
+            interp.boundary_position(s)
+        })
+        .ok()?;
+        for (v, m) in sp.velocity.iter_mut().zip(&sp.material) {
+            *v = interp.velocity(m);
+        }
+        Some((gmesh, sp))
     }
 
     /// Display mesh, singular points, frame statistics from S_P and S_G.
