@@ -275,6 +275,7 @@ fn an_active_crease_bound_reports_a_singular_point_on_the_right_rim() {
         density: 0.1,
         bending_stiffness: 0.1,
         crease_regularizer: 0.1,
+        clamp: Default::default(),
         gravity: [0.0; 3],
         kinetic: KineticModel::QuasiStatic,
         base: BaseMode::Prescribed {

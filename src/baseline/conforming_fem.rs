@@ -662,6 +662,7 @@ mod tests {
             density: 0.1,
             bending_stiffness: 0.1,
             crease_regularizer: 0.1,
+            clamp: Default::default(),
             gravity: [0.0, 0.0, -9.81],
             kinetic: crate::ribbon::KineticModel::Full,
             base: BaseMode::Prescribed {

@@ -80,6 +80,32 @@ pub struct ProjectedNewton {
     factor_free: Option<Vec<usize>>,
 }
 
+/// Relative tolerance of "on a bound": x_i <= lower_i + eps (1 + |lower_i|).
+const BOUND_EPS: f64 = 1e-12;
+
+/// What one call of `minimize` carries from iteration to iteration.
+struct IterationState {
+    f: f64,
+    /// Projected-gradient infinity norm at x.
+    pg: f64,
+    iterations: u32,
+    evaluations: u32,
+    /// Whether `ProjectedNewton::h` holds the Hessian at x (assembled on demand: see
+    /// [`BoxProblem::hessian`]).
+    hessian_ready: bool,
+    /// Whether this iteration steps on the stored factorization (chord step).
+    chord: bool,
+}
+
+/// How an iteration's direction was found.
+struct Direction {
+    ok: bool,
+    /// The damping had to be raised to make the model positive definite.
+    escalated: bool,
+    /// The scaled-gradient fallback instead of a Newton step.
+    fallback: bool,
+}
+
 impl Clone for ProjectedNewton {
     /// Buffers only: a fresh workspace behaves identically.
     fn clone(&self) -> Self {
@@ -103,6 +129,8 @@ impl ProjectedNewton {
         }
     }
 
+    /// Minimize `problem` over the box [lower, upper] from `x` (clamped into the box),
+    /// writing the minimizer to `x`.
     pub fn minimize(
         &mut self,
         problem: &mut impl BoxProblem,
@@ -118,29 +146,32 @@ impl ProjectedNewton {
         for i in 0..n {
             x[i] = x[i].clamp(lower[i], upper[i]);
         }
-        let mut evaluations = 1;
-        let mut f = problem.evaluate(x, Some(&mut self.g), None);
-        let mut pg = projected_gradient_inf(x, &self.g, lower, upper);
-        let initial_pg = pg;
+        let mut state = IterationState {
+            f: problem.evaluate(x, Some(&mut self.g), None),
+            pg: 0.0,
+            iterations: 0,
+            evaluations: 1,
+            hessian_ready: false,
+            chord: false,
+        };
+        state.pg = projected_gradient_inf(x, &self.g, lower, upper);
+        let initial_pg = state.pg;
         let pgtol = match options.pgtol_relative_to_start {
-            Some(factor) => factor * pg.max(1e-300),
+            Some(factor) => factor * state.pg.max(1e-300),
             None => options.pgtol,
         };
-        if !f.is_finite() || !pg.is_finite() {
-            return NewtonResult {
-                f,
-                iterations: 0,
-                evaluations,
-                projected_gradient_inf: pg,
-                initial_projected_gradient_inf: initial_pg,
-                converged: false,
-            };
+        let result = |state: &IterationState, converged: bool| NewtonResult {
+            f: state.f,
+            iterations: state.iterations,
+            evaluations: state.evaluations,
+            projected_gradient_inf: state.pg,
+            initial_projected_gradient_inf: initial_pg,
+            converged,
+        };
+        if !state.f.is_finite() || !state.pg.is_finite() {
+            return result(&state, false);
         }
-        let mut iterations = 0;
-        let mut converged = pg <= pgtol;
-        // Whether self.h holds the Hessian at x (assembled on demand: see
-        // BoxProblem::hessian).
-        let mut hessian_ready = false;
+        let mut converged = state.pg <= pgtol;
         // Start from a tenth of the damping the last solve's first iteration needed:
         // consecutive time steps have similar curvature, and every rejected
         // factorization costs as much as an accepted one.
@@ -149,97 +180,24 @@ impl ProjectedNewton {
         // Chord steps (the stored factorization, no new Hessian) while they contract
         // the projected gradient at least 4x per step: each saves an assembly and a
         // factorization (about half an iteration's cost at 100 unknowns).
-        let mut chord = options.reuse_factorization && self.factor_free.is_some();
-        if !chord {
+        state.chord = options.reuse_factorization && self.factor_free.is_some();
+        if !state.chord {
             self.factor_free = None;
         }
-        while !converged && iterations < options.max_iterations {
-            iterations += 1;
-            // Active set: at a bound with the gradient pointing out of the box.
-            let eps = 1e-12;
-            self.free.clear();
-            for i in 0..n {
-                let at_lower = x[i] <= lower[i] + eps * (1.0 + lower[i].abs()) && self.g[i] > 0.0;
-                let at_upper = x[i] >= upper[i] - eps * (1.0 + upper[i].abs()) && self.g[i] < 0.0;
-                if !(at_lower || at_upper) {
-                    self.free.push(i);
-                }
-            }
+        while !converged && state.iterations < options.max_iterations {
+            state.iterations += 1;
+            self.free_set(x, lower, upper);
             if self.free.is_empty() {
                 converged = true;
                 break;
             }
-            let pg_before = pg;
-            let mut escalated = false;
-            // whether this iteration's direction is the scaled-gradient fallback
-            let mut fallback = false;
-            let mut step_ok = false;
-            // At most a few rounds of binding: each drops from the free set the variables
-            // that sit on a bound while the Newton step points out of the box, and solves
-            // again. The projected search would clamp them at every trial, bending the
-            // path until only tiny steps pass Armijo (seen as runs of alpha ~1e-4 on the
-            // loops of the Moebius chain); held, they are freed again next iteration if
-            // the step turns inward (it does when H is positive definite and they are
-            // the only ones left with a gradient).
-            for binding in 0..4 {
-                let m = self.free.len();
-                chord &= self.factor_free.as_deref() == Some(&self.free[..]);
-                step_ok = if chord {
-                    self.reduced.clear();
-                    self.reduced.extend(self.free.iter().map(|&i| -self.g[i]));
-                    self.substitute(m)
-                } else {
-                    if !hessian_ready {
-                        // x was the last point evaluated with a gradient (the start or
-                        // the accepted trial)
-                        problem.hessian(x, &mut self.h);
-                        hessian_ready = true;
-                    }
-                    // Newton step on the Hessian; where it is indefinite, more damping.
-                    let mut ok = self.solve_reduced(m);
-                    while !ok && self.damping < 1e2 {
-                        self.damping = (self.damping * 10.0).max(1e-8);
-                        escalated = true;
-                        ok = self.solve_reduced(m);
-                    }
-                    self.factor_free = if ok { Some(self.free.clone()) } else { None };
-                    if !ok {
-                        // Not positive definite even at 100x its diagonal: a projected
-                        // gradient step scaled by the diagonal instead, a descent
-                        // direction the line search can always shorten to a decrease.
-                        // Giving up here would return the start, i.e. the previous
-                        // state, and zero the velocity (seen once in a helix run at
-                        // dt 78 us: kinetic energy 0.62 J -> 0 in one step).
-                        ok = self.scaled_gradient_step();
-                        fallback = true;
-                    }
-                    ok
-                };
-                if !step_ok || binding == 3 {
-                    break;
-                }
-                let before = self.free.len();
-                let mut k = 0;
-                let reduced = &self.reduced;
-                self.free.retain(|&i| {
-                    let d = reduced[k];
-                    k += 1;
-                    let on_lower = x[i] <= lower[i] + eps * (1.0 + lower[i].abs());
-                    let on_upper = x[i] >= upper[i] - eps * (1.0 + upper[i].abs());
-                    !((on_lower && d < 0.0) || (on_upper && d > 0.0))
-                });
-                if self.free.len() == before || self.free.is_empty() {
-                    if self.free.is_empty() {
-                        step_ok = false;
-                    }
-                    break;
-                }
-            }
-            if first && !chord {
+            let pg_before = state.pg;
+            let direction = self.direction(problem, x, lower, upper, &mut state);
+            if first && !state.chord {
                 self.first_damping = self.damping;
             }
             first = false;
-            if !step_ok {
+            if !direction.ok {
                 break;
             }
             // Stationary to round-off: the model predicts a decrease no larger than the
@@ -250,49 +208,24 @@ impl ProjectedNewton {
                 .zip(&self.reduced)
                 .map(|(&i, d)| self.g[i] * d)
                 .sum::<f64>();
-            if predicted <= 1e-14 * f.abs() {
+            if predicted <= 1e-14 * state.f.abs() {
                 converged = true;
                 break;
             }
-            // Projected Armijo line search along the Newton direction. The full step is
-            // evaluated with its gradient: it is accepted almost always, and then that
-            // evaluation is the next iterate's.
-            let mut alpha = 1.0;
-            let mut accepted = false;
-            let mut f_new = f;
             // (a chord step gets no line search: if its full step fails, the factorization
             // is stale)
-            for trial in 0..if chord { 1 } else { 40 } {
-                self.trial.copy_from_slice(x);
-                for (k, &i) in self.free.iter().enumerate() {
-                    self.trial[i] = (x[i] + alpha * self.reduced[k]).clamp(lower[i], upper[i]);
-                }
-                evaluations += 1;
-                f_new = if trial == 0 {
-                    problem.evaluate(&self.trial, Some(&mut self.g_trial), None)
-                } else {
-                    problem.evaluate(&self.trial, None, None)
-                };
-                let decrease: f64 = self
-                    .free
-                    .iter()
-                    .map(|&i| self.g[i] * (self.trial[i] - x[i]))
-                    .sum();
-                if f_new.is_finite() && f_new <= f + 1e-4 * decrease {
-                    accepted = true;
-                    break;
-                }
-                alpha *= 0.5;
-            }
-            if chord && !(accepted && alpha == 1.0) {
+            let trials = if state.chord { 1 } else { 40 };
+            let (accepted, alpha, f_new) =
+                self.line_search(problem, x, lower, upper, &mut state, trials);
+            if state.chord && !(accepted && alpha == 1.0) {
                 // the old factorization no longer models f here: a Newton step from x
-                chord = false;
+                state.chord = false;
                 if !accepted {
                     // the workspace holds the trial's data: evaluate x again for its
                     // Hessian
-                    evaluations += 1;
-                    f = problem.evaluate(x, Some(&mut self.g), None);
-                    iterations -= 1;
+                    state.evaluations += 1;
+                    state.f = problem.evaluate(x, Some(&mut self.g), None);
+                    state.iterations -= 1;
                     continue;
                 }
             }
@@ -306,36 +239,19 @@ impl ProjectedNewton {
                 self.damping = (self.damping * 100.0).max(1e-6);
                 continue;
             }
-            if alpha == 1.0 {
-                // a full step: trust the model more (Levenberg-Marquardt update), unless
-                // this iteration had to raise the damping to make the model positive
-                // definite: then the next Hessian, a step away, is likely indefinite at
-                // a lower damping too, and every rejected factorization costs as much as
-                // an accepted one
-                if !escalated {
-                    self.damping = (self.damping / 1000.0).max(1e-12);
-                }
-            } else {
-                self.damping = (self.damping * 10.0).min(1e6);
-            }
-            x.copy_from_slice(&self.trial);
-            let f_old = f;
-            if alpha == 1.0 {
-                // the full-step trial was evaluated with its gradient
-                f = f_new;
-                std::mem::swap(&mut self.g, &mut self.g_trial);
-            } else {
-                evaluations += 1;
-                f = problem.evaluate(x, Some(&mut self.g), None);
-            }
-            hessian_ready = false;
-            pg = projected_gradient_inf(x, &self.g, lower, upper);
+            self.adapt_damping(alpha, direction.escalated);
+            let f_old = state.f;
+            self.accept(problem, x, alpha, f_new, &mut state);
+            state.pg = projected_gradient_inf(x, &self.g, lower, upper);
             // (chord steps only at the start of a call: within one, Newton steps
             // converge in fewer evaluations)
-            chord &= pg <= 0.25 * pg_before;
-            if pg <= pgtol {
+            state.chord &= state.pg <= 0.25 * pg_before;
+            let f = state.f;
+            if state.pg <= pgtol {
                 converged = true;
-            } else if !fallback && (f_old - f) <= options.ftol * f_old.abs().max(f.abs()).max(1.0) {
+            } else if !direction.fallback
+                && (f_old - f) <= options.ftol * f_old.abs().max(f.abs()).max(1.0)
+            {
                 // After any accepted Newton step, as L-BFGS-B applies `factr`: where the
                 // resampling operator's kinks stall the projected gradient above its
                 // tolerance, the line search keeps passing steps of alpha ~1e-3 that
@@ -345,14 +261,187 @@ impl ProjectedNewton {
                 converged = true;
             }
         }
-        NewtonResult {
-            f,
-            iterations,
-            evaluations,
-            projected_gradient_inf: pg,
-            initial_projected_gradient_inf: initial_pg,
-            converged,
+        result(&state, converged)
+    }
+
+    /// The free set at x: every variable except those at a bound with the gradient
+    /// pointing out of the box.
+    fn free_set(&mut self, x: &[f64], lower: &[f64], upper: &[f64]) {
+        self.free.clear();
+        for i in 0..x.len() {
+            let at_lower = x[i] <= lower[i] + BOUND_EPS * (1.0 + lower[i].abs()) && self.g[i] > 0.0;
+            let at_upper = x[i] >= upper[i] - BOUND_EPS * (1.0 + upper[i].abs()) && self.g[i] < 0.0;
+            if !(at_lower || at_upper) {
+                self.free.push(i);
+            }
         }
+    }
+
+    /// The step direction on the free set into `self.reduced`: a chord step on the
+    /// stored factorization, a damped Newton step, or the scaled-gradient fallback.
+    ///
+    /// At most a few rounds of binding: each drops from the free set the variables
+    /// that sit on a bound while the Newton step points out of the box, and solves
+    /// again. The projected search would clamp them at every trial, bending the path
+    /// until only tiny steps pass Armijo (seen as runs of alpha ~1e-4 on the loops of
+    /// the Moebius chain); held, they are freed again next iteration if the step turns
+    /// inward (it does when H is positive definite and they are the only ones left
+    /// with a gradient).
+    fn direction(
+        &mut self,
+        problem: &mut impl BoxProblem,
+        x: &[f64],
+        lower: &[f64],
+        upper: &[f64],
+        state: &mut IterationState,
+    ) -> Direction {
+        let mut direction = Direction {
+            ok: false,
+            escalated: false,
+            fallback: false,
+        };
+        for binding in 0..4 {
+            let m = self.free.len();
+            state.chord &= self.factor_free.as_deref() == Some(&self.free[..]);
+            direction.ok = if state.chord {
+                self.reduced.clear();
+                self.reduced.extend(self.free.iter().map(|&i| -self.g[i]));
+                self.substitute(m)
+            } else {
+                if !state.hessian_ready {
+                    // x was the last point evaluated with a gradient (the start or the
+                    // accepted trial)
+                    problem.hessian(x, &mut self.h);
+                    state.hessian_ready = true;
+                }
+                self.damped_newton_step(m, &mut direction)
+            };
+            if !direction.ok || binding == 3 {
+                break;
+            }
+            if !self.drop_binding(x, lower, upper) {
+                // every free variable was binding: no step
+                if self.free.is_empty() {
+                    direction.ok = false;
+                }
+                break;
+            }
+        }
+        direction
+    }
+
+    /// Newton step on the Hessian; where it is indefinite, more damping; where even
+    /// 100x its diagonal is not enough, the scaled-gradient fallback.
+    fn damped_newton_step(&mut self, m: usize, direction: &mut Direction) -> bool {
+        let mut ok = self.solve_reduced(m);
+        while !ok && self.damping < 1e2 {
+            self.damping = (self.damping * 10.0).max(1e-8);
+            direction.escalated = true;
+            ok = self.solve_reduced(m);
+        }
+        self.factor_free = if ok { Some(self.free.clone()) } else { None };
+        if !ok {
+            // Not positive definite even at 100x its diagonal: a projected gradient
+            // step scaled by the diagonal instead, a descent direction the line search
+            // can always shorten to a decrease. Giving up here would return the start,
+            // i.e. the previous state, and zero the velocity (seen once in a helix run
+            // at dt 78 us: kinetic energy 0.62 J -> 0 in one step).
+            ok = self.scaled_gradient_step();
+            direction.fallback = true;
+        }
+        ok
+    }
+
+    /// Drop from the free set the variables on a bound that the direction in
+    /// `self.reduced` pushes out of the box. Whether to solve again: some were
+    /// dropped and some are left (with none left, the step is void: `self.free` empty).
+    fn drop_binding(&mut self, x: &[f64], lower: &[f64], upper: &[f64]) -> bool {
+        let before = self.free.len();
+        let mut k = 0;
+        let reduced = &self.reduced;
+        self.free.retain(|&i| {
+            let d = reduced[k];
+            k += 1;
+            let on_lower = x[i] <= lower[i] + BOUND_EPS * (1.0 + lower[i].abs());
+            let on_upper = x[i] >= upper[i] - BOUND_EPS * (1.0 + upper[i].abs());
+            !((on_lower && d < 0.0) || (on_upper && d > 0.0))
+        });
+        self.free.len() != before && !self.free.is_empty()
+    }
+
+    /// Projected Armijo line search along the direction in `self.reduced`, at most
+    /// `trials` halvings. The full step is evaluated with its gradient (into
+    /// `g_trial`): it is accepted almost always, and then that evaluation is the next
+    /// iterate's. Returns (accepted, alpha, f at the last trial).
+    fn line_search(
+        &mut self,
+        problem: &mut impl BoxProblem,
+        x: &[f64],
+        lower: &[f64],
+        upper: &[f64],
+        state: &mut IterationState,
+        trials: u32,
+    ) -> (bool, f64, f64) {
+        let mut alpha = 1.0;
+        let mut f_new = state.f;
+        for trial in 0..trials {
+            self.trial.copy_from_slice(x);
+            for (k, &i) in self.free.iter().enumerate() {
+                self.trial[i] = (x[i] + alpha * self.reduced[k]).clamp(lower[i], upper[i]);
+            }
+            state.evaluations += 1;
+            f_new = if trial == 0 {
+                problem.evaluate(&self.trial, Some(&mut self.g_trial), None)
+            } else {
+                problem.evaluate(&self.trial, None, None)
+            };
+            let decrease: f64 = self
+                .free
+                .iter()
+                .map(|&i| self.g[i] * (self.trial[i] - x[i]))
+                .sum();
+            if f_new.is_finite() && f_new <= state.f + 1e-4 * decrease {
+                return (true, alpha, f_new);
+            }
+            alpha *= 0.5;
+        }
+        (false, alpha, f_new)
+    }
+
+    /// Levenberg-Marquardt update after an accepted step of length `alpha`.
+    fn adapt_damping(&mut self, alpha: f64, escalated: bool) {
+        if alpha == 1.0 {
+            // a full step: trust the model more, unless this iteration had to raise
+            // the damping to make the model positive definite: then the next Hessian,
+            // a step away, is likely indefinite at a lower damping too, and every
+            // rejected factorization costs as much as an accepted one
+            if !escalated {
+                self.damping = (self.damping / 1000.0).max(1e-12);
+            }
+        } else {
+            self.damping = (self.damping * 10.0).min(1e6);
+        }
+    }
+
+    /// Move x to the accepted trial point, with its value and gradient.
+    fn accept(
+        &mut self,
+        problem: &mut impl BoxProblem,
+        x: &mut [f64],
+        alpha: f64,
+        f_new: f64,
+        state: &mut IterationState,
+    ) {
+        x.copy_from_slice(&self.trial);
+        if alpha == 1.0 {
+            // the full-step trial was evaluated with its gradient
+            state.f = f_new;
+            std::mem::swap(&mut self.g, &mut self.g_trial);
+        } else {
+            state.evaluations += 1;
+            state.f = problem.evaluate(x, Some(&mut self.g), None);
+        }
+        state.hessian_ready = false;
     }
 
     /// Solve (H_FF + damping * diag(H_FF) + tiny I) d = -g_F into `self.reduced` by a

@@ -1,5 +1,6 @@
 //! A ribbon as a simulated object: state, handles, one step, mesh and singular points.
 
+use super::bending::{clamp_stations, crease_bending_weights};
 use super::mass::element_mass;
 use super::objective::{Equality, Layout, NormalGuide, PointForce, RimHistory, StepTerms};
 use super::params::{BaseMode, KineticModel, RibbonParams};
@@ -186,11 +187,19 @@ impl RibbonSim {
             equality_handles.push(None);
         }
         let multipliers = equalities.iter().map(|e| vec![0.0; e.rows()]).collect();
+        let mut crease_bending = Vec::new();
+        crease_bending_weights(
+            params.bending_stiffness,
+            &strip,
+            params.clamp,
+            &clamp_stations(&params.base, handles, index),
+            &mut crease_bending,
+        );
         let terms = StepTerms {
             h: 0.01,
             kinetic: params.kinetic,
             density: params.density,
-            bending_stiffness: params.bending_stiffness,
+            crease_bending,
             crease_regularizer: params.crease_regularizer,
             gravity: Vector3::from(params.gravity),
             normal_guides,
@@ -480,10 +489,8 @@ impl RibbonSim {
                 e.gravity -= rho * m.k[a].iter().sum::<f64>() * g.dot(&x[a]);
             }
         }
-        let bend_k =
-            self.params.bending_stiffness * n as f64 * self.strip.width / self.strip.length;
         for k in 1..n {
-            e.elastic += bend_k * (1.0 + c[k] * c[k]) * psi[k] * psi[k]
+            e.elastic += self.terms.crease_bending[k] * (1.0 + c[k] * c[k]) * psi[k] * psi[k]
                 + self.params.crease_regularizer * c[k] * c[k];
         }
         e

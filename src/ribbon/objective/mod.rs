@@ -1,0 +1,253 @@
+//! The implicit-Euler objective of one ribbon step (Pan et al. sec. 4, 5) over the
+//! generalized coordinates q = <w, t | c_1..c_{n-1} | psi_1..psi_{n-1}>, with
+//!
+//! - its gradient in adjoint mode, O(n) (appendix C): every term contributes a wrench
+//!   on the element carrying its point, and the gradient of coordinate q_a is the twist
+//!   of q_a paired with the suffix sum of wrenches of the elements it moves;
+//! - the chain-rule gradient of appendix A as the baseline: the full Jacobian ∇x_j,
+//!   O(n^2);
+//! - a Gauss-Newton Hessian of the least-squares terms, assembled in O(n^2) from 8x8
+//!   per-element blocks (6 twist + 2 local crease sliding) and the same suffix sums.
+//!
+//! Why twists: element E_e is the rigid image of its flat trapezoid under
+//! T_0 T_1 ... T_e, so a change of T_k (k <= e) moves E_e rigidly. The velocity of a
+//! point of E_e under dq_a is `ξ_a(p)` for every coordinate a whose transform precedes
+//! e, plus, for a rim vertex on crease k, the sliding of its material position along
+//! the rim when c_k changes (eq. 2).
+//!
+//! Files: [`layout`] (where each coordinate lives in q), [`kinetic`] (the rim history,
+//! the resampling operator R and the kinetic term), [`terms`] (the other terms and the
+//! step's data), `accumulate` (per-element generalized forces), `gradient` (twists,
+//! adjoint and chain rule), `hessian` (the dense Newton matrix).
+
+mod accumulate;
+mod gradient;
+mod hessian;
+pub mod kinetic;
+pub mod layout;
+pub mod terms;
+#[cfg(test)]
+mod tests;
+
+use nalgebra::{DMatrix, SMatrix, SVector};
+
+use super::params::KineticModel;
+use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
+use crate::geometry::{Matrix3, Pose, Twist, Vector3};
+use accumulate::{Accumulator, PointGradient, SecondOrder};
+
+pub use gradient::GradientMode;
+pub(crate) use kinetic::interpolate;
+pub use kinetic::RimHistory;
+pub use layout::Layout;
+pub use terms::{Equality, NormalGuide, ObjectiveParts, PointForce, StepTerms};
+
+type Vec8 = SVector<f64, 8>;
+type Mat8 = SMatrix<f64, 8, 8>;
+type Mat3x8 = SMatrix<f64, 3, 8>;
+
+/// Buffers reused across evaluations (no allocation per evaluation once warm).
+#[derive(Clone, Debug, Default)]
+pub struct Workspace {
+    pub coords: Coordinates,
+    pub frames: Frames,
+    twists: Vec<Twist>,
+    /// Per-element generalized force: [wrench (moment, force); local c_e; local c_{e+1}].
+    element_gradient: Vec<Vec8>,
+    element_hessian: Vec<Mat8>,
+    /// Off-diagonal blocks (e1, e2, B) of the Gauss-Newton Hessian (loop closure).
+    cross_blocks: Vec<(usize, usize, Mat8)>,
+    /// Kinetic residual D per vertex (bottom then top), m/s.
+    residual_bottom: Vec<Vector3>,
+    residual_top: Vec<Vector3>,
+    point_gradients: Vec<PointGradient>,
+    /// Per element: Σ p γ^T over points and directions (for the geometric stiffness),
+    /// and Σ s × γ of vertices sliding with c_e (index 0) and c_{e+1} (index 1).
+    element_second: Vec<SecondOrder>,
+    /// Per crease k: (axis point A_k, R_{k-1} ḋ, dΩ_c/dc) for same-crease second
+    /// derivatives.
+    crease_extra: Vec<(Vector3, Vector3, Vector3)>,
+    suffix: Vec<Vec8>,
+    scratch_first: Vec<usize>,
+    scratch_u: Vec<SVector<f64, 6>>,
+    scratch_twists: Vec<[f64; 6]>,
+    scratch_columns: Vec<[f64; 6]>,
+    scratch_psuf: Vec<(Matrix3, Vector3, Vector3)>,
+    hessian_suffix: Vec<SMatrix<f64, 6, 6>>,
+    /// Kinetic-term slopes of the resampling along u (bottom, top rim).
+    slope_bottom: Vec<Vector3>,
+    slope_top: Vec<Vector3>,
+    /// Cross-block scratch (loop closure): P_e1 columns and B P_e2 columns.
+    scratch_left: Vec<Vec8>,
+    scratch_right: Vec<(usize, Vec8)>,
+    /// Whether the last evaluation kept what `assemble_newton_hessian` needs.
+    second_order_recorded: bool,
+    pub parts: ObjectiveParts,
+}
+
+impl Default for Coordinates {
+    fn default() -> Self {
+        Coordinates::flat(1, Pose::identity())
+    }
+}
+
+/// The objective of one step. Holds references to everything fixed during the step.
+pub struct Objective<'a> {
+    pub strip: Strip,
+    pub layout: Layout,
+    pub terms: &'a StepTerms,
+    pub history: &'a RimHistory,
+    /// Base frame when prescribed; for a floating base, the reference rotation R_ref
+    /// (R = exp(w) R_ref) and nothing else.
+    pub base: Pose,
+}
+
+impl<'a> Objective<'a> {
+    pub fn new(
+        strip: Strip,
+        floating: bool,
+        terms: &'a StepTerms,
+        history: &'a RimHistory,
+        base: Pose,
+    ) -> Self {
+        Objective {
+            strip,
+            layout: Layout {
+                segments: strip.segments,
+                floating,
+            },
+            terms,
+            history,
+            base,
+        }
+    }
+
+    /// Set up coordinates and frames for q.
+    pub fn prepare(&self, q: &[f64], ws: &mut Workspace) {
+        let n = self.strip.segments;
+        if ws.coords.segments() != n {
+            ws.coords = Coordinates::flat(n, self.base);
+        }
+        if !self.layout.floating {
+            ws.coords.base = self.base;
+        }
+        self.layout.unpack(q, &self.base, &mut ws.coords);
+        reconstruct(&self.strip, &ws.coords, &mut ws.frames);
+    }
+
+    /// Evaluate the objective; with `gradient`, also its gradient (by `mode`); with
+    /// `hessian`, also the Gauss-Newton Hessian (N x N, N = layout.len()).
+    pub fn evaluate(
+        &self,
+        q: &[f64],
+        ws: &mut Workspace,
+        gradient: Option<(&mut [f64], GradientMode)>,
+        hessian: Option<&mut DMatrix<f64>>,
+    ) -> f64 {
+        let value = self.evaluate_recording(q, ws, gradient, hessian.is_some());
+        if let Some(h) = hessian {
+            self.assemble_newton_hessian(ws, h);
+        }
+        value
+    }
+
+    /// The objective at q and, if asked, its gradient; with `second_order`, also the
+    /// per-element second-order data, so that [`Self::assemble_newton_hessian`] can
+    /// build the Hessian at q afterwards without another pass (a Newton solver only
+    /// needs it once it knows it has not converged).
+    pub fn evaluate_recording(
+        &self,
+        q: &[f64],
+        ws: &mut Workspace,
+        gradient: Option<(&mut [f64], GradientMode)>,
+        second_order: bool,
+    ) -> f64 {
+        self.prepare(q, ws);
+        let record_points = matches!(gradient, Some((_, GradientMode::ChainRule)));
+        let mut grad_out = gradient;
+        if let Some((g, _)) = grad_out.as_mut() {
+            g.iter_mut().for_each(|x| *x = 0.0);
+        }
+        ws.parts = self.point_terms(ws, second_order, record_points);
+        // terms written directly in (c, psi): bending, regularizer, end-crease bound
+        let (coords, parts) = (&ws.coords, &mut ws.parts);
+        self.crease_terms(coords, parts, grad_out.as_mut().map(|(g, _)| &mut **g));
+        let value = ws.parts.total();
+
+        // --- assemble the geometric part ---
+        let need_twists = grad_out.is_some() || second_order;
+        if need_twists {
+            self.compute_twists(q, ws);
+        }
+        if let Some((g, mode)) = grad_out {
+            match mode {
+                GradientMode::Adjoint => self.gradient_adjoint(ws, g),
+                GradientMode::ChainRule => self.gradient_chain_rule(q, ws, g),
+            }
+        }
+        ws.second_order_recorded = second_order;
+        value
+    }
+
+    /// Every term that acts through points and directions of the elements (kinetic,
+    /// gravity, normal guiding, point forces, equalities): their values, and their
+    /// per-element generalized forces (and second-order data when `second_order`)
+    /// collected in `ws`.
+    fn point_terms(
+        &self,
+        ws: &mut Workspace,
+        second_order: bool,
+        record_points: bool,
+    ) -> ObjectiveParts {
+        let n = self.strip.segments;
+        ws.element_gradient.clear();
+        ws.element_gradient.resize(n, Vec8::zeros());
+        if second_order {
+            ws.element_hessian.clear();
+            ws.element_hessian.resize(n, Mat8::zeros());
+            ws.element_second.clear();
+            ws.element_second.resize(n, SecondOrder::default());
+        }
+        ws.cross_blocks.clear();
+        ws.point_gradients.clear();
+        let mut parts = ObjectiveParts::default();
+        let mut acc = Accumulator {
+            strip: &self.strip,
+            ws_gradient: &mut ws.element_gradient,
+            ws_hessian: second_order.then_some(&mut ws.element_hessian),
+            points: record_points.then_some(&mut ws.point_gradients),
+            second: second_order.then_some(&mut ws.element_second),
+            frames: &ws.frames,
+            coords: &ws.coords,
+        };
+
+        // --- kinetic term (sec. 4) ---
+        let t = self.terms;
+        match t.kinetic {
+            KineticModel::Full => {
+                parts.kinetic = self.kinetic_full(
+                    &mut acc,
+                    [&mut ws.residual_bottom, &mut ws.residual_top],
+                    [&mut ws.slope_bottom, &mut ws.slope_top],
+                );
+            }
+            KineticModel::Lumped => {
+                parts.kinetic = self.kinetic_lumped(&mut acc);
+            }
+            KineticModel::QuasiStatic => {}
+        }
+
+        // --- gravity: V = -rho g^T M X with the consistent M (row sums) ---
+        if t.gravity.norm_squared() > 0.0 {
+            parts.gravity = self.gravity(&mut acc);
+        }
+        parts.external = self.normal_guides_and_forces(&mut acc);
+
+        // --- equality constraints: augmented Lagrangian -λ.C + μ/2 |C|^2 ---
+        for (eq, lambda) in t.equalities.iter().zip(&t.multipliers) {
+            parts.constraint +=
+                self.equality(&mut acc, &mut ws.cross_blocks, eq, lambda, t.penalty);
+        }
+        parts
+    }
+}

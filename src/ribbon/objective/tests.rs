@@ -1,0 +1,263 @@
+//! Finite-difference checks of the gradients (adjoint, chain rule) and the Hessian.
+
+use super::*;
+use crate::geometry::{Point2, Point3};
+use crate::ribbon::params::LoopKind;
+use rand::{Rng, SeedableRng};
+
+/// A random but smooth-enough test problem: every term active, history perturbed so
+/// no vertex sits exactly on a resampling kink.
+pub(super) fn problem(
+    n: usize,
+    floating: bool,
+    kinetic: KineticModel,
+    seed: u64,
+) -> (Strip, StepTerms, RimHistory, Vec<f64>, Pose) {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let strip = Strip {
+        length: 1.0,
+        width: 0.08,
+        segments: n,
+    };
+    let base = Pose::new(Vector3::new(0.1, 0.2, -0.1), Vector3::new(0.3, -0.2, 0.5));
+    // previous state: random coordinates, random velocities
+    let mut prev = Coordinates::flat(n, base);
+    for k in 1..n {
+        prev.crease_direction[k] = rng.random_range(-0.3..0.3);
+        prev.bending_angle[k] = rng.random_range(-0.4..0.4);
+    }
+    let mut frames = Frames::default();
+    reconstruct(&strip, &prev, &mut frames);
+    let mut history = RimHistory::at_rest(&strip, &prev.crease_direction, &frames);
+    for v in history.v_bottom.iter_mut().chain(history.v_top.iter_mut()) {
+        *v = Vector3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        );
+    }
+    let equalities = vec![
+        Equality::Position {
+            material_point: Point2::new(0.63, 0.01),
+            target: Point3::new(0.2, 0.3, 0.1),
+            axes: [true, false, true],
+        },
+        Equality::Orientation {
+            material_point: Point2::new(0.97, 0.0),
+            target: *nalgebra::Rotation3::new(Vector3::new(0.2, 0.1, 0.3)).matrix(),
+        },
+        Equality::Loop(LoopKind::NonOrientable),
+    ];
+    let multipliers = equalities
+        .iter()
+        .map(|e| (0..e.rows()).map(|_| rng.random_range(-1.0..1.0)).collect())
+        .collect();
+    let terms = StepTerms {
+        h: 0.01,
+        kinetic,
+        density: 0.3,
+        // 0.02 J with a clamp-like weight on crease 1 (any positive weights work)
+        crease_bending: (0..=n)
+            .map(|k| match k {
+                0 => 0.0,
+                1 => 0.02 * n as f64 * 0.08 / 1.5,
+                k if k == n => 0.0,
+                _ => 0.02 * n as f64 * 0.08,
+            })
+            .collect(),
+        crease_regularizer: 0.1,
+        gravity: Vector3::new(0.0, 0.0, -9.81),
+        normal_guides: vec![NormalGuide {
+            material_point: Point2::new(0.41, -0.02),
+            target: Vector3::new(0.0, 0.6, 0.8),
+            stiffness: 3.0,
+        }],
+        forces: vec![PointForce {
+            material_point: Point2::new(0.27, 0.03),
+            force: Vector3::new(0.5, -1.0, 2.0),
+        }],
+        equalities,
+        multipliers,
+        end_crease_multipliers: [-0.3, 0.0],
+        penalty: 50.0,
+        crease_bound: 0.95 * 2.0 / (0.08 * n as f64),
+    };
+    // current q: near prev, perturbed
+    let layout = Layout {
+        segments: n,
+        floating,
+    };
+    let mut q = vec![0.0; layout.len()];
+    let mut cur = prev.clone();
+    for k in 1..n {
+        cur.crease_direction[k] += rng.random_range(-0.05..0.05);
+        cur.bending_angle[k] += rng.random_range(-0.1..0.1);
+    }
+    // make the end-crease inequality active
+    cur.crease_direction[n - 1] = 0.95 * 2.0 / (0.08 * n as f64) + 0.01;
+    cur.base = Pose::new(
+        Vector3::new(0.12, 0.18, -0.09),
+        Vector3::new(0.31, -0.22, 0.48),
+    );
+    layout.pack(&cur, &base, &mut q);
+    (strip, terms, history, q, base)
+}
+
+fn check_gradient(n: usize, floating: bool, kinetic: KineticModel, mode: GradientMode) {
+    let (strip, terms, history, q, base) = problem(n, floating, kinetic, 11 + n as u64);
+    let obj = Objective::new(strip, floating, &terms, &history, base);
+    let mut ws = Workspace::default();
+    let mut g = vec![0.0; q.len()];
+    let f0 = obj.evaluate(&q, &mut ws, Some((&mut g, mode)), None);
+    assert!(f0.is_finite());
+    let h = 1e-6;
+    let mut worst: f64 = 0.0;
+    let scale = g.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    for a in 0..q.len() {
+        let mut qp = q.clone();
+        qp[a] += h;
+        let fp = obj.evaluate(&qp, &mut ws, None, None);
+        qp[a] -= 2.0 * h;
+        let fm = obj.evaluate(&qp, &mut ws, None, None);
+        let fd = (fp - fm) / (2.0 * h);
+        let err = (fd - g[a]).abs() / scale;
+        worst = worst.max(err);
+        // central differences: O(h^2) truncation ~ 1e-12 relative, round-off
+        // ~ eps |f| / h ~ 1e-10 relative to the gradient scale.
+        assert!(
+            err < 1e-6,
+            "coordinate {a} ({mode:?}, {kinetic:?}): analytic {} vs fd {fd}",
+            g[a]
+        );
+    }
+    assert!(worst < 1e-6);
+}
+
+#[test]
+fn adjoint_gradient_matches_finite_differences_fixed_base() {
+    check_gradient(9, false, KineticModel::Full, GradientMode::Adjoint);
+}
+#[test]
+fn adjoint_gradient_matches_finite_differences_floating_base() {
+    check_gradient(8, true, KineticModel::Full, GradientMode::Adjoint);
+}
+#[test]
+fn chain_rule_gradient_matches_finite_differences() {
+    check_gradient(8, true, KineticModel::Full, GradientMode::ChainRule);
+    check_gradient(7, false, KineticModel::Lumped, GradientMode::ChainRule);
+}
+#[test]
+fn lumped_and_quasi_static_gradients_match_finite_differences() {
+    check_gradient(10, true, KineticModel::Lumped, GradientMode::Adjoint);
+    check_gradient(6, false, KineticModel::QuasiStatic, GradientMode::Adjoint);
+}
+
+#[test]
+fn adjoint_and_chain_rule_agree() {
+    let (strip, terms, history, q, base) = problem(30, true, KineticModel::Full, 5);
+    let obj = Objective::new(strip, true, &terms, &history, base);
+    let mut ws = Workspace::default();
+    let mut ga = vec![0.0; q.len()];
+    let mut gc = vec![0.0; q.len()];
+    obj.evaluate(&q, &mut ws, Some((&mut ga, GradientMode::Adjoint)), None);
+    obj.evaluate(&q, &mut ws, Some((&mut gc, GradientMode::ChainRule)), None);
+    let scale = ga.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    for (a, c) in ga.iter().zip(&gc) {
+        assert!((a - c).abs() < 1e-10 * scale, "{a} vs {c}");
+    }
+}
+
+/// Hessian against central differences of the analytic gradient.
+fn check_hessian(
+    terms: &StepTerms,
+    history: &RimHistory,
+    strip: Strip,
+    base: Pose,
+    q: &[f64],
+    floating: bool,
+    coords: &[usize],
+) {
+    let obj = Objective::new(strip, floating, terms, history, base);
+    let mut ws = Workspace::default();
+    let mut hm = DMatrix::zeros(q.len(), q.len());
+    let mut g = vec![0.0; q.len()];
+    obj.evaluate(
+        q,
+        &mut ws,
+        Some((&mut g, GradientMode::Adjoint)),
+        Some(&mut hm),
+    );
+    assert!(
+        (&hm - hm.transpose()).amax() <= 1e-12 * hm.amax(),
+        "symmetric"
+    );
+    // columns of the finite-difference Hessian, symmetrized (the standard remedy
+    // for the O(h) asymmetry of differenced gradients)
+    let step = 1e-6;
+    let nq = q.len();
+    let mut fd = DMatrix::zeros(nq, nq);
+    for &b in coords {
+        let mut qp = q.to_vec();
+        qp[b] += step;
+        let mut gp = vec![0.0; nq];
+        obj.evaluate(&qp, &mut ws, Some((&mut gp, GradientMode::Adjoint)), None);
+        qp[b] -= 2.0 * step;
+        let mut gm = vec![0.0; nq];
+        obj.evaluate(&qp, &mut ws, Some((&mut gm, GradientMode::Adjoint)), None);
+        for &a in coords {
+            fd[(a, b)] = (gp[a] - gm[a]) / (2.0 * step);
+        }
+    }
+    let fd = (&fd + fd.transpose()) * 0.5;
+    for &b in coords {
+        for &a in coords {
+            // truncation ~ h^2 times the third derivative, round-off ~ eps |g| / h
+            // ~ 1e-10 |g|; 1e-6 of the largest entry is far above both and far below
+            // any missing term.
+            assert!(
+                (fd[(a, b)] - hm[(a, b)]).abs() < 1e-6 * hm.amax(),
+                "H[{a},{b}] = {} vs fd {}",
+                hm[(a, b)],
+                fd[(a, b)]
+            );
+        }
+    }
+}
+
+#[test]
+fn newton_hessian_matches_finite_differences_quasi_static() {
+    // no kinetic term, no gravity: every term's Hessian is exact (bending unclamped
+    // for c^2 < 1/3), in every coordinate including crease directions
+    let (strip, mut terms, history, mut q, base) = problem(7, true, KineticModel::QuasiStatic, 3);
+    terms.gravity = Vector3::zeros();
+    let lay = Layout {
+        segments: 7,
+        floating: true,
+    };
+    q[lay.c(6)] = 0.05;
+    q[0..3].copy_from_slice(&[0.0; 3]); // base rotation at its reference: exact curvature
+    terms.end_crease_multipliers = [0.0, 0.0];
+    let all: Vec<usize> = (0..lay.len()).collect();
+    check_hessian(&terms, &history, strip, base, &q, true, &all);
+}
+
+#[test]
+fn newton_hessian_matches_finite_differences_with_inertia_and_gravity() {
+    // with the full kinetic term and gravity the mass matrix depends on c, a term
+    // the Hessian leaves out: compare in the bending-angle and base coordinates
+    let (strip, terms, history, mut q, base) = problem(7, true, KineticModel::Full, 4);
+    let lay = Layout {
+        segments: 7,
+        floating: true,
+    };
+    q[0..3].copy_from_slice(&[0.0; 3]);
+    let coords: Vec<usize> = (0..6).chain(lay.psi(1)..lay.len()).collect();
+    check_hessian(&terms, &history, strip, base, &q, true, &coords);
+    let (strip, terms, history, q, base) = problem(9, false, KineticModel::Lumped, 8);
+    let lay = Layout {
+        segments: 9,
+        floating: false,
+    };
+    let coords: Vec<usize> = (lay.psi(1)..lay.len()).collect();
+    check_hessian(&terms, &history, strip, base, &q, false, &coords);
+}
