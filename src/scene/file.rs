@@ -11,7 +11,7 @@ use crate::ribbon::{
     BaseMode, ClampRule, Imperfection, KineticModel, LoopKind, RibbonForce, RibbonInitialShape,
     RibbonParams, RibbonSim, SolverKind, SolverSettings,
 };
-use crate::sim::{HandleSpec, Motion, OrientationMode, SimObject, Trajectory, World};
+use crate::sim::{HandleSpec, Motion, ObjectSim, OrientationMode, Trajectory, World};
 
 fn d_frame() -> String {
     "world".into()
@@ -751,7 +751,7 @@ impl SceneFile {
             }
             objects.push((
                 object_names[index].clone(),
-                SimObject::Ribbon(Box::new(sim)),
+                Box::new(sim) as Box<dyn ObjectSim>,
             ));
         }
         let mut world = World::new(objects, handles, dt);
