@@ -11,8 +11,8 @@ use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use developable_sim::ribbon::objective::GradientMode;
+use developable_sim::ribbon::RibbonSim;
 use developable_sim::scene::{self, Scene};
-use developable_sim::sim::SimObject;
 
 fn load(name: &str, sets: &[String]) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -75,9 +75,10 @@ fn gradient_vs_n(c: &mut Criterion) {
             &[format!("ribbon.segments={n}"), "duration=0.05".into()],
             3,
         );
-        let SimObject::Ribbon(r) = &mut s.world.objects_mut()[0] else {
-            unreachable!("a ribbon scene")
-        };
+        let r = s
+            .world
+            .object_as_mut::<RibbonSim>(0)
+            .expect("a ribbon scene");
         let mut g = Vec::new();
         group.bench_function(BenchmarkId::new("adjoint", n), |b| {
             b.iter(|| black_box(r.evaluate_gradient(GradientMode::Adjoint, &mut g)))

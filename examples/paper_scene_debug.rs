@@ -1,5 +1,5 @@
 use developable_sim::scene;
-use developable_sim::sim::SimObject;
+use developable_sim::paper::PaperSim;
 use std::path::Path;
 
 fn main() {
@@ -12,9 +12,7 @@ fn main() {
             final_dump(&sc);
         }
         let r = sc.world.step(&[]);
-        let SimObject::Paper(p) = &sc.world.objects()[0] else {
-            panic!()
-        };
+        let p = sc.world.object_as::<PaperSim>(0).expect("a paper scene");
         let f = p.frame_stats();
         let m = p.mesh();
         let mut worst = (0.0, 0u32, 0u32);
@@ -50,9 +48,7 @@ fn main() {
 
 #[allow(dead_code)]
 fn final_dump(sc: &developable_sim::scene::Scene) {
-    let SimObject::Paper(p) = &sc.world.objects()[0] else {
-        panic!()
-    };
+    let p = sc.world.object_as::<PaperSim>(0).expect("a paper scene");
     println!("creases {:?}", p.geometric_layer().creases);
     let layer = p.geometric_layer();
     for r in &layer.regions {

@@ -19,7 +19,7 @@ use developable_sim::ros::session::MarkerStyle;
 use developable_sim::runner::StepObserver;
 use developable_sim::scene::Scene;
 use developable_sim::sim::{ReachWatch, StepReport};
-use developable_sim::{runner, scene};
+use developable_sim::{render, runner, scene};
 
 #[derive(Parser)]
 #[command(
@@ -276,25 +276,18 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             }
             let mut loaded = scene::load(&scene, &overrides)?;
             runner::run(&mut loaded, &mut (), &|| false)?;
-            let (w, h) = size
-                .split_once('x')
-                .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
-                .ok_or_else(|| anyhow::anyhow!("--size must be WIDTHxHEIGHT, got `{size}`"))?;
-            anyhow::ensure!(
-                view.len() == 3 && view.iter().all(|v| v.is_finite()),
-                "--view takes three numbers x,y,z"
-            );
+            let (width, height) = render::parse_size(&size)?;
+            anyhow::ensure!(view.len() == 3, "--view takes three numbers x,y,z");
             let meshes: Vec<_> = (0..loaded.world.object_names().len())
                 .map(|i| loaded.world.mesh(i))
                 .collect();
-            let dir = nalgebra::Vector3::new(view[0], view[1], view[2]);
-            anyhow::ensure!(dir.norm() > 0.0, "--view must not be zero");
-            let up = if dir.normalize().z.abs() > 0.99 {
-                nalgebra::Vector3::y()
-            } else {
-                nalgebra::Vector3::z()
+            let view_dir = nalgebra::Vector3::new(view[0], view[1], view[2]);
+            let options = render::RenderOptions {
+                width,
+                height,
+                view_dir,
             };
-            developable_sim::render::render_png(&meshes, &out, w, h, dir, up)?;
+            render::render_png(&meshes, &out, &options)?;
             println!("wrote {}", out.display());
             Ok(())
         }

@@ -3,9 +3,8 @@
 
 use std::time::Instant;
 
-use crate::ribbon::objective::GradientMode;
 use crate::scene::Scene;
-use crate::sim::{Phase, PhaseClock, SimObject, StepReport};
+use crate::sim::{Phase, PhaseClock, StepReport};
 use crate::stats::{RunStats, StatsCollector};
 
 /// Called after every step with the world and the report (recording, progress).
@@ -34,16 +33,8 @@ pub fn run(
     let solver_kind = scene
         .world
         .objects()
-        .iter()
-        .map(|o| match o {
-            SimObject::Ribbon(r) => match r.params.solver.kind {
-                crate::ribbon::SolverKind::GaussNewton => "gauss_newton",
-                crate::ribbon::SolverKind::Lbfgsb => "lbfgsb",
-            },
-            SimObject::Paper(_) => "paper_newton",
-        })
-        .next()
-        .unwrap_or("none");
+        .first()
+        .map_or("none", |o| o.solver_name());
     let mut stats = StatsCollector::new(&scene.name, &scene.world, solver_kind);
     let steps = (scene.duration / scene.world.dt()).round().max(1.0) as usize;
     let wall = Instant::now();
@@ -116,13 +107,13 @@ pub fn gradient_cost_us(scene: &mut Scene) -> f64 {
     let mut samples = Vec::new();
     let mut g = Vec::new();
     for object in scene.world.objects_mut() {
-        let SimObject::Ribbon(r) = object else {
+        // warm the buffers; objects without a step objective are not sampled
+        if object.evaluate_gradient(&mut g).is_none() {
             continue;
-        };
-        r.evaluate_gradient(GradientMode::Adjoint, &mut g); // warm the buffers
+        }
         for _ in 0..31 {
             let t = Instant::now();
-            let f = r.evaluate_gradient(GradientMode::Adjoint, &mut g);
+            let f = object.evaluate_gradient(&mut g);
             samples.push(t.elapsed().as_secs_f64() * 1e6);
             std::hint::black_box(f);
         }

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use crate::sim::{SimObject, StepReport, World};
+use crate::sim::{CompressionStats, ObjectSim, StepReport, World};
 
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Percentiles {
@@ -33,11 +33,21 @@ pub struct ObjectFinal {
     pub vertices: Vec<[f64; 3]>,
     pub triangles: Vec<[u32; 3]>,
     pub material_vertices: Vec<[f64; 2]>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub crease_direction: Option<Vec<f64>>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub bending_angle: Option<Vec<f64>>,
+    /// The object's named reduced coordinates (ribbons: `crease_direction`,
+    /// `bending_angle`), one key each.
+    #[serde(flatten)]
+    pub coordinates: Coordinates,
     pub singular_points: Vec<[f64; 3]>,
+}
+
+/// Named coordinate vectors, written as one JSON key each in this order.
+#[derive(Clone, Debug, Default)]
+pub struct Coordinates(pub Vec<(&'static str, Vec<f64>)>);
+
+impl Serialize for Coordinates {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_map(self.0.iter().map(|(k, v)| (k, v)))
+    }
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -235,25 +245,23 @@ impl StatsCollector {
             s.singular_points_max = s.singular_points_max.max(o.singular_points);
             s.finite &= world.mesh(i).is_finite() && o.energies.total().is_finite();
         }
-        // paper objects: per-frame measurements averaged over the sheets
-        let papers: Vec<&crate::paper::PaperSim> = world
+        // paper objects (those measuring their compression): per-frame measurements
+        // averaged over the sheets
+        let papers: Vec<(&dyn ObjectSim, CompressionStats)> = world
             .objects()
             .iter()
-            .filter_map(|o| match o {
-                SimObject::Paper(p) => Some(p.as_ref()),
-                _ => None,
-            })
+            .filter_map(|o| Some((o.as_ref(), o.compression_stats()?)))
             .collect();
         if !papers.is_empty() {
             let n = papers.len() as f64;
-            let f = |g: &dyn Fn(&crate::paper::PaperFrameStats) -> f64| {
-                papers.iter().map(|p| g(p.frame_stats())).sum::<f64>() / n
+            let f = |g: &dyn Fn(&CompressionStats) -> f64| {
+                papers.iter().map(|(_, c)| g(c)).sum::<f64>() / n
             };
             self.paper_compression.push(f(&|x| x.compression_mean_pct));
             self.paper_compressed.push(f(&|x| x.compressed_edges_pct));
             self.paper_triangles.push(f(&|x| x.triangles as f64));
             if s.first_singular_point.is_none() {
-                if let Some(sp) = papers.iter().find_map(|p| p.singular_points().first()) {
+                if let Some(sp) = papers.iter().find_map(|(p, _)| p.singular_points().first()) {
                     s.first_singular_point = Some(FirstSingular {
                         time: world.time(),
                         material: [sp.material.x, sp.material.y],
@@ -261,7 +269,7 @@ impl StatsCollector {
                     });
                 }
             }
-            s.singular_vertices = Some(papers.iter().map(|p| p.singular_points().len()).sum());
+            s.singular_vertices = Some(papers.iter().map(|(p, _)| p.singular_points().len()).sum());
         }
         if let Some(c) = &report.contact {
             let r = &c.report;
@@ -339,14 +347,7 @@ impl StatsCollector {
 }
 
 fn total_energy(world: &World) -> f64 {
-    world
-        .objects()
-        .iter()
-        .map(|o| match o {
-            SimObject::Ribbon(r) => r.energies().total(),
-            SimObject::Paper(p) => p.energies().total(),
-        })
-        .sum()
+    world.objects().iter().map(|o| o.energies().total()).sum()
 }
 
 /// The final meshes and coordinates.
@@ -357,20 +358,19 @@ pub fn final_state(world: &World) -> FinalState {
         .enumerate()
         .map(|(i, name)| {
             let mesh = world.mesh(i);
-            let (c, psi) = match &world.objects()[i] {
-                SimObject::Ribbon(r) => (
-                    Some(r.coordinates().crease_direction.clone()),
-                    Some(r.coordinates().bending_angle.clone()),
-                ),
-                SimObject::Paper(_) => (None, None),
-            };
             ObjectFinal {
                 name: name.clone(),
                 vertices: mesh.vertices.iter().map(|p| [p.x, p.y, p.z]).collect(),
                 triangles: mesh.triangles.clone(),
                 material_vertices: mesh.material.iter().map(|p| [p.x, p.y]).collect(),
-                crease_direction: c,
-                bending_angle: psi,
+                coordinates: Coordinates(
+                    world
+                        .object(i)
+                        .coordinates()
+                        .into_iter()
+                        .map(|(name, v)| (name, v.to_vec()))
+                        .collect(),
+                ),
                 singular_points: world
                     .singular_points(i)
                     .iter()

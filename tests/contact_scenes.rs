@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 
 use developable_sim::geometry::{Point3, Pose};
 use developable_sim::scene::{self, Scene};
-use developable_sim::sim::{SimObject, StepReport};
+use developable_sim::ribbon::RibbonSim;
+use developable_sim::sim::StepReport;
 use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::TriMesh;
 
@@ -136,9 +137,10 @@ fn falling_ribbon_stays_above_the_ground_and_its_correction_does_not_accumulate(
     );
     // the next optimization restarts from the developable reconstruction: the
     // ribbon's own frames stay isometric whatever the correction did
-    let SimObject::Ribbon(r) = &s.world.objects()[0] else {
-        panic!("the falling scene holds a ribbon")
-    };
+    let r = s
+        .world
+        .object_as::<RibbonSim>(0)
+        .expect("the falling scene holds a ribbon");
     let f = r.frames();
     for j in 0..f.rim_bottom.len() - 1 {
         let len = (f.rim_bottom[j + 1] - f.rim_bottom[j]).norm();

@@ -7,7 +7,6 @@ use std::path::PathBuf;
 use developable_sim::paper::PaperSim;
 use developable_sim::runner;
 use developable_sim::scene::{self, Scene};
-use developable_sim::sim::SimObject;
 use developable_sim::stats::RunStats;
 
 fn scene_path(name: &str) -> PathBuf {
@@ -28,10 +27,10 @@ fn run(name: &str, sets: &[&str]) -> (Scene, RunStats) {
 }
 
 fn paper(scene: &Scene) -> &PaperSim {
-    match &scene.world.objects()[0] {
-        SimObject::Paper(p) => p,
-        _ => panic!("not a paper scene"),
-    }
+    scene
+        .world
+        .object_as::<PaperSim>(0)
+        .expect("a paper scene")
 }
 
 #[test]

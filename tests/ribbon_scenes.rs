@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 use developable_sim::metrics::{rms_distance, strip_samples};
 use developable_sim::ribbon::RibbonSim;
 use developable_sim::scene::{self, Scene};
-use developable_sim::sim::SimObject;
 use developable_sim::{runner, stats::RunStats};
 
 fn scene_path(name: &str) -> PathBuf {
@@ -27,10 +26,10 @@ fn run(name: &str, sets: &[&str]) -> (Scene, RunStats) {
 }
 
 fn ribbon(scene: &Scene) -> &RibbonSim {
-    match &scene.world.objects()[0] {
-        SimObject::Ribbon(r) => r,
-        _ => panic!("not a ribbon scene"),
-    }
+    scene
+        .world
+        .object_as::<RibbonSim>(0)
+        .expect("a ribbon scene")
 }
 
 /// Exactly isometric by construction: every edge keeps its material length to
@@ -204,7 +203,7 @@ fn lbfgsb_and_newton_reach_the_same_step_minimizer() {
         if step % 20 == 0 {
             let mut newton = s.clone();
             let mut lbfgsb = s.clone();
-            if let SimObject::Ribbon(r) = &mut lbfgsb.world.objects_mut()[0] {
+            if let Some(r) = lbfgsb.world.object_as_mut::<RibbonSim>(0) {
                 r.params.solver.kind = developable_sim::ribbon::SolverKind::Lbfgsb;
                 r.params.solver.max_iterations = 20_000;
             }
@@ -276,6 +275,7 @@ fn an_active_crease_bound_reports_a_singular_point_on_the_right_rim() {
         density: 0.1,
         bending_stiffness: 0.1,
         crease_regularizer: 0.1,
+        clamp: Default::default(),
         gravity: [0.0; 3],
         kinetic: KineticModel::QuasiStatic,
         base: BaseMode::Prescribed {

@@ -43,8 +43,8 @@
 use crate::geometry::{Point2, Point3, SurfaceMesh, Vector3, VertexRegion};
 use crate::metrics::world_at_material;
 use crate::paper::sparse::BlockSpd;
-use crate::ribbon::BaseMode;
-use crate::sim::{OrientationMode, SimObject, Trajectory, World};
+use crate::ribbon::{BaseMode, RibbonSim};
+use crate::sim::{OrientationMode, Trajectory, World};
 
 /// Settings of the conforming FEM.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -149,21 +149,13 @@ impl ConformingFem {
     /// step; vertex positions are the ribbon's initial surface at their material
     /// points (a helix starts as a helix), at rest.
     pub fn from_world(world: &World, params: ConformingFemParams) -> Result<Self, BaselineError> {
-        let ribbons: Vec<_> = world
-            .objects()
-            .iter()
-            .filter_map(|o| match o {
-                SimObject::Ribbon(r) => Some(r),
-                SimObject::Paper(_) => None,
-            })
-            .collect();
-        if ribbons.len() != 1 || world.objects().len() != 1 {
-            return Err(BaselineError::NotOneRibbon);
-        }
+        let ribbon = match world.object_as::<RibbonSim>(0) {
+            Some(r) if world.objects().len() == 1 => r,
+            _ => return Err(BaselineError::NotOneRibbon),
+        };
         if world.contact_stage().is_some() {
             return Err(BaselineError::Unsupported("contact"));
         }
-        let ribbon = ribbons[0];
         let rp = &ribbon.params;
         if rp.loop_closure.is_some() {
             return Err(BaselineError::Unsupported("loops"));
@@ -670,6 +662,7 @@ mod tests {
             density: 0.1,
             bending_stiffness: 0.1,
             crease_regularizer: 0.1,
+            clamp: Default::default(),
             gravity: [0.0, 0.0, -9.81],
             kinetic: crate::ribbon::KineticModel::Full,
             base: BaseMode::Prescribed {
@@ -692,7 +685,7 @@ mod tests {
             &[],
         );
         World::new(
-            vec![("ribbon".into(), SimObject::Ribbon(Box::new(ribbon)))],
+            vec![("ribbon".into(), Box::new(ribbon) as _)],
             Vec::new(),
             0.01,
         )

@@ -2,6 +2,8 @@
 //! surfaces at matched material points (the ribbon remeshes in material space, so
 //! vertex indices do not correspond across runs).
 
+pub mod elastica;
+
 use crate::geometry::{Point2, Point3, SurfaceMesh};
 
 /// World position of the material point `m` on `mesh` (barycentric interpolation in

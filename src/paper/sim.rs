@@ -22,8 +22,10 @@ use super::pattern::Pattern;
 use super::physical::{build_physical, Interpolator, PhysicalMesh};
 use super::tracking::{fit_cones, update_junctions, ConeReport, JunctionReport};
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3};
-use crate::sim::{
-    Energies, HandleSpec, ObjectStepReport, OrientationMode, Phase, PhaseClock, SingularPoint,
+use crate::sim::handle::{HandleSpec, OrientationMode};
+use crate::sim::object::{
+    CompressionStats, Energies, NoClock, ObjectSim, ObjectStepReport, Phase, PhaseClock,
+    SingularPoint, StepContext,
 };
 
 /// A handle holding this sheet.
@@ -234,7 +236,7 @@ impl PaperSim {
         handles: &[HandleSpec],
         targets: &[Pose],
     ) -> ObjectStepReport {
-        self.step_with_clock(dt, time, index, handles, targets, &crate::sim::NoClock)
+        self.step_with_clock(dt, time, index, handles, targets, &NoClock)
     }
 
     /// [`PaperSim::step`] with each phase run inside `clock` (the edge times them).
@@ -359,15 +361,10 @@ impl PaperSim {
         targets: &[Pose],
     ) -> FemReport {
         self.time = time;
-        // a non-finite target is ignored: the handle keeps its last valid target
-        for (h, t) in targets.iter().enumerate() {
-            let finite = t.translation.vector.iter().all(|x| x.is_finite())
-                && t.rotation.coords.iter().all(|x| x.is_finite());
-            if finite {
-                if let Some(slot) = self.last_targets.get_mut(h) {
-                    *slot = Some(*t);
-                }
-            }
+        // `targets` are finite: the world keeps a handle's last target instead of a
+        // non-finite one (see `StepContext::targets`)
+        for (slot, t) in self.last_targets.iter_mut().zip(targets) {
+            *slot = Some(*t);
         }
         let (dirichlet, springs, held) = self.handle_constraints(time);
         self.held = held;
@@ -644,6 +641,48 @@ fn tangent_neighbours(sp: &PhysicalMesh, v: usize) -> Vec<usize> {
         }
     }
     best.map(|(_, a, b)| vec![a, b]).unwrap_or_default()
+}
+
+impl ObjectSim for PaperSim {
+    fn kind(&self) -> &'static str {
+        "paper"
+    }
+    fn solver_name(&self) -> &'static str {
+        "paper_newton"
+    }
+    fn step(&mut self, ctx: &StepContext<'_>) -> ObjectStepReport {
+        self.step_with_clock(
+            ctx.dt,
+            ctx.time,
+            ctx.index,
+            ctx.handles,
+            ctx.targets,
+            ctx.clock,
+        )
+    }
+    fn mesh(&self) -> &SurfaceMesh {
+        PaperSim::mesh(self)
+    }
+    fn singular_points(&self) -> &[SingularPoint] {
+        PaperSim::singular_points(self)
+    }
+    fn energies(&self) -> Energies {
+        PaperSim::energies(self)
+    }
+    fn material_pose(&self, m: &Point2) -> Pose {
+        PaperSim::material_pose(self, m)
+    }
+    fn compression_stats(&self) -> Option<CompressionStats> {
+        let f = &self.frame;
+        Some(CompressionStats {
+            compression_mean_pct: f.compression_mean_pct,
+            compressed_edges_pct: f.compressed_edges_pct,
+            triangles: f.triangles,
+        })
+    }
+    fn clone_box(&self) -> Box<dyn ObjectSim> {
+        Box::new(self.clone())
+    }
 }
 
 #[cfg(test)]

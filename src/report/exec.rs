@@ -11,7 +11,8 @@ use crate::baseline::{ConformingFem, ConformingFemParams};
 use crate::geometry::SurfaceMesh;
 use crate::runner::{self, StepObserver};
 use crate::scene::{self, Scene};
-use crate::sim::{SimObject, StepReport};
+use crate::ribbon::RibbonSim;
+use crate::sim::StepReport;
 use crate::stats::percentiles;
 
 /// What a run produced: its surfaces at the sample times and its cost.
@@ -58,18 +59,16 @@ pub fn scene_defaults(file: &Path, duration: Option<f64>) -> anyhow::Result<Scen
         "{}: the report runs scenes with one object and no contact",
         file.display()
     );
-    let (kind, resolution, tolerance) = match &objects[0] {
-        SimObject::Ribbon(r) => (
+    let (kind, resolution, tolerance) = match scene.world.object_as::<RibbonSim>(0) {
+        Some(r) => (
             SceneKind::Ribbon,
             r.params.segments as f64,
             r.params.solver.tolerance,
         ),
-        SimObject::Paper(_) => {
-            let p = scene
-                .source
-                .paper
-                .as_ref()
-                .context("a paper object without a paper section")?;
+        None => {
+            let p = scene.source.paper.as_ref().with_context(|| {
+                format!("a {} object: the report runs ribbons and paper", objects[0].kind())
+            })?;
             (SceneKind::Paper, p.boundary_density, p.newton_tolerance)
         }
     };
@@ -212,7 +211,7 @@ impl StepObserver for Sampler<'_> {
         let dt = scene.world.dt();
         self.offer(report.time, dt, scene.world.mesh(0));
         for (o, object) in report.objects.iter().zip(scene.world.objects()) {
-            if matches!(object, SimObject::Ribbon(_)) {
+            if object.downcast_ref::<RibbonSim>().is_some() {
                 self.solver_done(o.iterations, o.converged);
             }
         }

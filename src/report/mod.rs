@@ -27,7 +27,7 @@ use anyhow::Context;
 
 use crate::geometry::Point2;
 use crate::metrics::grid_samples;
-use crate::sim::SimObject;
+use crate::ribbon::RibbonSim;
 use errors::{error_against, log_log_slope};
 use output::{Row, SceneReport};
 use plan::{Method, SceneKind, Sweep};
@@ -202,10 +202,10 @@ fn select_scenes(opts: &ReportOptions) -> anyhow::Result<Vec<PathBuf>> {
 }
 
 /// The material points compared: a grid on the ribbon's strip or inside the sheet.
-fn material_points(file: &Path, kind: SceneKind) -> anyhow::Result<Vec<Point2>> {
+fn material_points(file: &Path) -> anyhow::Result<Vec<Point2>> {
     let scene = crate::scene::load(file, &[])?;
-    Ok(match (&scene.world.objects()[0], kind) {
-        (SimObject::Ribbon(r), _) => {
+    Ok(match scene.world.object_as::<RibbonSim>(0) {
+        Some(r) => {
             let (l, w) = (r.params.length, r.params.width);
             // inset by a micrometre so the strip's boundary resolves in any remeshing
             grid_samples(
@@ -216,7 +216,7 @@ fn material_points(file: &Path, kind: SceneKind) -> anyhow::Result<Vec<Point2>> 
                 1e-6,
             )
         }
-        (SimObject::Paper(_), _) => {
+        None => {
             let size = scene.source.paper.as_ref().map_or([0.1, 0.1], |p| p.size);
             grid_samples(
                 Point2::new(0.0, 0.0),
@@ -301,7 +301,7 @@ fn run_report_on_this_thread(
     for (file, name, plan) in plans {
         let kind = plan.defaults.kind;
         let duration = plan.defaults.duration;
-        let points = material_points(&file, kind)?;
+        let points = material_points(&file)?;
         let describe = |r: &plan::RunSpec| {
             format!(
                 "{name}: {} {} dt={} res={}",

@@ -2,12 +2,14 @@
 //! Bending Coordinates".
 //!
 //! - [`reconstruct`]: eqs. (2), (3), element frames, rims, normals.
+//! - [`bending`]: the per-crease bending weights and how a clamp sets them.
 //! - [`mass`]: the crease-dependent consistent mass of a trapezoid (appendix B).
 //! - [`objective`]: the implicit-Euler objective (sec. 4), its adjoint gradient
 //!   (appendix C), the chain-rule baseline (appendix A) and a Gauss-Newton Hessian.
 //! - [`step`]: one time step (algorithm 2): box constraints after the variable
 //!   substitution, augmented Lagrangian, and the two inner solvers.
 
+pub mod bending;
 pub mod mass;
 pub mod objective;
 pub mod params;
@@ -15,6 +17,7 @@ pub mod reconstruct;
 mod sim;
 pub mod step;
 
+pub use bending::ClampRule;
 pub use params::{BaseMode, KineticModel, LoopKind, RibbonParams, SolverKind, SolverSettings};
 pub use reconstruct::{Coordinates, Frames, Strip};
 pub use sim::{Imperfection, RibbonForce, RibbonInitialShape, RibbonSim};

@@ -1,5 +1,6 @@
 //! Ribbon parameters (Pan et al. sec. 3-5). SI units throughout.
 
+use super::bending::ClampRule;
 use crate::geometry::Pose;
 
 /// Kinetic term of the implicit-Euler objective.
@@ -103,6 +104,9 @@ pub struct RibbonParams {
     pub bending_stiffness: f64,
     /// Crease-direction regularizer beta, J (energy beta * c^2 per crease; paper 0.1).
     pub crease_regularizer: f64,
+    /// How a clamp (fixed or driven base, a handle holding orientation) weights the
+    /// creases next to it; default [`ClampRule::DualLength`] (second order in n).
+    pub clamp: ClampRule,
     /// Gravity, m/s^2.
     pub gravity: [f64; 3],
     pub kinetic: KineticModel,

@@ -1,12 +1,17 @@
 //! A ribbon as a simulated object: state, handles, one step, mesh and singular points.
 
+use super::bending::{clamp_stations, crease_bending_weights};
 use super::mass::element_mass;
 use super::objective::{Equality, Layout, NormalGuide, PointForce, RimHistory, StepTerms};
 use super::params::{BaseMode, KineticModel, RibbonParams};
 use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
 use super::step::{SolveOutcome, StepSolver};
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3, VertexRegion};
-use crate::sim::{Energies, HandleSpec, ObjectStepReport, OrientationMode, SingularPoint};
+use crate::contact::BodyTopology;
+use crate::sim::handle::{HandleSpec, OrientationMode};
+use crate::sim::object::{
+    ContactBody, Energies, ObjectSim, ObjectStepReport, Phase, SingularPoint, StepContext,
+};
 
 /// A seeded random perturbation of every crease: c_k and psi_k (rad) each get a
 /// uniform offset in [-amplitude, amplitude]. A perfectly flat strip twisted or spun
@@ -65,7 +70,6 @@ pub struct RibbonSim {
     q: Vec<f64>,
     mesh: SurfaceMesh,
     singular: Vec<SingularPoint>,
-    last_targets: Vec<Option<Pose>>,
     last_outcome: SolveOutcome,
     /// q at the end minus q at the start of the last step (extrapolation).
     q_delta: Vec<f64>,
@@ -183,11 +187,19 @@ impl RibbonSim {
             equality_handles.push(None);
         }
         let multipliers = equalities.iter().map(|e| vec![0.0; e.rows()]).collect();
+        let mut crease_bending = Vec::new();
+        crease_bending_weights(
+            params.bending_stiffness,
+            &strip,
+            params.clamp,
+            &clamp_stations(&params.base, handles, index),
+            &mut crease_bending,
+        );
         let terms = StepTerms {
             h: 0.01,
             kinetic: params.kinetic,
             density: params.density,
-            bending_stiffness: params.bending_stiffness,
+            crease_bending,
             crease_regularizer: params.crease_regularizer,
             gravity: Vector3::from(params.gravity),
             normal_guides,
@@ -221,7 +233,6 @@ impl RibbonSim {
             q,
             mesh: SurfaceMesh::default(),
             singular: Vec::new(),
-            last_targets: vec![None; handles.len()],
             last_outcome: SolveOutcome::default(),
             q_delta: Vec::new(),
             loaded_before: Vec::new(),
@@ -318,26 +329,15 @@ impl RibbonSim {
         handles: &[HandleSpec],
         targets: &[Pose],
     ) -> ObjectStepReport {
-        // A non-finite target is ignored: the handle keeps its last valid target.
-        let mut valid: Vec<Option<Pose>> = Vec::with_capacity(targets.len());
-        for (h, t) in targets.iter().enumerate() {
-            let finite = t.translation.vector.iter().all(|x| x.is_finite())
-                && t.rotation.coords.iter().all(|x| x.is_finite());
-            let v = if finite {
-                Some(*t)
-            } else {
-                self.last_targets.get(h).copied().flatten()
-            };
-            valid.push(v);
-        }
-        self.last_targets = valid.clone();
+        // `targets` are finite: the world keeps a handle's last target instead of a
+        // non-finite one (see `StepContext::targets`).
         self.terms.h = dt;
         if let BaseMode::Prescribed {
             pose,
             driven_by: Some(h),
         } = &mut self.params.base
         {
-            if let Some(target) = valid.get(*h).copied().flatten() {
+            if let Some(target) = targets.get(*h).copied() {
                 let grasp = handles[*h].material_point;
                 // world_from_base = world_from_gripper * gripper_from_base; the gripper
                 // sits at the grasp point with axes along the material axes.
@@ -354,7 +354,7 @@ impl RibbonSim {
         }
         for (eq, h) in self.terms.equalities.iter_mut().zip(&self.equality_handles) {
             let Some(h) = h else { continue };
-            let Some(target) = valid.get(*h).copied().flatten() else {
+            let Some(target) = targets.get(*h).copied() else {
                 continue;
             };
             match eq {
@@ -368,7 +368,7 @@ impl RibbonSim {
             }
         }
         for (guide, h) in self.terms.normal_guides.iter_mut().zip(&self.guide_handles) {
-            if let Some(target) = valid.get(*h).copied().flatten() {
+            if let Some(target) = targets.get(*h).copied() {
                 guide.target = target.rotation * Vector3::z();
             }
         }
@@ -489,10 +489,8 @@ impl RibbonSim {
                 e.gravity -= rho * m.k[a].iter().sum::<f64>() * g.dot(&x[a]);
             }
         }
-        let bend_k =
-            self.params.bending_stiffness * n as f64 * self.strip.width / self.strip.length;
         for k in 1..n {
-            e.elastic += bend_k * (1.0 + c[k] * c[k]) * psi[k] * psi[k]
+            e.elastic += self.terms.crease_bending[k] * (1.0 + c[k] * c[k]) * psi[k] * psi[k]
                 + self.params.crease_regularizer * c[k] * c[k];
         }
         e
@@ -704,11 +702,11 @@ impl RibbonSim {
     }
 }
 
-impl RibbonSim {
+impl ContactBody for RibbonSim {
     /// The contact mesh: one contact vertex per rim point, the two end pairs welded
     /// when the ribbon is a loop (x_n on x_0 and y_n on y_0; crossed for a Moebius
     /// loop), stations = crease index, topological neighbours within 2 elements.
-    pub fn contact_topology(&self) -> crate::contact::BodyTopology {
+    fn contact_topology(&self) -> BodyTopology {
         let n = self.strip.segments;
         let mesh_vertices = 2 * (n + 1);
         let mut vertex_of: Vec<u32> = (0..mesh_vertices as u32).collect();
@@ -730,7 +728,7 @@ impl RibbonSim {
             .iter()
             .map(|t| t.map(|v| vertex_of[v as usize]))
             .collect();
-        crate::contact::BodyTopology {
+        BodyTopology {
             vertex_of,
             vertices,
             triangles,
@@ -741,7 +739,7 @@ impl RibbonSim {
     }
 
     /// Mesh vertices of the state before the last step (X^n), m, in mesh order.
-    pub fn previous_mesh_vertices(&self, out: &mut Vec<Point3>) {
+    fn previous_mesh_vertices(&self, out: &mut Vec<Point3>) {
         out.clear();
         let h = &self.previous_history;
         for (b, t) in h.x_bottom.iter().zip(&h.x_top) {
@@ -754,7 +752,7 @@ impl RibbonSim {
     /// (Pan et al. sec. 5.2): it becomes X^{n+1} of the kinetic term, with velocities
     /// V = (X^{n+1} - R(X̄^{n+1}, X^n)) / h from the corrected positions; the next
     /// optimization starts from it. `h` is the step, s.
-    pub fn apply_contact_correction(&mut self, corrected: &[Point3], h: f64) {
+    fn apply_contact_correction(&mut self, corrected: &[Point3], h: f64) {
         let n = self.strip.segments;
         assert_eq!(corrected.len(), 2 * (n + 1));
         let old = &self.previous_history;
@@ -781,5 +779,59 @@ impl RibbonSim {
                 (self.mesh.vertices[a].coords + self.mesh.vertices[a + 2].coords) * 0.5,
             );
         }
+    }
+}
+
+impl ObjectSim for RibbonSim {
+    fn kind(&self) -> &'static str {
+        "ribbon"
+    }
+    fn solver_name(&self) -> &'static str {
+        match self.params.solver.kind {
+            super::SolverKind::GaussNewton => "gauss_newton",
+            super::SolverKind::Lbfgsb => "lbfgsb",
+        }
+    }
+    /// One implicit-Euler step, timed as one [`Phase::Simulation`].
+    fn step(&mut self, ctx: &StepContext<'_>) -> ObjectStepReport {
+        let mut report = ObjectStepReport::default();
+        ctx.clock.time(Some(ctx.index), Phase::Simulation, &mut || {
+            report = RibbonSim::step(self, ctx.dt, ctx.time, ctx.index, ctx.handles, ctx.targets)
+        });
+        report
+    }
+    fn mesh(&self) -> &SurfaceMesh {
+        RibbonSim::mesh(self)
+    }
+    fn singular_points(&self) -> &[SingularPoint] {
+        RibbonSim::singular_points(self)
+    }
+    fn energies(&self) -> Energies {
+        RibbonSim::energies(self)
+    }
+    fn material_pose(&self, m: &Point2) -> Pose {
+        RibbonSim::material_pose(self, m)
+    }
+    fn coordinates(&self) -> Vec<(&'static str, &[f64])> {
+        vec![
+            ("crease_direction", &self.coords.crease_direction),
+            ("bending_angle", &self.coords.bending_angle),
+        ]
+    }
+    fn evaluate_gradient(&mut self, gradient: &mut Vec<f64>) -> Option<f64> {
+        Some(RibbonSim::evaluate_gradient(
+            self,
+            super::objective::GradientMode::Adjoint,
+            gradient,
+        ))
+    }
+    fn contact_body(&self) -> Option<&dyn ContactBody> {
+        Some(self)
+    }
+    fn contact_body_mut(&mut self) -> Option<&mut dyn ContactBody> {
+        Some(self)
+    }
+    fn clone_box(&self) -> Box<dyn ObjectSim> {
+        Box::new(self.clone())
     }
 }

@@ -10,7 +10,7 @@ use super::mesh_file::load_mesh;
 use super::SceneError;
 use crate::contact::{Closeness, Collider, ColliderShape, ContactSettings, ContactStage};
 use crate::geometry::{Point3, Vector3};
-use crate::sim::{SimObject, World};
+use crate::sim::World;
 
 fn d_friction() -> f64 {
     0.5
@@ -174,11 +174,14 @@ pub(super) fn build_stage(
     let topologies = world
         .objects()
         .iter()
-        .map(|o| match o {
-            SimObject::Ribbon(r) => Ok(r.contact_topology()),
-            SimObject::Paper(_) => Err(ck.fail(
+        .map(|o| match o.contact_body() {
+            Some(body) => Ok(body.contact_topology()),
+            None => Err(ck.fail(
                 "contact",
-                "the contact stage acts on ribbons; a paper sheet collides through `paper.colliders`",
+                format!(
+                    "the contact stage acts on ribbons, not on a {} object; a paper sheet collides through `paper.colliders`",
+                    o.kind()
+                ),
             )),
         })
         .collect::<Result<_, _>>()?;

@@ -8,10 +8,10 @@ use serde::{Deserialize, Serialize};
 use super::{Outputs, Scene, SceneError};
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::ribbon::{
-    BaseMode, Imperfection, KineticModel, LoopKind, RibbonForce, RibbonInitialShape, RibbonParams,
-    RibbonSim, SolverKind, SolverSettings,
+    BaseMode, ClampRule, Imperfection, KineticModel, LoopKind, RibbonForce, RibbonInitialShape,
+    RibbonParams, RibbonSim, SolverKind, SolverSettings,
 };
-use crate::sim::{HandleSpec, Motion, OrientationMode, SimObject, Trajectory, World};
+use crate::sim::{HandleSpec, Motion, ObjectSim, OrientationMode, Trajectory, World};
 
 fn d_frame() -> String {
     "world".into()
@@ -167,6 +167,14 @@ pub struct RibbonFile {
     /// `full` (default), `lumped` or `quasi_static`.
     #[serde(default = "d_kinetic")]
     pub kinetic: String,
+    /// How a clamp (fixed or driven base, a handle with `orientation: full`) weights the
+    /// creases next to it: `moment_matched` (default, second order in n),
+    /// `dual_length` (the crease next to a clamp at s_c stands for the centerline from
+    /// s_c to the midpoint of its free neighbour element: second order, a ~10x larger
+    /// constant at end clamps) or `paper` (every crease l/n as in Pan et al.: the clamp
+    /// acts half an element away from its point, first order). See docs/accuracy.md.
+    #[serde(default = "d_clamp")]
+    pub clamp: String,
     /// How the first element is held.
     #[serde(default)]
     pub base: BaseFile,
@@ -207,6 +215,9 @@ fn d_beta() -> f64 {
 }
 fn d_kinetic() -> String {
     "full".into()
+}
+fn d_clamp() -> String {
+    "dual_length".into()
 }
 fn d_loop() -> String {
     "none".into()
@@ -767,7 +778,7 @@ impl SceneFile {
             }
             objects.push((
                 object_names[index].clone(),
-                SimObject::Ribbon(Box::new(sim)),
+                Box::new(sim) as Box<dyn ObjectSim>,
             ));
         }
         let mut world = World::new(objects, handles, dt);
@@ -886,6 +897,15 @@ impl SceneFile {
             "full" => KineticModel::Full,
             "lumped" => KineticModel::Lumped,
             _ => KineticModel::QuasiStatic,
+        };
+        let clamp = match ck.choice(
+            &format!("{rk}.clamp"),
+            &ribbon.clamp,
+            &["moment_matched", "dual_length", "paper"],
+        )? {
+            "paper" => ClampRule::Paper,
+            "dual_length" => ClampRule::DualLength,
+            _ => ClampRule::MomentMatched,
         };
         let loop_closure = match ck.choice(
             &format!("{rk}.loop"),
@@ -1018,6 +1038,7 @@ impl SceneFile {
             density,
             bending_stiffness: alpha,
             crease_regularizer: beta,
+            clamp,
             gravity: gravity.into(),
             kinetic,
             base,

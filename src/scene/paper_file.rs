@@ -9,7 +9,7 @@ use super::file::{parse_handle, pose_from, Check, PoseFile, SceneFile};
 use super::{Scene, SceneError};
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::paper::{Collider, PaperParams, PaperSim, PresetCrease};
-use crate::sim::{SimObject, World};
+use crate::sim::World;
 
 /// A sheet of paper. Every key is optional; defaults in parentheses.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -399,7 +399,7 @@ impl SceneFile {
         };
         let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(pk, e.to_string()))?;
         let world = World::new(
-            vec![("paper".to_string(), SimObject::Paper(Box::new(sim)))],
+            vec![("paper".to_string(), Box::new(sim) as _)],
             handles,
             dt,
         );

@@ -3,14 +3,18 @@
 //! This is the API every edge (CLI, ROS node, recorder, report) drives:
 //! build a [`World`] from a scene, call [`World::step`] with the newest handle targets,
 //! read meshes, singular points and the [`StepReport`]. Pure: no I/O, no ROS, no serde.
+//! Every object meets one contract, [`ObjectSim`] (`object`, a leaf: the simulators
+//! import it, not the world).
 
 pub mod handle;
+pub mod object;
 pub mod reach;
 mod world;
 
 pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
 pub use reach::{ReachMessage, ReachWatch};
-pub use world::{
-    ContactStepReport, Energies, NoClock, ObjectKind, ObjectStepReport, Phase, PhaseClock,
-    SimObject, SingularPoint, StepReport, World,
+pub use object::{
+    CompressionStats, ContactBody, Energies, NoClock, ObjectSim, ObjectStepReport, Phase,
+    PhaseClock, SingularPoint, StepContext,
 };
+pub use world::{ContactStepReport, StepReport, World};

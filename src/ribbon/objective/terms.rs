@@ -71,7 +71,10 @@ pub struct StepTerms {
     pub h: f64,
     pub kinetic: KineticModel,
     pub density: f64,
-    pub bending_stiffness: f64,
+    /// Bending weight of crease k (k = 1..n-1; n + 1 entries), J: the crease's energy
+    /// is `crease_bending[k] (1 + c_k^2) psi_k^2`, alpha w / d_k with d_k the length of
+    /// centerline the crease stands for (see [`crate::ribbon::bending`]).
+    pub crease_bending: Vec<f64>,
     pub crease_regularizer: f64,
     pub gravity: Vector3,
     pub normal_guides: Vec<NormalGuide>,
@@ -353,13 +356,13 @@ impl Objective<'_> {
     }
 
     /// Bending stiffness of crease k (1 <= k <= n-1) in the energy
-    /// k_k (1 + c_k^2) psi_k^2: alpha n w / l (Pan et al. sec. 3), J. The one place
-    /// the weight of a crease is set: the gradient, both Hessians and the chain solver
-    /// read it here.
+    /// k_k (1 + c_k^2) psi_k^2, J: alpha n w / l (Pan et al. sec. 3) away from clamps,
+    /// alpha w / d_k beside one ([`crate::ribbon::bending`] sets them). The one place
+    /// the weight of a crease is read: the gradient, both Hessians and the chain
+    /// solver read it here.
     #[inline]
-    pub fn bending_weight(&self, _k: usize) -> f64 {
-        let n = self.strip.segments as f64;
-        self.terms.bending_stiffness * n * self.strip.width / self.strip.length
+    pub fn bending_weight(&self, k: usize) -> f64 {
+        self.terms.crease_bending[k]
     }
 
     /// The terms written directly in (c, psi): bending k_k (1+c_k^2) psi_k^2 and the

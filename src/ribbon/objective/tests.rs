@@ -56,7 +56,15 @@ pub(super) fn problem(
         h: 0.01,
         kinetic,
         density: 0.3,
-        bending_stiffness: 0.02,
+        // 0.02 J with a clamp-like weight on crease 1 (any positive weights work)
+        crease_bending: (0..=n)
+            .map(|k| match k {
+                0 => 0.0,
+                1 => 0.02 * n as f64 * 0.08 / 1.5,
+                k if k == n => 0.0,
+                _ => 0.02 * n as f64 * 0.08,
+            })
+            .collect(),
         crease_regularizer: 0.1,
         gravity: Vector3::new(0.0, 0.0, -9.81),
         normal_guides: vec![NormalGuide {
