@@ -1,5 +1,5 @@
-use developable_sim::scene;
 use developable_sim::paper::PaperSim;
+use developable_sim::scene;
 use std::path::Path;
 
 fn main() {

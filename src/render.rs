@@ -556,6 +556,11 @@ mod tests {
         }
     }
 
+    /// The picture of `meshes` seen from straight above (y up on the screen).
+    fn from_above(meshes: &[&SurfaceMesh]) -> Image {
+        render(meshes, &opts([0.0, 0.0, -1.0])).unwrap()
+    }
+
     fn brightness(c: [u8; 3]) -> u32 {
         c.iter().map(|&x| x as u32).sum()
     }
@@ -563,9 +568,7 @@ mod tests {
     #[test]
     fn the_two_sides_of_the_surface_have_different_tints() {
         let m = square(0.0, VertexRegion::Flat, vec![]);
-        let top = render(&[&m], &opts([0.0, 0.0, -1.0]))
-            .unwrap()
-            .pixel(20, 20);
+        let top = from_above(&[&m]).pixel(20, 20);
         let bottom = render(&[&m], &opts([0.0, 0.0, 1.0])).unwrap().pixel(20, 20);
         // the material +z side in the flat colour (blue), the other side greyed
         let saturation = |c: [u8; 3]| c.iter().max().unwrap() - c.iter().min().unwrap();
@@ -595,7 +598,7 @@ mod tests {
             rulings: vec![],
             regions: vec![VertexRegion::Flat; 6],
         };
-        let img = render(&[&m], &opts([0.0, 0.0, -1.0])).unwrap();
+        let img = from_above(&[&m]);
         // screen rows run down: the +y face is the upper half
         let towards = brightness(img.pixel(32, 20));
         let away = brightness(img.pixel(32, 44));
@@ -608,7 +611,7 @@ mod tests {
     #[test]
     fn rulings_are_drawn_where_visible_and_hidden_behind_a_surface() {
         let ruled = square(0.0, VertexRegion::Flat, vec![[0, 2]]);
-        let img = render(&[&ruled], &opts([0.0, 0.0, -1.0])).unwrap();
+        let img = from_above(&[&ruled]);
         // the diagonal (0,0)-(1,1) runs from the lower left to the upper right
         let on = brightness(img.pixel(32, 32));
         let off = brightness(img.pixel(20, 20));
@@ -619,7 +622,7 @@ mod tests {
             p.x = 3.0 * p.x - 1.0;
             p.y = 3.0 * p.y - 1.0;
         }
-        let img = render(&[&ruled, &cover], &opts([0.0, 0.0, -1.0])).unwrap();
+        let img = from_above(&[&ruled, &cover]);
         let (c, near) = (img.pixel(32, 32), img.pixel(36, 32));
         assert!(
             brightness(c).abs_diff(brightness(near)) < 6,
@@ -630,13 +633,11 @@ mod tests {
     #[test]
     fn bent_parts_and_singular_points_have_their_colours() {
         let curved = square(0.0, VertexRegion::Curved, vec![]);
-        let c = render(&[&curved], &opts([0.0, 0.0, -1.0]))
-            .unwrap()
-            .pixel(20, 20);
+        let c = from_above(&[&curved]).pixel(20, 20);
         assert!(c[0] > c[2] + 60, "orange, got {c:?}");
         let mut m = square(0.0, VertexRegion::Flat, vec![]);
         m.regions[2] = VertexRegion::Singular;
-        let img = render(&[&m], &opts([0.0, 0.0, -1.0])).unwrap();
+        let img = from_above(&[&m]);
         // vertex 2 = (1, 1): the upper right corner of the framed square
         let corner = (0..64)
             .flat_map(|y| (0..64).map(move |x| (x, y)))

@@ -11,8 +11,8 @@
 use std::path::{Path, PathBuf};
 
 use developable_sim::geometry::{Point3, Pose};
-use developable_sim::scene::{self, Scene};
 use developable_sim::ribbon::RibbonSim;
+use developable_sim::scene::{self, Scene};
 use developable_sim::sim::StepReport;
 use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::TriMesh;

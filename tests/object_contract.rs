@@ -60,7 +60,9 @@ fn a_non_finite_target_holds_the_last_one_for_a_carried_collider() {
     let base = load("ribbon_gripper_push");
     assert!(base.world.contact_stage().is_some());
     let with_nan = run(base.clone(), 45, 0, 30..40, &|_, _| nan_pose());
-    let holding = run(base.clone(), 45, 0, 30..40, &|s, _| s.world.current_targets()[0]);
+    let holding = run(base.clone(), 45, 0, 30..40, &|s, _| {
+        s.world.current_targets()[0]
+    });
     let scripted = run(base, 45, 0, 0..0, &|_, _| unreachable!());
     assert!(with_nan.world.mesh(0).is_finite());
     assert_eq!(
@@ -83,7 +85,9 @@ fn a_non_finite_target_holds_the_last_one_for_a_carried_collider() {
 fn a_non_finite_target_holds_the_last_one_for_a_paper_handle() {
     let base = load("paper_cylinder_then_bend");
     let with_nan = run(base.clone(), 20, 0, 10..15, &|_, _| nan_pose());
-    let holding = run(base.clone(), 20, 0, 10..15, &|s, _| s.world.current_targets()[0]);
+    let holding = run(base.clone(), 20, 0, 10..15, &|s, _| {
+        s.world.current_targets()[0]
+    });
     let scripted = run(base, 20, 0, 0..0, &|_, _| unreachable!());
     assert!(with_nan.world.mesh(0).is_finite());
     assert!(mesh_bits(&with_nan) == mesh_bits(&holding));

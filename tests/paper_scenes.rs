@@ -27,10 +27,7 @@ fn run(name: &str, sets: &[&str]) -> (Scene, RunStats) {
 }
 
 fn paper(scene: &Scene) -> &PaperSim {
-    scene
-        .world
-        .object_as::<PaperSim>(0)
-        .expect("a paper scene")
+    scene.world.object_as::<PaperSim>(0).expect("a paper scene")
 }
 
 #[test]

@@ -349,3 +349,30 @@ fn the_check_accepts_the_forms_the_readme_uses() {
     let failures: Vec<String> = quoted.iter().filter_map(check).collect();
     assert!(failures.is_empty(), "{}", failures.join("\n\n"));
 }
+
+#[test]
+fn ci_runs_exactly_the_readmes_test_command() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(root.join("README.md")).unwrap();
+    let section = readme
+        .split("\n## The two commands")
+        .nth(1)
+        .expect("README.md has a section `## The two commands`");
+    let block = section.split("```").nth(1).expect("a code block in it");
+    // the block's last command is the test command
+    let test_command = block
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty() && !l.starts_with('#'))
+        .next_back()
+        .expect("a command in the block");
+    let ci = std::fs::read_to_string(root.join(".ci/run")).unwrap();
+    let runs_it = ci
+        .lines()
+        .map(|l| l.split(" #").next().unwrap().trim())
+        .any(|l| l == test_command);
+    assert!(
+        runs_it,
+        ".ci/run does not run the README's test command `{test_command}`:\n{ci}"
+    );
+}

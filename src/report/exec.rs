@@ -9,9 +9,9 @@ use anyhow::Context;
 use super::plan::{overrides, Method, RunSpec, SceneDefaults, SceneKind};
 use crate::baseline::{ConformingFem, ConformingFemParams};
 use crate::geometry::SurfaceMesh;
+use crate::ribbon::RibbonSim;
 use crate::runner::{self, StepObserver};
 use crate::scene::{self, Scene};
-use crate::ribbon::RibbonSim;
 use crate::sim::StepReport;
 use crate::stats::percentiles;
 
@@ -67,7 +67,10 @@ pub fn scene_defaults(file: &Path, duration: Option<f64>) -> anyhow::Result<Scen
         ),
         None => {
             let p = scene.source.paper.as_ref().with_context(|| {
-                format!("a {} object: the report runs ribbons and paper", objects[0].kind())
+                format!(
+                    "a {} object: the report runs ribbons and paper",
+                    objects[0].kind()
+                )
             })?;
             (SceneKind::Paper, p.boundary_density, p.newton_tolerance)
         }

@@ -6,8 +6,8 @@ use super::objective::{Equality, Layout, NormalGuide, PointForce, RimHistory, St
 use super::params::{BaseMode, KineticModel, RibbonParams};
 use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
 use super::step::{SolveOutcome, StepSolver};
-use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3, VertexRegion};
 use crate::contact::BodyTopology;
+use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3, VertexRegion};
 use crate::sim::handle::{HandleSpec, OrientationMode};
 use crate::sim::object::{
     ContactBody, Energies, ObjectSim, ObjectStepReport, Phase, SingularPoint, StepContext,

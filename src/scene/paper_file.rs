@@ -398,11 +398,7 @@ impl SceneFile {
             initial_shape: crate::paper::PaperInitialShape::Flat,
         };
         let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(pk, e.to_string()))?;
-        let world = World::new(
-            vec![("paper".to_string(), Box::new(sim) as _)],
-            handles,
-            dt,
-        );
+        let world = World::new(vec![("paper".to_string(), Box::new(sim) as _)], handles, dt);
         Ok(self.into_scene(file, duration, world, topics))
     }
 }

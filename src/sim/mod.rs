@@ -12,9 +12,9 @@ pub mod reach;
 mod world;
 
 pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
-pub use reach::{ReachMessage, ReachWatch};
 pub use object::{
     CompressionStats, ContactBody, Energies, NoClock, ObjectSim, ObjectStepReport, Phase,
     PhaseClock, SingularPoint, StepContext,
 };
+pub use reach::{ReachMessage, ReachWatch};
 pub use world::{ContactStepReport, StepReport, World};
