@@ -6,6 +6,7 @@
 //! ARCHITECTURE.md.
 
 pub mod baseline;
+pub mod cli;
 pub mod contact;
 pub mod geometry;
 pub mod metrics;

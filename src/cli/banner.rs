@@ -1,0 +1,65 @@
+//! The node's start-up banner: its name, domain, scene, pacing, and every topic and
+//! service it reads and writes, one line each (the caller prints them on stderr).
+
+use crate::ros::node::{Lockstep, NodeConfig, Pacing};
+
+/// The banner's lines, prefixed `[developable_sim]`.
+pub fn banner(config: &NodeConfig) -> Vec<String> {
+    let (scene, names) = (&config.scene, &config.names);
+    let mode = match (&config.lockstep, config.pacing) {
+        (Lockstep::Service, _) => "lock-step on ~/step".to_string(),
+        (Lockstep::Handle(h), _) => format!("lock-step on {}", names.handles[*h]),
+        (Lockstep::Off, Pacing::AsFastAsPossible) => "as fast as possible".into(),
+        (Lockstep::Off, Pacing::RealTime { factor }) => {
+            format!("real time x{factor} (dt {} s)", scene.world.dt())
+        }
+    };
+    let mut lines = vec![format!(
+        "[developable_sim] node {} on ROS domain {}: scene {} ({}), {mode}",
+        names.fqn(),
+        config.domain_id,
+        scene.name,
+        scene.file.display()
+    )];
+    for (h, t) in scene.world.handles().iter().zip(&names.handles) {
+        lines.push(format!(
+            "[developable_sim]   in : {t} (geometry_msgs/msg/PoseStamped, frame `{}`) -> handle {}",
+            scene.frame_id, h.name
+        ));
+    }
+    let outputs = &scene.outputs;
+    for o in &names.objects {
+        if outputs.markers {
+            lines.push(format!(
+                "[developable_sim]   out: {} (visualization_msgs/msg/MarkerArray)",
+                o.markers
+            ));
+        }
+        if outputs.singular_points {
+            lines.push(format!(
+                "[developable_sim]   out: {} (developable_sim/msg/SingularPoints)",
+                o.singular_points
+            ));
+        }
+        if outputs.status {
+            lines.push(format!(
+                "[developable_sim]   out: {} (developable_sim/msg/SimStatus)",
+                o.status
+            ));
+        }
+    }
+    if outputs.clock {
+        lines.push(format!(
+            "[developable_sim]   out: {} (rosgraph_msgs/msg/Clock)",
+            names.clock
+        ));
+    }
+    lines.push(format!(
+        "[developable_sim]   services: {} {} (std_srvs/srv/Trigger), {} (std_srvs/srv/SetBool)",
+        names.reset, names.step, names.set_paused
+    ));
+    if let Some((r, _)) = &config.record {
+        lines.push(format!("[developable_sim]   recording into {}", r.display()));
+    }
+    lines
+}
