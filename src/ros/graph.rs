@@ -13,7 +13,7 @@ use ros2_client::dds::rustdds::mio1::{Interest, Poll, Token};
 use ros2_client::{Name, Node, Subscription};
 
 use super::msgs::{Clock, PoseStamped, TFMessage, Time};
-use super::node::{dds, qos, topic_type, NodeError};
+use super::dds::{dds, qos, topic_type, NodeError};
 use super::tf::{frame_name, LookupError, TfBuffer};
 use crate::record::metadata::Qos;
 

@@ -19,7 +19,7 @@ use ros2_client::{
 
 use super::msgs::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
 use super::names::NodeNames;
-use super::node::{dds, NodeError};
+use super::dds::{dds, NodeError};
 use super::param_msgs::*;
 use super::reply::{ClientReaders, Flushed, HeldReplies};
 

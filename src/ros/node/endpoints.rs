@@ -1,0 +1,229 @@
+//! The node's DDS entities: the participant and node (with the spinner thread), the
+//! poll the loop waits on, the handle subscriptions, TF and clock inputs, every
+//! publisher, and the services. Created together, dropped in a fixed order.
+
+use std::sync::Arc;
+use std::time::Duration;
+
+use ros2_client::dds::rustdds::mio1::{Interest, Poll, Token, Waker};
+use ros2_client::{Context, ContextOptions, Name, Node, NodeName, NodeOptions, Publisher};
+use ros2_client::Subscription;
+
+use crate::record::metadata::Qos;
+use crate::ros::dds::{bounded_publisher, dds, qos, topic_type, NodeError};
+use crate::ros::graph::{ClockIn, TfIn, TF_QOS};
+use serde::Serialize;
+
+use crate::ros::msgs::{
+    Clock, MarkerArray, PoseStamped, RosMessage, SimStatus, SingularPoints, TFMessage,
+};
+use crate::ros::names::NodeNames;
+use crate::ros::services::Services;
+use crate::scene::Scene;
+
+/// Poll tokens: handle subscriptions use their handle index, then these.
+const WAKE: Token = Token(usize::MAX - 1);
+const SERVICE_TOKEN_BASE: usize = 1 << 20;
+const GRAPH_TOKEN_BASE: usize = 1 << 21;
+
+/// The publishers of one object's outputs (each present if the scene outputs it).
+pub(super) struct ObjectPubs {
+    pub(super) markers: Option<Publisher<MarkerArray>>,
+    pub(super) singular_points: Option<Publisher<SingularPoints>>,
+    pub(super) status: Option<Publisher<SimStatus>>,
+}
+
+/// Every DDS entity of the node.
+pub(super) struct Endpoints {
+    // field order = drop order: DDS entities, then the node, then the context
+    /// (handle index, its pose subscription); TF-driven handles have none.
+    pub(super) subs: Vec<(usize, Subscription<PoseStamped>)>,
+    pub(super) pubs: Vec<ObjectPubs>,
+    pub(super) clock: Option<Publisher<Clock>>,
+    /// TF in (a scene with handles), TF out (`outputs.tf`), an external clock.
+    pub(super) tf_in: Option<TfIn>,
+    pub(super) tf_out: Option<Publisher<TFMessage>>,
+    pub(super) clock_in: Option<ClockIn>,
+    /// The colliders' markers (only for a scene with colliders and markers on).
+    pub(super) colliders: Option<Publisher<MarkerArray>>,
+    pub(super) services: Services,
+    node: Option<Node>,
+    spinner: Option<std::thread::JoinHandle<()>>,
+    pub(super) context: Context,
+    pub(super) poll: Poll,
+    pub(super) waker: Arc<Waker>,
+}
+
+/// Joins the DDS domain and starts the node with its spinner thread (discovery, graph).
+fn start_node(
+    domain_id: u16,
+    names: &NodeNames,
+) -> Result<(Context, NodeName, Node, std::thread::JoinHandle<()>), NodeError> {
+    let context = Context::with_options(ContextOptions::new().domain_id(domain_id))
+        .map_err(dds("creating the DDS participant"))?;
+    let node_name = NodeName::new(&names.namespace, &names.node).map_err(dds("node name"))?;
+    let mut node = context
+        .new_node(
+            node_name.clone(),
+            NodeOptions::new()
+                .enable_rosout(true)
+                // ros2-client serves parameters only with the Enhanced (Fast DDS)
+                // service mapping; rather than offer services Cyclone clients
+                // cannot call, parameters come from the params file
+                .start_parameter_services(false),
+        )
+        .map_err(dds("creating the node"))?;
+    let spinner = node.spinner().map_err(dds("spinner"))?;
+    let spinner = std::thread::Builder::new()
+        .name("ros2-spinner".into())
+        .spawn(move || {
+            let _ = smol::block_on(spinner.spin());
+        })
+        .map_err(NodeError::Poll)?;
+    Ok((context, node_name, node, spinner))
+}
+
+/// A pose subscription per handle not driven by TF, registered with `poll` under the
+/// handle's index as token.
+fn handle_subscriptions(
+    node: &mut Node,
+    names: &NodeNames,
+    tf_handles: &[(usize, String)],
+    poll: &Poll,
+) -> Result<Vec<(usize, Subscription<PoseStamped>)>, NodeError> {
+    let mut subs = Vec::new();
+    for (i, t) in names.handles.iter().enumerate() {
+        if tf_handles.iter().any(|(h, _)| *h == i) {
+            continue;
+        }
+        let name = Name::parse(t).map_err(dds("topic name"))?;
+        let topic = node
+            .create_topic(&name, topic_type::<PoseStamped>(), &qos(Qos::SENSOR_DATA))
+            .map_err(dds("handle topic"))?;
+        let mut sub = node
+            .create_subscription::<PoseStamped>(&topic, Some(qos(Qos::SENSOR_DATA)))
+            .map_err(dds("handle subscription"))?;
+        poll.registry()
+            .register(&mut sub, Token(i), Interest::READABLE)?;
+        subs.push((i, sub));
+    }
+    Ok(subs)
+}
+
+/// Makes the node's publishers (see [`bounded_publisher`]).
+struct Publishers<'a> {
+    node: &'a mut Node,
+    context: &'a Context,
+    node_name: &'a NodeName,
+}
+
+impl Publishers<'_> {
+    /// A publisher on `topic` if `on`; `what` names it in errors.
+    fn publisher<M: RosMessage + Serialize>(
+        &mut self,
+        on: bool,
+        topic: &str,
+        q: Qos,
+        what: &str,
+    ) -> Result<Option<Publisher<M>>, NodeError> {
+        on.then(|| bounded_publisher(self.node, self.context, self.node_name, topic, q, what))
+            .transpose()
+    }
+}
+
+impl Endpoints {
+    /// Create every entity the node's scene and settings ask for (`use_sim_time`:
+    /// follow an external clock, publish none; `tf_max_lag`, s); `tf_handles`:
+    /// (handle, TF frame) of the handles that follow TF frames (they get no pose
+    /// subscription).
+    pub(super) fn open(
+        domain_id: u16,
+        names: &NodeNames,
+        scene: &Scene,
+        use_sim_time: bool,
+        tf_max_lag: f64,
+        tf_handles: &[(usize, String)],
+    ) -> Result<Self, NodeError> {
+        let outputs = scene.outputs;
+        let (context, node_name, mut node, spinner) = start_node(domain_id, names)?;
+        let poll = Poll::new()?;
+        let waker = Arc::new(Waker::new(poll.registry(), WAKE)?);
+        let subs = handle_subscriptions(&mut node, names, tf_handles, &poll)?;
+        // TF in for every scene with handles: TF-driven handles, and poses in another
+        // frame of the tree
+        let tf_in = (!names.handles.is_empty())
+            .then(|| {
+                let lag = Duration::from_secs_f64(tf_max_lag);
+                TfIn::new(&mut node, &names.tf, &names.tf_static, &poll, GRAPH_TOKEN_BASE, lag)
+            })
+            .transpose()?;
+        let clock_in = use_sim_time
+            .then(|| ClockIn::new(&mut node, &names.clock, &poll, GRAPH_TOKEN_BASE + 2))
+            .transpose()?;
+        let mut make = Publishers {
+            node: &mut node,
+            context: &context,
+            node_name: &node_name,
+        };
+        let tf_out = make.publisher(outputs.tf, &names.tf, TF_QOS, "tf")?;
+        let mut pubs = Vec::new();
+        for o in &names.objects {
+            pubs.push(ObjectPubs {
+                markers: make.publisher(outputs.markers, &o.markers, Qos::MARKERS, "markers")?,
+                singular_points: make.publisher(
+                    outputs.singular_points,
+                    &o.singular_points,
+                    Qos::DATA,
+                    "singular points",
+                )?,
+                status: make.publisher(outputs.status, &o.status, Qos::DATA, "status")?,
+            });
+        }
+        // under use_sim_time another node owns /clock
+        let own_clock = outputs.clock && !use_sim_time;
+        let clock = make.publisher(own_clock, &names.clock, Qos::CLOCK, "clock")?;
+        let has_colliders = scene
+            .world
+            .contact_stage()
+            .is_some_and(|s| !s.colliders().is_empty());
+        let colliders = make.publisher(
+            outputs.markers && has_colliders,
+            &names.colliders,
+            Qos::MARKERS,
+            "colliders",
+        )?;
+        let services = Services::new(&mut node, &node_name, names, &poll, SERVICE_TOKEN_BASE)?;
+        Ok(Endpoints {
+            subs,
+            pubs,
+            clock,
+            tf_in,
+            tf_out,
+            clock_in,
+            colliders,
+            services,
+            node: Some(node),
+            spinner: Some(spinner),
+            context,
+            poll,
+            waker,
+        })
+    }
+}
+
+impl Drop for Endpoints {
+    fn drop(&mut self) {
+        // shutdown order: DDS entities and the node (stops the spinner), then the
+        // spinner thread, then the context (field order)
+        self.subs.clear();
+        self.pubs.clear();
+        self.clock = None;
+        self.tf_in = None;
+        self.tf_out = None;
+        self.clock_in = None;
+        drop(self.node.take());
+        if let Some(s) = self.spinner.take() {
+            let _ = s.join();
+        }
+    }
+}
