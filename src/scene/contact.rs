@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::file::{pose_from, Check, SceneFile};
+use super::check::{pose_from, Check};
 use super::mesh_file::load_mesh;
 use super::SceneError;
 use crate::contact::{Closeness, Collider, ColliderShape, ContactSettings, ContactStage};
@@ -129,16 +129,17 @@ impl Default for ContactFile {
 /// The contact stage of a scene, or `None` when it declares neither colliders nor a
 /// `contact:` section.
 pub(super) fn build_stage(
-    scene: &SceneFile,
+    collider_files: &[ColliderFile],
+    contact: Option<&ContactFile>,
     ck: &Check,
     file: &Path,
     world: &World,
 ) -> Result<Option<ContactStage>, SceneError> {
-    if scene.colliders.is_empty() && scene.contact.is_none() {
+    if collider_files.is_empty() && contact.is_none() {
         return Ok(None);
     }
     let defaults = ContactFile::default();
-    let c = scene.contact.as_ref().unwrap_or(&defaults);
+    let c = contact.unwrap_or(&defaults);
     let settings = ContactSettings {
         thickness: ck.positive("contact.thickness", c.thickness)?,
         stiffness: ck.non_negative("contact.stiffness", c.stiffness)?,
@@ -153,7 +154,7 @@ pub(super) fn build_stage(
     };
     let mut colliders = Vec::new();
     let mut names: Vec<String> = Vec::new();
-    for (i, cf) in scene.colliders.iter().enumerate() {
+    for (i, cf) in collider_files.iter().enumerate() {
         let key = format!("colliders.{i}");
         let name = cf.name.clone().unwrap_or_else(|| format!("collider_{i}"));
         if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {

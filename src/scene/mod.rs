@@ -4,11 +4,14 @@
 //!
 //! This is an edge module: it reads files; the core never sees serde.
 
+mod check;
 mod contact;
 mod file;
+mod handle_file;
 mod mesh_file;
 mod overrides;
 mod paper_file;
+mod ribbon_file;
 
 use std::path::{Path, PathBuf};
 

@@ -1,12 +1,11 @@
 //! The `paper:` section of a scene (Schreck et al.): every key with its unit and
 //! default (table VI of the paper, converted to SI). Builds a [`PaperSim`].
 
-use std::path::Path;
-
 use serde::{Deserialize, Serialize};
 
-use super::file::{parse_handle, pose_from, Check, PoseFile, SceneFile};
-use super::{Scene, SceneError};
+use super::check::{pose_from, Check};
+use super::handle_file::{parse_handle, HandleFile, PoseFile};
+use super::SceneError;
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::paper::{Collider, PaperParams, PaperSim, PresetCrease};
 use crate::sim::World;
@@ -191,28 +190,37 @@ fn d_radius() -> f64 {
     0.01
 }
 
-impl SceneFile {
-    /// Validate the `paper:` section and its handles and build the world.
-    pub(super) fn build_paper(
-        self,
-        file: &Path,
+/// The scene-level keys a paper scene reads besides its `paper:` section.
+pub(super) struct PaperScene<'a> {
+    pub(super) paper: Option<&'a PaperFile>,
+    pub(super) handles: &'a [HandleFile],
+    /// Top-level `colliders:`, `contact:` and `forces:` are given (none applies to paper).
+    pub(super) has_colliders: bool,
+    pub(super) has_contact: bool,
+    pub(super) has_forces: bool,
+    pub(super) seed: u64,
+}
+
+/// Validate the `paper:` section and its handles and build the world; returns it with
+/// the handles' topics.
+pub(super) fn build_paper(
+        scene: PaperScene,
         ck: &Check,
-        duration: f64,
         dt: f64,
         gravity: Vector3,
-    ) -> Result<Scene, SceneError> {
-        let Some(paper) = &self.paper else {
+    ) -> Result<(World, Vec<String>), SceneError> {
+        let Some(paper) = scene.paper else {
             return Err(ck.fail("paper", "missing"));
         };
         // The contact stage (Pan et al. sec. 5) acts on ribbons; a sheet collides
         // through its own FEM collision energy (Schreck et al. step 1).
-        if !self.colliders.is_empty() {
+        if scene.has_colliders {
             return Err(ck.fail(
                 "colliders",
                 "top-level colliders feed the ribbon contact stage; a paper sheet takes `paper.colliders` (plane, sphere)",
             ));
         }
-        if self.contact.is_some() {
+        if scene.has_contact {
             return Err(ck.fail(
                 "contact",
                 "the contact stage acts on ribbons; a paper sheet collides through `paper.colliders`",
@@ -324,7 +332,7 @@ impl SceneFile {
         let mut handles = Vec::new();
         let mut topics = Vec::new();
         let mut releases = Vec::new();
-        for (i, h) in self.handles.iter().enumerate() {
+        for (i, h) in scene.handles.iter().enumerate() {
             let hkey = format!("handles.{i}");
             if let Some(o) = &h.object {
                 if o != "paper" {
@@ -353,7 +361,7 @@ impl SceneFile {
             topics.push(topic);
             handles.push(spec);
         }
-        if !self.forces.is_empty() {
+        if scene.has_forces {
             return Err(ck.fail("forces", "point forces are not supported on paper objects"));
         }
 
@@ -393,12 +401,11 @@ impl SceneFile {
             colliders,
             preset_creases,
             imperfection: ck.non_negative(&key("imperfection"), paper.imperfection)?,
-            seed: self.seed,
+            seed: scene.seed,
             handle_releases: releases,
             initial_shape: crate::paper::PaperInitialShape::Flat,
         };
         let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(pk, e.to_string()))?;
         let world = World::new(vec![("paper".to_string(), Box::new(sim) as _)], handles, dt);
-        Ok(self.into_scene(file, duration, world, topics))
-    }
+        Ok((world, topics))
 }
