@@ -13,7 +13,7 @@ use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use super::metadata::{self, Qos, TopicSummary};
+use super::metadata::{self, write_metadata_file, Qos, TopicSummary};
 use super::RecordError;
 use crate::ros::msgs::RosMessage;
 
@@ -427,16 +427,6 @@ impl Drop for BagWriter {
             let _ = self.close();
         }
     }
-}
-
-/// Write `metadata.yaml` into `dir`.
-pub fn write_metadata_file(dir: &Path, meta: &metadata::MetadataFile) -> Result<(), RecordError> {
-    let path = dir.join("metadata.yaml");
-    let text = serde_yaml::to_string(meta).map_err(|e| RecordError::Bag {
-        path: path.clone(),
-        message: e.to_string(),
-    })?;
-    std::fs::write(&path, text).map_err(|source| RecordError::Io { path, source })
 }
 
 /// The folder's last path component (`bags/demo` -> `demo`).

@@ -5,6 +5,8 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use super::RecordError;
+
 /// rosbag2 metadata version written (Jazzy).
 pub const VERSION: u32 = 9;
 
@@ -240,6 +242,16 @@ pub fn ros_distro() -> &'static str {
     } else {
         "jazzy"
     }
+}
+
+/// Write `metadata.yaml` into `dir`.
+pub fn write_metadata_file(dir: &std::path::Path, meta: &MetadataFile) -> Result<(), RecordError> {
+    let path = dir.join("metadata.yaml");
+    let text = serde_yaml::to_string(meta).map_err(|e| RecordError::Bag {
+        path: path.clone(),
+        message: e.to_string(),
+    })?;
+    std::fs::write(&path, text).map_err(|source| RecordError::Io { path, source })
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use mcap::records::Record;
 use mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 
-use super::bag::write_metadata_file;
+use super::metadata::write_metadata_file;
 use super::metadata::{self, MetadataFile, QosEntry, TopicSummary};
 use super::RecordError;
 

@@ -16,25 +16,9 @@
 //! h^2 error of that quadrature and of the rigid held element. Derivation and measured
 //! errors: docs/accuracy.md.
 
+use super::params::ClampRule;
 use super::BaseMode;
 use crate::sim::{HandleSpec, OrientationMode};
-
-/// How a clamp weights the creases next to it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum ClampRule {
-    /// Every crease has d_k = l/n (Pan et al.: a clamp acts half an element away from
-    /// its point, first order in n).
-    Paper,
-    /// The crease next to a clamp at s_c has d_k = |m - s_c|, m the midpoint of its
-    /// free neighbour element (second order in n).
-    DualLength,
-    /// The first two creases beside a clamp share the dual lengths of
-    /// [`ClampRule::DualLength`] so that their sum also integrates a linearly varying
-    /// curvature exactly from the clamp on (second order in n, with a ~10x smaller
-    /// constant at end clamps). The default.
-    #[default]
-    MomentMatched,
-}
 
 /// Fill `out[k]` (k = 1..n-1; entries 0 and n are 0) with the bending weight of crease k,
 /// J: `alpha w / d_k` (see the module doc). `clamps` are the centerline stations s_c

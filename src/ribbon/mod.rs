@@ -17,7 +17,8 @@ pub mod reconstruct;
 mod sim;
 pub mod step;
 
-pub use bending::ClampRule;
-pub use params::{BaseMode, KineticModel, LoopKind, RibbonParams, SolverKind, SolverSettings};
+pub use params::{
+    BaseMode, ClampRule, KineticModel, LoopKind, RibbonParams, SolverKind, SolverSettings,
+};
 pub use reconstruct::{Coordinates, Frames, Strip};
 pub use sim::{Imperfection, RibbonForce, RibbonInitialShape, RibbonSim};

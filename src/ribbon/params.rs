@@ -1,6 +1,5 @@
 //! Ribbon parameters (Pan et al. sec. 3-5). SI units throughout.
 
-use super::bending::ClampRule;
 use crate::geometry::Pose;
 
 /// Kinetic term of the implicit-Euler objective.
@@ -24,6 +23,23 @@ pub enum SolverKind {
     GaussNewton,
     /// The paper's: L-BFGS-B inside the augmented Lagrangian (algorithm 2).
     Lbfgsb,
+}
+
+/// How a clamp weights the creases next to it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ClampRule {
+    /// Every crease has d_k = l/n (Pan et al.: a clamp acts half an element away from
+    /// its point, first order in n).
+    Paper,
+    /// The crease next to a clamp at s_c has d_k = |m - s_c|, m the midpoint of its
+    /// free neighbour element (second order in n).
+    DualLength,
+    /// The first two creases beside a clamp share the dual lengths of
+    /// [`ClampRule::DualLength`] so that their sum also integrates a linearly varying
+    /// curvature exactly from the clamp on (second order in n, with a ~10x smaller
+    /// constant at end clamps). The default.
+    #[default]
+    MomentMatched,
 }
 
 /// How the first element (E_0) is placed.
