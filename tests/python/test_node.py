@@ -237,7 +237,10 @@ def test_bad_poses_are_rejected_counted_and_never_reach_the_mesh(start_node, ros
     node = start_node(domain_id, GRIPPER)
     status = ros.reader("/ribbon/status", rt.SimStatus)
     markers = ros.reader("/ribbon/markers", rt.MarkerArray, reliable_qos(1, True))
-    pose = ros.writer("/handles/gripper", rt.PoseStamped, SENSOR_QOS)
+    # reliable, and one pose at a time (the next only once the status counted the last):
+    # the node's input history keeps the latest 5 (latest wins), so a burst written while
+    # the node is starved of CPU would overwrite samples before it reads them
+    pose = ros.writer("/handles/gripper", rt.PoseStamped, reliable_qos(5))
     ros.wait_matched(pose)
     nan, inf = float("nan"), float("inf")
     sequence = [
@@ -262,11 +265,12 @@ def test_bad_poses_are_rejected_counted_and_never_reach_the_mesh(start_node, ros
         rejected_unknown_frame=2,
         rejected_future_stamp=1,
     )
-    # best effort: resend the whole sequence (with fresh stamps) until every sample got
-    # through once; counters only ever grow, so wait for the exact totals of one pass
-    for msg in sequence:
+    def seen(s):  # inputs the node has judged: each is accepted or rejected once
+        return s.handles[0].accepted + s.rejected_inputs
+
+    for i, msg in enumerate(sequence):
         pose.write(msg)
-        time.sleep(0.03)
+        _status_after(ros, status, lambda s, n=i + 1: seen(s) >= n)
 
     def done(s):
         h = s.handles[0]
