@@ -268,18 +268,34 @@ def test_bad_poses_are_rejected_counted_and_never_reach_the_mesh(start_node, ros
     def seen(s):  # inputs the node has judged: each is accepted or rejected once
         return s.handles[0].accepted + s.rejected_inputs
 
+    # our writer may match the node's reader before that reader matches our writer: a
+    # sample written in between is dropped for good (volatile durability). Warm up with
+    # valid poses, stamped before the sequence's, until the node has counted one.
+    for k in range(50):
+        pose.write(pose_msg(0.7, 0.0, 0.3, sec=1, nanosec=k))
+        try:
+            warm = _status_after(ros, status, lambda s: seen(s) >= 1, timeout=0.3)
+            break
+        except AssertionError:
+            continue
+    time.sleep(0.3)  # any other warm-up pose that got through is counted by now
+    warm = [s for s in ros.take(status, 0.2) if hasattr(s, "handles")][-1]  # the newest
+    base = warm.handles[0]
+    assert base.accepted >= 1 and warm.rejected_inputs == 0
+    counted = {k: getattr(base, k) for k in expected}
+
     for i, msg in enumerate(sequence):
         pose.write(msg)
-        _status_after(ros, status, lambda s, n=i + 1: seen(s) >= n)
+        _status_after(ros, status, lambda s, n=i + 1: seen(s) >= base.accepted + n)
 
     def done(s):
         h = s.handles[0]
-        return all(getattr(h, k) >= v for k, v in expected.items())
+        return all(getattr(h, k) - counted[k] >= v for k, v in expected.items())
 
     last = _status_after(ros, status, done, timeout=10.0)
     h = last.handles[0]
     for k, v in expected.items():
-        assert getattr(h, k) == v, f"{k}: {getattr(h, k)} != {v}"
+        assert getattr(h, k) - counted[k] == v, f"{k}: {getattr(h, k) - counted[k]} != {v}"
     assert last.rejected_inputs == 7
     assert h.external and h.last_stamp.sec == 16
     q = h.target.orientation
