@@ -310,16 +310,25 @@ def test_bad_poses_are_rejected_counted_and_never_reach_the_mesh(start_node, ros
 def test_lockstep_on_a_handle_steps_once_per_accepted_pose(start_node, ros, domain_id):
     start_node(domain_id, GRIPPER, "--lockstep", "gripper")
     status = ros.reader("/ribbon/status", rt.SimStatus)
-    pose = ros.writer("/handles/gripper", rt.PoseStamped, SENSOR_QOS)
+    pose = ros.writer("/handles/gripper", rt.PoseStamped, reliable_qos(5))
     ros.wait_matched(pose)
     time.sleep(0.5)  # nothing must happen without input
     assert all(s.step == 0 for s in status.take(N=64) if hasattr(s, "step"))
     n = 15
     for i in range(n):
-        pose.write(pose_msg(0.8, 0.0, 0.2 + 0.005 * i, sec=100 + i))
-        time.sleep(0.03)
+        # one pose at a time; resent while the node's reader has not matched our writer yet
+        # (a sample written before that is dropped; a copy that does arrive twice has a
+        # stale stamp the second time: rejected, no step)
+        msg = pose_msg(0.8, 0.0, 0.2 + 0.005 * i, sec=100 + i)
+        for _ in range(10):
+            pose.write(msg)
+            try:
+                last = _status_after(ros, status, lambda s, k=i + 1: s.step >= k, timeout=1.0)
+                break
+            except AssertionError:
+                continue
+    assert last.step == n
     pose.write(pose_msg(0.8, 0.0, 0.2, sec=1))  # stale: rejected, no step
-    last = _status_after(ros, status, lambda s: s.step == n)
     time.sleep(0.3)
     later = [s.step for s in status.take(N=64) if hasattr(s, "step")]
     assert all(s <= n for s in later), later
