@@ -213,6 +213,11 @@ def test_foxglove_port_parameter_starts_the_server_and_a_bad_bind_is_refused(
     )
     assert bad.wait_exit(20) != 0
     assert "--foxglove-bind `localhost:x` is not an IP address" in bad.log()
+    high = start_node(
+        domain_id, GRIPPER, "--ros-args", "-p", "foxglove_port:=70000", wait=False, name="high"
+    )
+    assert high.wait_exit(20) != 0
+    assert "`foxglove_port`: must be a TCP port 0..=65535, got 70000" in high.log(), high.log()
 
 
 def raw_ws_client(port: int, rcvbuf: int = 4096) -> socket.socket:
