@@ -954,8 +954,36 @@ fn report_command(
     };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let command = format!("developable_sim {}", args.join(" "));
-    developable_sim::report::run_report(&options, &command)?;
+    let report = developable_sim::report::run_report(&options, &command)?;
+    if !report.exact.is_empty() {
+        // the README's table of errors against the exact solutions
+        println!(
+            "{}",
+            developable_sim::report::exact_output::readme_table(&report.exact)
+        );
+        for c in report.exact.iter().flat_map(|s| &s.checks) {
+            println!(
+                "{} {}: {}: measured {}",
+                if c.pass { "PASS" } else { "FAIL" },
+                c.scene,
+                c.what,
+                c.measured.map_or("n/a".into(), |m| format!("{m:.4}"))
+            );
+        }
+    }
     println!("wrote {}", out.join("summary.md").display());
+    let failed = report.failed_checks();
+    if !failed.is_empty() {
+        bail!(
+            "accuracy against the exact solutions regressed: {} check(s) failed ({})",
+            failed.len(),
+            failed
+                .iter()
+                .map(|c| format!("{}: {}", c.scene, c.what))
+                .collect::<Vec<_>>()
+                .join("; ")
+        );
+    }
     Ok(())
 }
 
