@@ -19,7 +19,7 @@ use developable_sim::record::recorder::RunRecorder;
 use developable_sim::record::{read, replay};
 use developable_sim::ros::node::SimNode;
 use developable_sim::ros::params;
-use developable_sim::runner::StepObserver;
+use developable_sim::runner::{ObserverError, StepObserver};
 use developable_sim::scene::Scene;
 use developable_sim::sim::{ReachWatch, StepReport};
 use developable_sim::{render, runner, scene};
@@ -255,8 +255,18 @@ fn report_command(a: ReportArgs) -> anyhow::Result<()> {
     };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let command = format!("developable_sim {}", args.join(" "));
-    developable_sim::report::run_report(&options, &command)?;
+    let report = developable_sim::report::run_report(&options, &command)?;
+    print(summary::exact_summary(&report.exact));
     println!("wrote {}", a.out.join("summary.md").display());
+    let failed = report.failed_checks();
+    if !failed.is_empty() {
+        let which: Vec<String> = failed.iter().map(|c| format!("{}: {}", c.scene, c.what)).collect();
+        bail!(
+            "accuracy against the exact solutions regressed: {} check(s) failed ({})",
+            failed.len(),
+            which.join("; ")
+        );
+    }
     Ok(())
 }
 
@@ -273,7 +283,7 @@ impl StepObserver for CliObserver<'_> {
         scene: &Scene,
         report: &StepReport,
         step_ms: f64,
-    ) -> anyhow::Result<()> {
+    ) -> Result<(), ObserverError> {
         let world = &scene.world;
         for m in self
             .reach

@@ -7,6 +7,15 @@ use crate::scene::Scene;
 use crate::sim::{Phase, PhaseClock, StepReport};
 use crate::stats::{RunStats, StatsCollector};
 
+/// Why a run stopped early: its step observer failed (the run's statistics up to there
+/// are lost; the recorder's bag stays readable up to the failure).
+#[derive(Debug, thiserror::Error)]
+pub enum ObserverError {
+    /// Recording the step failed (a full disk, an unwritable folder).
+    #[error(transparent)]
+    Record(#[from] crate::record::RecordError),
+}
+
 /// Called after every step with the world and the report (recording, progress).
 pub trait StepObserver {
     fn after_step(
@@ -14,11 +23,11 @@ pub trait StepObserver {
         scene: &Scene,
         report: &StepReport,
         step_ms: f64,
-    ) -> anyhow::Result<()>;
+    ) -> Result<(), ObserverError>;
 }
 
 impl StepObserver for () {
-    fn after_step(&mut self, _: &Scene, _: &StepReport, _: f64) -> anyhow::Result<()> {
+    fn after_step(&mut self, _: &Scene, _: &StepReport, _: f64) -> Result<(), ObserverError> {
         Ok(())
     }
 }
@@ -29,7 +38,7 @@ pub fn run(
     scene: &mut Scene,
     observer: &mut dyn StepObserver,
     should_stop: &dyn Fn() -> bool,
-) -> anyhow::Result<RunStats> {
+) -> Result<RunStats, ObserverError> {
     let solver_kind = scene
         .world
         .objects()

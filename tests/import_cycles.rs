@@ -63,7 +63,8 @@ fn expand(tree: &str) -> Vec<String> {
         return vec![path.replace(' ', "")];
     };
     let prefix = tree[..open].replace(' ', "");
-    let body = &tree[open + 1..tree.rfind('}').unwrap_or(tree.len())];
+    let close = tree.rfind('}').filter(|&c| c > open).unwrap_or(tree.len());
+    let body = &tree[open + 1..close];
     let (mut parts, mut depth, mut current) = (Vec::new(), 0, String::new());
     for c in body.chars() {
         match c {
@@ -92,11 +93,14 @@ fn uses(code: &str, public: bool) -> Vec<String> {
     let mut rest = code;
     while let Some(i) = rest.find("use ") {
         let before = &rest[..i];
-        let at_start = before.is_empty() || before.ends_with(|c: char| c.is_whitespace());
         let end = rest[i..].find(';').map_or(rest.len(), |e| i + e);
-        if at_start {
-            let line_start = before.rfind('\n').map_or(0, |k| k + 1);
-            let is_pub = before[line_start..].trim_start().starts_with("pub");
+        // a `use` item starts its line (after indentation and a visibility), never
+        // inside a string or an expression
+        let line_start = before.rfind('\n').map_or(0, |k| k + 1);
+        let lead = before[line_start..].trim();
+        let visibility = ["", "pub", "pub(crate)", "pub(super)"];
+        if visibility.contains(&lead) {
+            let is_pub = !lead.is_empty();
             if is_pub == public {
                 out.extend(expand(&rest[i + 4..end]));
             }

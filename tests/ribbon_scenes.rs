@@ -108,7 +108,7 @@ fn spinning_full_kinetics_deforms_lumped_stays_flat() {
             scene: &Scene,
             _: &developable_sim::sim::StepReport,
             _: f64,
-        ) -> anyhow::Result<()> {
+        ) -> Result<(), runner::ObserverError> {
             let q = ribbon(scene).coordinates();
             for x in q.crease_direction.iter().chain(&q.bending_angle) {
                 self.0 = self.0.max(x.abs());

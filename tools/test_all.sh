@@ -7,8 +7,9 @@ cd "$(dirname "$0")/.."
 
 echo "== cargo test =="
 cargo test --release --lib --bins --tests -- --test-threads=2
-# benchmarks must keep compiling (criterion's own runner does not take test flags)
-cargo build --release --benches
+# benchmarks and the debugging examples (examples/) must keep compiling (criterion's
+# own runner does not take test flags)
+cargo build --release --benches --examples
 # error against run time on short scenes (issue 6): the binary `cargo test` built
 echo "== report --quick =="
 ./target/release/developable_sim report --quick --out target/report

@@ -128,6 +128,14 @@ pub struct NodeArgs {
     /// Write latency and run statistics as JSON at exit.
     #[arg(long, value_name = "OUT.json")]
     pub stats: Option<PathBuf>,
+    /// Serve a live Foxglove view on this TCP port (foxglove.websocket.v1; connect
+    /// Foxglove to ws://localhost:PORT); 0: off (default, or the `foxglove_port` parameter).
+    #[arg(long, value_name = "PORT")]
+    pub foxglove: Option<u16>,
+    /// IP address of the Foxglove server (default 127.0.0.1: this machine only;
+    /// 0.0.0.0: every interface, no authentication).
+    #[arg(long, value_name = "ADDR")]
+    pub foxglove_bind: Option<String>,
 }
 
 // `developable_sim replay`

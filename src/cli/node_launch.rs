@@ -8,6 +8,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use crate::record::bag::{BagOptions, Compression};
+use crate::ros::foxglove::{FoxgloveConfig, DEFAULT_BIND};
 use crate::ros::input::{InputPolicy, DEFAULT_MAX_STAMP_LEAD};
 use crate::ros::names::{normalize_namespace, NameError, NodeNames};
 use crate::ros::node::{Lockstep, NodeConfig, Pacing};
@@ -248,6 +249,36 @@ pub fn input_policy(p: &Params, scene: &Scene) -> Result<InputPolicy, ParamsErro
     })
 }
 
+/// The Foxglove server's address: `--foxglove` > `foxglove_port` > 0 (off), and
+/// `--foxglove-bind` > `foxglove_bind` > 127.0.0.1; the values in effect go into `p`.
+pub fn foxglove(args: &NodeArgs, p: &mut Params) -> Result<Option<FoxgloveConfig>, LaunchError> {
+    let port = match (args.foxglove, p.integer("foxglove_port")) {
+        (Some(port), _) => port,
+        (None, Some(i)) => u16::try_from(i).map_err(|_| {
+            p.invalid(
+                "foxglove_port",
+                format!("must be a TCP port 0..=65535, got {i}"),
+            )
+        })?,
+        (None, None) => 0,
+    };
+    let bind = match (&args.foxglove_bind, p.string("foxglove_bind")) {
+        (Some(b), _) => b.clone(),
+        (None, Some(b)) => b.to_string(),
+        (None, None) => DEFAULT_BIND.to_string(),
+    };
+    if bind.parse::<std::net::IpAddr>().is_err() {
+        let msg = format!("`{bind}` is not an IP address (e.g. 127.0.0.1, 0.0.0.0)");
+        if args.foxglove_bind.is_some() {
+            return Err(LaunchError::Flag(format!("--foxglove-bind {msg}")));
+        }
+        return Err(p.invalid("foxglove_bind", msg).into());
+    }
+    p.set_effective("foxglove_port", ParamValue::Integer(port.into()));
+    p.set_effective("foxglove_bind", ParamValue::String(bind.clone()));
+    Ok((port > 0).then_some(FoxgloveConfig { bind, port }))
+}
+
 /// Every setting of the node. `env_domain_id` is $ROS_DOMAIN_ID; `log` receives the
 /// warnings about the params files and the notes about ignored ROS arguments, as soon
 /// as they are known (before the scene is loaded).
@@ -283,6 +314,7 @@ pub fn resolve(
     if p.double("markers_rate").is_some() {
         non_negative(&p, "markers_rate", 0.0)?;
     }
+    let foxglove = foxglove(args, &mut p)?;
     p.set_effective("scene", ParamValue::String(scene_path.display().to_string()));
     p.set_effective("duration", ParamValue::Double(duration));
     p.set_effective("lockstep", ParamValue::String(lockstep_spec));
@@ -303,6 +335,7 @@ pub fn resolve(
         use_sim_time,
         tf_max_lag,
         params: p,
+        foxglove,
     })
 }
 

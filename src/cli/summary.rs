@@ -139,6 +139,25 @@ pub fn reindex_summary(bag: &Path, r: &ReindexReport) -> Vec<String> {
     lines
 }
 
+/// `report`: the README's table of errors against the exact solutions, then a PASS or
+/// FAIL line per check (nothing when the report ran no exact-solution scene).
+pub fn exact_summary(exact: &[crate::report::exact_run::ExactSceneReport]) -> Vec<String> {
+    if exact.is_empty() {
+        return Vec::new();
+    }
+    let mut lines = vec![crate::report::exact_output::readme_table(exact)];
+    for c in exact.iter().flat_map(|s| &s.checks) {
+        lines.push(format!(
+            "{} {}: {}: measured {}",
+            if c.pass { "PASS" } else { "FAIL" },
+            c.scene,
+            c.what,
+            c.measured.map_or("n/a".into(), |m| format!("{m:.4}"))
+        ));
+    }
+    lines
+}
+
 /// The node's last line on stderr.
 pub fn node_stopped(s: &NodeStats) -> String {
     format!(

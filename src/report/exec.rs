@@ -10,7 +10,7 @@ use super::plan::{overrides, Method, RunSpec, SceneDefaults, SceneKind};
 use crate::baseline::{ConformingFem, ConformingFemParams};
 use crate::geometry::SurfaceMesh;
 use crate::ribbon::RibbonSim;
-use crate::runner::{self, StepObserver};
+use crate::runner::{self, ObserverError, StepObserver};
 use crate::scene::{self, Scene};
 use crate::sim::StepReport;
 use crate::stats::percentiles;
@@ -210,7 +210,12 @@ impl Sampler<'_> {
 }
 
 impl StepObserver for Sampler<'_> {
-    fn after_step(&mut self, scene: &Scene, report: &StepReport, _: f64) -> anyhow::Result<()> {
+    fn after_step(
+        &mut self,
+        scene: &Scene,
+        report: &StepReport,
+        _: f64,
+    ) -> Result<(), ObserverError> {
         let dt = scene.world.dt();
         self.offer(report.time, dt, scene.world.mesh(0));
         for (o, object) in report.objects.iter().zip(scene.world.objects()) {
@@ -231,8 +236,21 @@ pub fn execute(
     spec: &RunSpec,
     times: &[f64],
 ) -> anyhow::Result<RunOutput> {
+    execute_with(file, kind, duration, spec, times, &[])
+}
+
+/// [`execute`] with `extra` `--set` overrides applied after the plan's.
+pub fn execute_with(
+    file: &Path,
+    kind: SceneKind,
+    duration: f64,
+    spec: &RunSpec,
+    times: &[f64],
+    extra: &[String],
+) -> anyhow::Result<RunOutput> {
     let mut set = overrides(kind, duration, spec);
     set.extend(same_shape_overrides(file, kind, spec)?);
+    set.extend(extra.iter().cloned());
     let mut scene = scene::load(file, &set)?;
     let mut sampler = Sampler::new(times);
     if spec.method == Method::ConformingFem {

@@ -18,6 +18,11 @@ pub enum NodeError {
     Record(#[from] crate::record::RecordError),
     #[error("poll: {0}")]
     Poll(#[from] std::io::Error),
+    /// Settings that cannot work together (found before anything starts).
+    #[error("{0}")]
+    Config(String),
+    #[error("{0}")]
+    Foxglove(#[from] super::foxglove::FoxgloveStartError),
 }
 
 pub(crate) fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> NodeError + '_ {

@@ -8,6 +8,7 @@
 pub mod cdr;
 pub mod convert;
 pub mod dds;
+pub mod foxglove;
 pub mod frames;
 pub mod graph;
 pub mod input;

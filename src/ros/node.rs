@@ -17,6 +17,7 @@ use std::time::{Duration, Instant};
 use ros2_client::dds::rustdds::mio1::{Events, Waker};
 
 pub use super::dds::NodeError;
+use super::foxglove::{Advertised, FoxgloveConfig, FoxgloveOut};
 use super::input::InputPolicy;
 use super::names::NodeNames;
 pub use super::node_stats::{rss_kib, LatencyStats, NodeStats, Window};
@@ -76,6 +77,8 @@ pub struct NodeConfig {
     /// The parameters as read (the parameter services report them; the node's own
     /// settings above win where they differ).
     pub params: Params,
+    /// The live Foxglove WebSocket server (None: off).
+    pub foxglove: Option<FoxgloveConfig>,
 }
 
 /// Under use_sim_time, at most this many catch-up steps run between two polls (inputs
@@ -94,6 +97,8 @@ pub struct SimNode {
     /// the last went out.
     markers_period: Option<f64>,
     last_markers: Option<f64>,
+    /// The same outputs to Foxglove WebSocket clients (`--foxglove PORT`).
+    foxglove: Option<FoxgloveOut>,
     /// The parameters as the parameter services report them.
     params: ParamTable,
     session: Session,
@@ -112,6 +117,53 @@ pub struct SimNode {
     pending_input: Vec<Option<Instant>>,
     stats: NodeStats,
     latency: Latency,
+}
+
+/// Lock-step on a handle steps once per pose accepted on its topic. A handle that
+/// follows a TF frame has no pose topic: its target is looked up at each tick, and /tf
+/// carries every frame of the robot at the broadcasters' rates, so "one step per TF
+/// message" would tie the simulation to unrelated frames. Refused, with the ways out.
+fn lockstep_needs_a_pose_topic(cfg: &NodeConfig) -> Result<(), NodeError> {
+    let Lockstep::Handle(h) = cfg.lockstep else {
+        return Ok(());
+    };
+    match cfg.scene.handle_tf_frames.get(h) {
+        Some(Some(frame)) => Err(NodeError::Config(format!(
+            "--lockstep {name}: handle `{name}` follows TF frame `{frame}` (tf_frame in the \
+             scene), so it has no pose topic to step on; use `--lockstep service` (one step \
+             per ~/step call) or drive the handle from its pose topic",
+            name = cfg
+                .scene
+                .world
+                .handles()
+                .get(h)
+                .map_or("?", |s| s.name.as_str()),
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// The Foxglove server for `cfg.foxglove`, advertising what the node publishes.
+fn start_foxglove(
+    cfg: &NodeConfig,
+    io: &Endpoints,
+    published: FrameContent,
+) -> Result<Option<FoxgloveOut>, NodeError> {
+    let Some(f) = &cfg.foxglove else {
+        return Ok(None);
+    };
+    let what = Advertised {
+        content: published,
+        colliders: io.colliders.is_some(),
+        tf: io.tf_out.is_some(),
+    };
+    let out = FoxgloveOut::start(f, &cfg.names, what)?;
+    eprintln!(
+        "[developable_sim] Foxglove: open ws://{}:{} in Foxglove",
+        f.bind,
+        out.port()
+    );
+    Ok(Some(out))
 }
 
 /// The statistics' run mode, e.g. `real_time x1`, `lockstep:service`.
@@ -146,6 +198,7 @@ fn param_table(cfg: &NodeConfig) -> (ParamTable, f64) {
 impl SimNode {
     /// Join the DDS domain and create every topic, service and the bag.
     pub fn new(cfg: NodeConfig) -> Result<SimNode, NodeError> {
+        lockstep_needs_a_pose_topic(&cfg)?;
         let tf_handles: Vec<(usize, String)> = cfg
             .scene
             .handle_tf_frames
@@ -168,6 +221,7 @@ impl SimNode {
             singular_points: outputs.singular_points,
             status: outputs.status,
         };
+        let foxglove = start_foxglove(&cfg, &io, published)?;
         let names = cfg.names;
         let mut handle_topics = names.handles.clone();
         for (h, _) in &tf_handles {
@@ -199,6 +253,7 @@ impl SimNode {
             tf_handles,
             markers_period: (markers_rate > 0.0).then(|| 1.0 / markers_rate),
             last_markers: None,
+            foxglove,
             params,
             session,
             recorder,
@@ -355,9 +410,10 @@ impl SimNode {
                 dropped += publisher.publish(m.clone()).is_err() as u64;
             }
         }
-        if let Some(publisher) = &self.io.tf_out {
-            let tf = super::frames::tf_message(&self.session, frame.stamp);
-            dropped += publisher.publish(tf).is_err() as u64;
+        let tf = (self.io.tf_out.is_some())
+            .then(|| super::frames::tf_message(&self.session, frame.stamp));
+        if let (Some(publisher), Some(tf)) = (&self.io.tf_out, &tf) {
+            dropped += publisher.publish(tf.clone()).is_err() as u64;
         }
         if let (Some(m), Some(publisher)) = (&frame.colliders, &self.io.colliders) {
             dropped += publisher.publish(m.clone()).is_err() as u64;
@@ -376,6 +432,9 @@ impl SimNode {
             }
         }
         self.stats.dropped_publications += dropped;
+        if let Some(f) = self.foxglove.as_mut() {
+            f.emit(frame, markers_due, tf.as_ref());
+        }
         self.record(|r| r.record_frame(frame));
     }
 

@@ -31,7 +31,7 @@ use std::time::Instant;
 use anyhow::Context;
 use serde::Serialize;
 
-use crate::runner::{self, StepObserver};
+use crate::runner::{self, ObserverError, StepObserver};
 use crate::scene::{self, Scene};
 use crate::sim::StepReport;
 
@@ -308,7 +308,12 @@ struct EnergyWatch {
 }
 
 impl StepObserver for EnergyWatch {
-    fn after_step(&mut self, _: &Scene, report: &StepReport, _: f64) -> anyhow::Result<()> {
+    fn after_step(
+        &mut self,
+        _: &Scene,
+        report: &StepReport,
+        _: f64,
+    ) -> Result<(), ObserverError> {
         self.work += report.objects.iter().map(|o| o.work_bound).sum::<f64>();
         let e: f64 = report.objects.iter().map(|o| o.energies.total()).sum();
         let rise = e - self.initial;

@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use super::{Lockstep, SimNode, CATCH_UP_BATCH};
 use crate::ros::graph::tf_pose;
+use crate::ros::msgs::{Header, Pose, PoseStamped, Time};
 
 impl SimNode {
     /// TF and the external clock: take what arrived.
@@ -77,7 +78,7 @@ impl SimNode {
                         );
                         self.tf_failing[k] = false;
                     }
-                    let arrival_ns = crate::record::bag::now_ns();
+                    let arrival_ns = self.arrival_ns();
                     self.record(|r| r.record_input(h, &msg, arrival_ns, None));
                     if self.session.offer(h, &msg, arrival_ns).is_err() {
                         self.stats.inputs_rejected += 1;
@@ -91,6 +92,15 @@ impl SimNode {
                         );
                         self.tf_failing[k] = true;
                     }
+                    let what = PoseStamped {
+                        header: Header {
+                            stamp: Time::from_nanos(at as i64),
+                            frame_id: frame.clone(),
+                        },
+                        pose: Pose::default(), // identity
+                    };
+                    let arrival_ns = self.arrival_ns();
+                    self.record(|r| r.record_tf_failure(h, &what, arrival_ns));
                     self.session.reject_tf(h);
                     self.stats.inputs_rejected += 1;
                 }
@@ -130,6 +140,8 @@ impl SimNode {
                     )) => {
                         self.stats.inputs_received += 1;
                         self.stats.inputs_rejected += 1;
+                        let arrival_ns = self.arrival_ns();
+                        self.record(|r| r.record_tf_failure(h, &msg, arrival_ns));
                         self.session.reject_tf(h);
                         continue;
                     }
@@ -162,5 +174,13 @@ impl SimNode {
                 }
             }
         }
+    }
+
+    /// The arrival time of an input: the recorder's (strictly increasing, it is the
+    /// input's log time in the bag) when recording, else the wall clock, ns.
+    pub(super) fn arrival_ns(&mut self) -> u64 {
+        self.recorder
+            .as_mut()
+            .map_or_else(crate::record::bag::now_ns, |r| r.arrival_ns())
     }
 }
