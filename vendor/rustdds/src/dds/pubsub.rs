@@ -34,7 +34,9 @@ use crate::{
   mio_source,
   polling::{wake_channel, BoundSender, Doorbell, ReadySender, WakeSender},
   rtps::{
-    constant::DEFAULT_WRITER_MAX_SAMPLES, reader::ReaderIngredients, writer::WriterIngredients,
+    constant::{DEFAULT_WRITER_MAX_SAMPLES, KEEP_LAST_SEND_WINDOW},
+    reader::ReaderIngredients,
+    writer::WriterIngredients,
     writer_send_buffer::WriterSendBuffer,
   },
   serialization::{CDRDeserializerAdapter, CDRSerializerAdapter},
@@ -522,7 +524,22 @@ impl InnerPublisher {
     // spuriously returns `WouldBlock` when an ACK is slower than
     // `max_blocking_time` (e.g. under the normal discovery race). Use the
     // resource limit when set, otherwise the default.
-    let window_limit = resource_max.unwrap_or(DEFAULT_WRITER_MAX_SAMPLES);
+    // developable_sim patch: a KEEP_LAST writer never blocks on its window (it
+    // evicts instead, see `WriterSendBuffer`), and its window -- how many
+    // unacknowledged samples it keeps for repair -- is at least
+    // KEEP_LAST_SEND_WINDOW, whatever the depth.
+    // KEEP_LAST counts samples per instance; the send buffer does not know
+    // instances, so this applies to NO_KEY topics (all ROS 2 topics) only.
+    let keep_last_depth = match writer_qos.history() {
+      Some(policy::History::KeepLast { depth }) if topic.kind() == TopicKind::NoKey => {
+        Some((depth as usize).max(1))
+      }
+      _ => None,
+    };
+    let window_limit = match keep_last_depth {
+      Some(d) => resource_max.unwrap_or(KEEP_LAST_SEND_WINDOW).max(d),
+      None => resource_max.unwrap_or(DEFAULT_WRITER_MAX_SAMPLES),
+    };
     // nonblocking-transmit: the unsent-backlog limit bounds how many admitted
     // samples may await transmission when the network socket is congested. We
     // reuse the same capacity as the reliable window.
@@ -555,6 +572,7 @@ impl InnerPublisher {
       window_limit,
       backlog_limit,
       max_retain,
+      keep_last_depth,
     );
     // Doorbell: enqueue this writer's entity id and wake the participant poll.
     let doorbell = Doorbell::new(guid.entity_id, self.writer_ready.clone());

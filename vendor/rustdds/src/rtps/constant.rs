@@ -59,6 +59,12 @@ pub const HEARTBEAT_PERIOD_FAST: crate::structure::duration::Duration =
 // they remain available for repair) rather than being evicted eagerly.
 pub const DEFAULT_WRITER_MAX_SAMPLES: usize = 8192;
 
+// developable_sim patch: the reliable send window of a KEEP_LAST writer when
+// ResourceLimits.max_samples does not set one: how many unacknowledged samples
+// it keeps for repairing a slow reader. Independent of the History depth, so a
+// KeepLast(1) writer is not stop-and-wait.
+pub const KEEP_LAST_SEND_WINDOW: usize = 64;
+
 // Memory-safety backstop for the per-matched-reader set of sequence numbers a
 // Writer still intends to send (`RtpsReaderProxy::unsent_changes`). In normal
 // operation this set is pruned as samples are pushed or acknowledged, but a

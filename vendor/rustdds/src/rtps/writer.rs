@@ -2102,6 +2102,15 @@ impl Writer {
           // before matching with this reader. Therefore we set the reader as pending GAP
           // for all existing sequence numbers
           new_proxy.set_pending_gap_up_to(self.send_buffer.last_change_sequence_number());
+        } else if let Some(depth) = self.send_buffer.keep_last_depth() {
+          // developable_sim patch: a late joiner of a durable KEEP_LAST writer
+          // gets the newest `depth` samples, not the unacknowledged ones the
+          // send window still holds for other readers.
+          let first = i64::from(self.send_buffer.first_change_sequence_number());
+          let last = i64::from(self.send_buffer.last_change_sequence_number());
+          for sn in first..=(last - depth as i64) {
+            new_proxy.insert_pending_gap(SequenceNumber::new(sn));
+          }
         }
         new_proxy.resolve_send_route(
           &self.interface_observations.borrow(),
@@ -2784,6 +2793,7 @@ mod tests {
           DEFAULT_WRITER_MAX_SAMPLES,
           DEFAULT_WRITER_MAX_SAMPLES,
           DEFAULT_WRITER_MAX_SAMPLES,
+          /* keep_last_depth */ None,
         );
         for _ in 0..sample_count {
           let data = DDSData::new(SerializedPayload::new(
@@ -2950,6 +2960,54 @@ mod tests {
 
     // Built-in and user Writers alike answer an ACKNACK only after
     // nack_response_delay, from the SendRepairData timer.
+    // developable_sim patch: a late joiner of a durable KEEP_LAST(1) writer is
+    // told (GAP) that every retained sample but the newest is irrelevant, even
+    // while a silent reader keeps the window full.
+    #[test]
+    fn keep_last_late_joiner_gets_only_the_newest_sample() {
+      let mut f = Fixture::user(0, 8, None); // one reader that never acknowledges
+      f.writer.send_buffer = WriterSendBuffer::new(
+        f.writer.my_guid,
+        "repair_test".to_string(),
+        true,
+        false,
+        /* volatile */ false,
+        /* window_limit */ 64,
+        64,
+        1,
+        /* keep_last_depth */ Some(1),
+      );
+      f.writer.refresh_acked_frontier();
+      for _ in 0..10 {
+        let data = DDSData::new(SerializedPayload::new(
+          RepresentationIdentifier::CDR_LE,
+          vec![0; 8],
+        ));
+        assert!(matches!(
+          f.writer
+            .send_buffer
+            .admit_blocking(WriteOptions::default(), data, Some(StdDuration::ZERO)),
+          Admission::Admitted(_)
+        ));
+      }
+      assert_eq!(f.writer.send_buffer.retained_len(), 10);
+      let late = GUID::new(
+        GuidPrefix::new(&[3; 12]),
+        EntityId::new([0, 0, 3], EntityKind::READER_WITH_KEY_USER_DEFINED),
+      );
+      let qos = f.writer.qos_policies.clone();
+      f.writer
+        .update_reader_proxy(&RtpsReaderProxy::new(late, qos.clone(), false), &qos);
+      let gaps: Vec<i64> = f.writer.readers[&late]
+        .get_pending_gap()
+        .iter()
+        .map(|&sn| i64::from(sn))
+        .collect();
+      assert_eq!(gaps, (1..=9).collect::<Vec<i64>>());
+      // the first reader's view is unchanged: it may still repair everything
+      assert!(f.reader_proxy().get_pending_gap().is_empty());
+    }
+
     #[test]
     fn acknack_schedules_repair_after_nack_response_delay() {
       for mut f in [Fixture::sedp(5, 8), Fixture::user(5, 8, None)] {

@@ -89,6 +89,13 @@ struct Shared {
   // (TRANSIENT_LOCAL / TRANSIENT / PERSISTENT) the writer must retain samples for
   // late-joining readers, so pre-match trimming is disabled.
   volatile: bool,
+  // developable_sim patch: `Some(depth)` for a KEEP_LAST user writer. Such a
+  // writer never blocks or fails on a full cache (DDS v1.4 2.2.3.18: KEEP_LAST
+  // replaces the oldest sample). It keeps the newest `depth` samples, plus
+  // unacknowledged ones up to the send window (`window_limit`) so that a slow
+  // reliable reader can be repaired; a reader lagging further is skipped (it
+  // gets a GAP) instead of being waited for.
+  keep_last_depth: Option<usize>,
   topic_name: String,
 }
 
@@ -117,6 +124,7 @@ impl WriterSendBuffer {
     window_limit: usize,
     backlog_limit: usize,
     max_retain: usize,
+    keep_last_depth: Option<usize>,
   ) -> Self {
     Self {
       shared: Arc::new(Shared {
@@ -137,6 +145,7 @@ impl WriterSendBuffer {
         reliable_writer,
         is_builtin,
         volatile,
+        keep_last_depth: keep_last_depth.filter(|_| !is_builtin).map(|d| d.max(1)),
         topic_name,
       }),
     }
@@ -156,8 +165,9 @@ impl WriterSendBuffer {
       return true;
     }
 
-    if !may_block {
-      // Best-effort write that must not block (DDS v1.4 2.2.2.4.2.11 default).
+    if !may_block || shared.keep_last_depth.is_some() {
+      // Best-effort write that must not block (DDS v1.4 2.2.2.4.2.11 default),
+      // or a KEEP_LAST writer, which evicts its oldest sample on insert instead.
       // Never throttle admission.
       return true;
     }
@@ -272,6 +282,11 @@ impl WriterSendBuffer {
     inner.changes.insert(seq, cc);
     inner.last_seq = seq;
 
+    if let Some(depth) = shared.keep_last_depth {
+      Self::evict_keep_last_locked(shared, inner, depth);
+      return seq;
+    }
+
     // KeepLast "newest wins" bound. Applied on insert for:
     //  - non-blocking best-effort writes: never throttled at admission (`has_room`
     //    returns true), and the only other eviction path is the periodic
@@ -303,6 +318,25 @@ impl WriterSendBuffer {
       }
     }
     seq
+  }
+
+  // developable_sim patch: KEEP_LAST eviction. The oldest sample goes when the
+  // history holds more than `depth` and no matched reliable reader still needs
+  // it, or when it is older than the send window (a reader that stopped
+  // acknowledging is skipped: it will get a GAP for it).
+  fn evict_keep_last_locked(shared: &Shared, inner: &mut Inner, depth: usize) {
+    while let Some(oldest) = inner.changes.keys().next().copied() {
+      let len = inner.changes.len();
+      let acked = !shared.reliable_writer
+        || !inner.reliable_readers_present
+        || oldest < inner.acked_before;
+      if len > inner.window_limit.max(depth) || (len > depth && acked) {
+        inner.changes.remove(&oldest);
+        inner.first_seq = oldest.plus_1();
+      } else {
+        break;
+      }
+    }
   }
 
   // --- consumer side (Writer / event loop) ---
@@ -349,6 +383,12 @@ impl WriterSendBuffer {
       inner.sent_frontier = sent_frontier;
       Self::wake_all(&mut inner, &shared.progress);
     }
+  }
+
+  /// developable_sim patch: the depth of a KEEP_LAST user writer, `None` for
+  /// the other writers.
+  pub fn keep_last_depth(&self) -> Option<usize> {
+    self.shared.keep_last_depth
   }
 
   /// The sequence number of the latest allocated sample (0 if none yet).
@@ -485,6 +525,7 @@ mod tests {
       /* window_limit */ 1,
       /* backlog_limit */ 1000,
       /* max_retain */ 1,
+      /* keep_last_depth */ None,
     );
     buf.set_acked_frontier(Some(SequenceNumber::zero()));
 
@@ -511,6 +552,7 @@ mod tests {
       /* window_limit */ 1000,
       /* backlog_limit */ 2,
       /* max_retain */ 1000,
+      /* keep_last_depth */ None,
     );
 
     // Nothing sent yet: backlog fills after two admissions.
@@ -539,6 +581,7 @@ mod tests {
       /* window_limit */ 1000,
       /* backlog_limit */ 1,
       /* max_retain */ 1000,
+      /* keep_last_depth */ None,
     );
     // Default WriteOptions => best_effort_may_block == false => never blocks.
     assert!(admit_now(&buf, WriteOptions::default()));
@@ -559,6 +602,7 @@ mod tests {
       1000,
       /* backlog_limit */ 1,
       /* max_retain */ 1000,
+      /* keep_last_depth */ None,
     );
     assert!(admit_now(&buf, may_block_opts()));
     assert!(admit_now(&buf, may_block_opts()));
@@ -583,6 +627,7 @@ mod tests {
       /* window_limit */ 1000,
       /* backlog_limit */ 1000,
       max_retain,
+      /* keep_last_depth */ None,
     );
 
     for _ in 0..100 {
@@ -618,6 +663,7 @@ mod tests {
       /* window_limit */ 1000,
       /* backlog_limit */ 1000,
       max_retain,
+      /* keep_last_depth */ None,
     );
     // No reliable readers matched yet => admission not window-throttled.
     for _ in 0..10 {
@@ -646,6 +692,7 @@ mod tests {
       /* window_limit */ 1000,
       /* backlog_limit */ 1000,
       max_retain,
+      /* keep_last_depth */ None,
     );
     // No reliable reader yet: admitted freely (backlog has room) but trimmed to
     // KeepLast so the buffer cannot balloon before discovery completes.
@@ -662,5 +709,87 @@ mod tests {
       assert!(admit_now(&buf, WriteOptions::default()));
     }
     assert_eq!(buf.retained_len(), max_retain + 10);
+  }
+
+  // developable_sim patch: a KEEP_LAST(1) reliable writer whose only reliable
+  // reader never acknowledges (a reader killed with -9) admits every sample at
+  // once, keeps the send window's worth of the newest ones for repair, and
+  // never more.
+  fn keep_last_buf(volatile: bool, depth: usize, window: usize) -> WriterSendBuffer {
+    WriterSendBuffer::new(
+      GUID::GUID_UNKNOWN,
+      "t".to_string(),
+      /* reliable_writer */ true,
+      /* is_builtin */ false,
+      volatile,
+      window,
+      /* backlog_limit */ window,
+      /* max_retain */ depth,
+      Some(depth),
+    )
+  }
+
+  #[test]
+  fn keep_last_reliable_writer_never_blocks_on_a_silent_reader() {
+    let buf = keep_last_buf(true, 1, 64);
+    buf.set_acked_frontier(Some(SequenceNumber::zero())); // matched, never acks
+    for _ in 0..1000 {
+      // nothing is sent either: the unsent backlog does not throttle it
+      assert!(admit_now(&buf, WriteOptions::default()));
+      assert!(buf.retained_len() <= 64);
+    }
+    assert_eq!(buf.retained_len(), 64);
+    assert_eq!(buf.first_change_sequence_number(), SequenceNumber::new(1000 - 63));
+    assert!(buf.get_by_sn(SequenceNumber::new(1000)).is_some());
+  }
+
+  // Acknowledged samples beyond the depth go on the next insert; an
+  // unacknowledged one stays for repair.
+  #[test]
+  fn keep_last_keeps_depth_plus_unacknowledged() {
+    let buf = keep_last_buf(true, 2, 64);
+    buf.set_acked_frontier(Some(SequenceNumber::new(1)));
+    for _ in 0..10 {
+      assert!(admit_now(&buf, WriteOptions::default()));
+    }
+    assert_eq!(buf.retained_len(), 10); // nothing acknowledged yet
+    buf.set_acked_frontier(Some(SequenceNumber::new(8))); // 1..=7 acknowledged
+    assert!(admit_now(&buf, WriteOptions::default())); // seq 11
+    assert_eq!(buf.first_change_sequence_number(), SequenceNumber::new(8));
+    assert_eq!(buf.retained_len(), 4);
+  }
+
+  // A durable KEEP_LAST writer with no reader keeps only the newest `depth`
+  // samples (a late joiner must not get a replay); so does a best-effort one.
+  #[test]
+  fn durable_keep_last_writer_keeps_depth_before_match() {
+    for volatile in [false, true] {
+      let buf = keep_last_buf(volatile, 1, 64);
+      for _ in 0..10 {
+        assert!(admit_now(&buf, WriteOptions::default()));
+      }
+      assert_eq!(buf.retained_len(), 1);
+      assert_eq!(buf.first_change_sequence_number(), SequenceNumber::new(10));
+    }
+  }
+
+  // Negative check: without the KEEP_LAST flag the same writer is the old
+  // stop-and-wait one (window 1 blocks the second write).
+  #[test]
+  fn without_keep_last_a_window_of_one_blocks() {
+    let buf = WriterSendBuffer::new(
+      GUID::GUID_UNKNOWN,
+      "t".to_string(),
+      true,
+      false,
+      true,
+      /* window_limit */ 1,
+      1000,
+      1,
+      None,
+    );
+    buf.set_acked_frontier(Some(SequenceNumber::zero()));
+    assert!(admit_now(&buf, WriteOptions::default()));
+    assert!(!admit_now(&buf, WriteOptions::default()));
   }
 }
