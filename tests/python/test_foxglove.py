@@ -22,6 +22,7 @@ from conftest import SCENES, SENSOR_QOS, Ros, pose_msg, reliable_qos
 from mcap.reader import make_reader
 from mcap.records import Schema
 from mcap_ros2.decoder import DecoderFactory
+from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 GRIPPER = str(SCENES / "ribbon_gripper.yaml")
@@ -204,6 +205,10 @@ def test_foxglove_port_parameter_starts_the_server_and_a_bad_bind_is_refused(
     ws, _, channels = connect_and_advertise(port)
     ws.close()
     assert "/ribbon/markers" in channels
+    # the SDK negotiates the protocol by its new name only (documented)
+    with pytest.raises(InvalidStatus) as refused:
+        connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.websocket.v1"], open_timeout=5)
+    assert refused.value.response.status_code == 400
     # the port is taken now: a second node says so and exits
     busy = start_node(domain_id, GRIPPER, "--foxglove", str(port), wait=False, name="busy")
     assert busy.wait_exit(30) != 0
