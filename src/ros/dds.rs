@@ -29,15 +29,15 @@ pub(crate) fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> NodeError + '
     move |e| NodeError::Dds(format!("{what}: {e:?}"))
 }
 
-/// A topic for one of the node's writers whose history is bounded by its QoS depth.
+/// A topic for one of the node's writers, with the writer's QoS.
 ///
-/// RustDDS keeps every sample a reliable writer published until all matched readers
-/// acknowledged it, and with no reader matched it keeps them up to its 8192-sample
-/// backstop (rustdds 0.15 `remove_all_acked_changes_but_keep_depth`): 8192 meshes of
-/// ~20 kB each, memory that grows for minutes. A `KeepLast(depth)` writer owes nobody
-/// more than its last `depth` samples, so the topic carries resource limits of
-/// `depth` samples (ros2-client's `QosProfile` has no resource limits; the writer
-/// inherits them from the topic).
+/// The writers are `KeepLast(depth)`: with the patched RustDDS (vendor/rustdds,
+/// docs/ros2_interop.md "Patched RustDDS") such a writer keeps its newest `depth`
+/// samples plus, for repair, up to 64 a reliable reader has not acknowledged; it
+/// never blocks and never fails on a full history, whatever its readers do, and a
+/// transient-local late joiner gets the newest `depth` samples only. No resource
+/// limits: `max_samples` would also cap that send window (a depth-1 writer would be
+/// stop-and-wait again).
 fn writer_topic(
     context: &Context,
     node_name: &NodeName,
@@ -45,26 +45,17 @@ fn writer_topic(
     type_name: MessageTypeName,
     q: Qos,
 ) -> Result<ros2_client::dds::rustdds::Topic, ros2_client::dds::rustdds::dds::CreateError> {
-    use ros2_client::dds::rustdds::{policy, QosPolicies, QosPolicyBuilder, TopicKind};
-    let depth = q.depth.max(1) as i32;
-    let limits = QosPolicyBuilder::new()
-        .resource_limits(policy::ResourceLimits {
-            max_samples: depth,
-            max_instances: 1,
-            max_samples_per_instance: depth,
-        })
-        .build();
-    let dds_qos = QosPolicies::from(qos(q)).modify_by(&limits);
+    use ros2_client::dds::rustdds::{QosPolicies, TopicKind};
     context.domain_participant().create_topic(
         topic.to_dds_name("rt", node_name, ""),
         type_name.dds_msg_type(),
-        &dds_qos,
+        &QosPolicies::from(qos(q)),
         TopicKind::NoKey,
     )
 }
 
-/// A publisher on `topic` (a resolved ROS name) whose writer history is bounded by its
-/// QoS depth (see [`writer_topic`]). `what` names it in errors.
+/// A publisher on `topic` (a resolved ROS name) whose writer keeps its QoS depth and
+/// never blocks (see [`writer_topic`]). `what` names it in errors.
 pub(crate) fn bounded_publisher<M: RosMessage + Serialize>(
     node: &mut Node,
     context: &Context,
@@ -80,8 +71,9 @@ pub(crate) fn bounded_publisher<M: RosMessage + Serialize>(
         .map_err(|e| NodeError::Dds(format!("{what} publisher: {e:?}")))
 }
 
-/// The DDS QoS of a recorded-QoS description. Reliable writers never block the loop:
-/// a full window fails the publication (counted) instead.
+/// The DDS QoS of a recorded-QoS description. Reliable writers never block the loop
+/// (KEEP_LAST evicts the oldest sample instead, see [`writer_topic`]); `WhenFull::Fail`
+/// only matters for a writer that is not KEEP_LAST.
 pub(crate) fn qos(q: Qos) -> QosProfile {
     let p = QosProfile::subscription_default().history(History::KeepLast {
         depth: q.depth as usize,
@@ -96,6 +88,12 @@ pub(crate) fn qos(q: Qos) -> QosProfile {
     } else {
         Durability::Volatile
     })
+}
+
+/// A publication's outcome without its message (a failed write hands the message
+/// back; only why it failed is kept).
+pub(crate) fn sent<M>(r: ros2_client::WriteResult<(), M>) -> Result<(), String> {
+    r.map_err(|e| e.to_string())
 }
 
 pub(crate) fn topic_type<M: RosMessage>() -> MessageTypeName {

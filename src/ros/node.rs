@@ -16,10 +16,12 @@ use std::time::{Duration, Instant};
 
 use ros2_client::dds::rustdds::mio1::{Events, Waker};
 
+use super::dds::sent;
 pub use super::dds::NodeError;
 use super::foxglove::{Advertised, FoxgloveConfig, FoxgloveOut};
 use super::input::InputPolicy;
 use super::names::NodeNames;
+use super::node_stats::DropLog;
 pub use super::node_stats::{rss_kib, LatencyStats, NodeStats, Window};
 use super::param_server::ParamTable;
 use super::params::{ParamValue, Params};
@@ -116,6 +118,8 @@ pub struct SimNode {
     /// When each handle's last accepted pose arrived (until markers go out).
     pending_input: Vec<Option<Instant>>,
     stats: NodeStats,
+    /// Which topics' dropped publications were already said in this episode.
+    drop_log: DropLog,
     latency: Latency,
 }
 
@@ -267,6 +271,7 @@ impl SimNode {
             last_report: None,
             last_step_duration: 0.0,
             stats,
+            drop_log: DropLog::default(),
             latency: Latency::new(),
         })
     }
@@ -393,9 +398,16 @@ impl SimNode {
 
     /// Publish a frame (clock, markers, singular points, status), then record it.
     fn emit(&mut self, frame: &Frame, trigger: Option<Instant>) {
-        let mut dropped = 0u64;
+        // (topic, why) of every publication that failed
+        let mut failed: Vec<(String, String)> = Vec::new();
+        let mut check = |r: Result<(), String>, topic: &String| {
+            if let Err(e) = r {
+                failed.push((topic.clone(), e));
+            }
+        };
+        let names = &self.names;
         if let Some(c) = &self.io.clock {
-            dropped += c.publish(frame.clock).is_err() as u64;
+            check(sent(c.publish(frame.clock)), &names.clock);
         }
         let t = self.session.scene.world.time();
         let markers_due = match (self.markers_period, self.last_markers) {
@@ -405,37 +417,54 @@ impl SimNode {
         if markers_due && frame.objects.iter().any(|o| o.markers.is_some()) {
             self.last_markers = Some(t);
         }
-        for (o, p) in frame.objects.iter().zip(&self.io.pubs) {
+        for ((o, p), n) in frame.objects.iter().zip(&self.io.pubs).zip(&names.objects) {
             if let (Some(m), Some(publisher), true) = (&o.markers, &p.markers, markers_due) {
-                dropped += publisher.publish(m.clone()).is_err() as u64;
+                check(sent(publisher.publish(m.clone())), &n.markers);
             }
         }
         let tf = (self.io.tf_out.is_some())
             .then(|| super::frames::tf_message(&self.session, frame.stamp));
         if let (Some(publisher), Some(tf)) = (&self.io.tf_out, &tf) {
-            dropped += publisher.publish(tf.clone()).is_err() as u64;
+            check(sent(publisher.publish(tf.clone())), &names.tf);
         }
         if let (Some(m), Some(publisher)) = (&frame.colliders, &self.io.colliders) {
-            dropped += publisher.publish(m.clone()).is_err() as u64;
+            check(sent(publisher.publish(m.clone())), &names.colliders);
         }
         let published_at = Instant::now();
         if let Some(t) = trigger {
             let inputs = self.pending_input.iter_mut().filter_map(|p| p.take());
             self.latency.published(published_at, t, inputs);
         }
-        for (o, p) in frame.objects.iter().zip(&self.io.pubs) {
+        for ((o, p), n) in frame.objects.iter().zip(&self.io.pubs).zip(&names.objects) {
             if let (Some(s), Some(publisher)) = (&o.singular_points, &p.singular_points) {
-                dropped += publisher.publish(s.clone()).is_err() as u64;
+                check(sent(publisher.publish(s.clone())), &n.singular_points);
             }
             if let (Some(s), Some(publisher)) = (&o.status, &p.status) {
-                dropped += publisher.publish(s.clone()).is_err() as u64;
+                check(sent(publisher.publish(s.clone())), &n.status);
             }
         }
-        self.stats.dropped_publications += dropped;
+        self.note_dropped(failed);
         if let Some(f) = self.foxglove.as_mut() {
             f.emit(frame, markers_due, tf.as_ref());
         }
         self.record(|r| r.record_frame(frame));
+    }
+
+    /// Counts failed publications (`SimStatus.dropped_publications` from the next
+    /// frame on, `--stats`) and says the first one per topic and episode on stderr.
+    fn note_dropped(&mut self, failed: Vec<(String, String)>) {
+        self.stats.dropped_publications += failed.len() as u64;
+        self.session.dropped_publications += failed.len() as u64;
+        let episode = self.session.episode;
+        for (topic, why) in failed {
+            if self.drop_log.first(&topic, episode) {
+                eprintln!(
+                    "[developable_sim] warning: a publication on {topic} was dropped ({why}); \
+                     further drops on {topic} in this episode are only counted \
+                     (SimStatus dropped_publications)"
+                );
+            }
+        }
     }
 
     fn record(
