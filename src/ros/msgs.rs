@@ -387,6 +387,11 @@ pub struct SimStatus {
     pub isometry_error: f64,
     pub constraint_violation: f64,
     pub singular_point_count: u32,
+    pub compression_mean_pct: f64,
+    pub compressed_edges_pct: f64,
+    pub strain_mean_pct: f64,
+    pub strain_max_pct: f64,
+    pub strained_edges_pct: f64,
     pub overrun_ticks: u64,
     pub rejected_inputs: u64,
     pub unconverged_steps: u64,
@@ -396,5 +401,5 @@ pub struct SimStatus {
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_701045a6aa651ea3a3694896febf1045c7b5f9190b65413a088775518b898c2b"
+    "RIHS01_9c8dda1185e0ccef357111f1f9998bfcae7301957efae6b62beb866b4f81a868"
 );
