@@ -117,6 +117,7 @@ class SimStatus(IdlStruct, typename="developable_sim::msg::dds_::SimStatus_"):
     strain_max_pct: t.float64 = 0.0
     strained_edges_pct: t.float64 = 0.0
     overrun_ticks: t.uint64 = 0
+    dropped_publications: t.uint64 = 0
     rejected_inputs: t.uint64 = 0
     unconverged_steps: t.uint64 = 0
     rejected_steps: t.uint64 = 0

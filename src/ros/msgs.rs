@@ -393,6 +393,7 @@ pub struct SimStatus {
     pub strain_max_pct: f64,
     pub strained_edges_pct: f64,
     pub overrun_ticks: u64,
+    pub dropped_publications: u64,
     pub rejected_inputs: u64,
     pub unconverged_steps: u64,
     pub rejected_steps: u64,
@@ -401,5 +402,5 @@ pub struct SimStatus {
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_9c8dda1185e0ccef357111f1f9998bfcae7301957efae6b62beb866b4f81a868"
+    "RIHS01_1dc8726f278337a6a78742ed2c42980012ea59b9f37b8f624210ecb92b5bb453"
 );

@@ -22,6 +22,7 @@ use ros2_client::{
 };
 use serde::Serialize;
 
+use super::foxglove::{Advertised, FoxgloveConfig, FoxgloveOut};
 use super::graph::{tf_pose, ClockIn, TfIn};
 use super::input::InputPolicy;
 use super::msgs::{
@@ -29,6 +30,7 @@ use super::msgs::{
     TFMessage, TriggerResponse,
 };
 use super::names::NodeNames;
+use super::node_stats::DropLog;
 pub use super::node_stats::{rss_kib, LatencyStats, NodeStats, Window};
 use super::param_msgs::{
     DescribeParametersResponse, GetParameterTypesResponse, GetParametersResponse,
@@ -85,6 +87,8 @@ pub struct NodeConfig {
     /// The parameters as read (the parameter services report them; the node's own
     /// settings above win where they differ).
     pub params: Params,
+    /// The live Foxglove WebSocket server (None: off).
+    pub foxglove: Option<FoxgloveConfig>,
 }
 
 /// A problem starting or running the node.
@@ -96,6 +100,11 @@ pub enum NodeError {
     Record(#[from] crate::record::RecordError),
     #[error("poll: {0}")]
     Poll(#[from] std::io::Error),
+    /// Settings that cannot work together (found before anything starts).
+    #[error("{0}")]
+    Config(String),
+    #[error("{0}")]
+    Foxglove(#[from] super::foxglove::FoxgloveStartError),
 }
 
 pub(super) fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> NodeError + '_ {
@@ -136,6 +145,8 @@ pub struct SimNode {
     last_markers: Option<f64>,
     /// The colliders' markers (only for a scene with colliders and markers on).
     colliders: Option<Publisher<MarkerArray>>,
+    /// The same outputs to Foxglove WebSocket clients (`--foxglove PORT`).
+    foxglove: Option<FoxgloveOut>,
     services: Services,
     /// The parameters as the parameter services report them.
     params: ParamTable,
@@ -158,6 +169,7 @@ pub struct SimNode {
     last_step_duration: f64,
     pending_input: Vec<Option<Instant>>,
     stats: NodeStats,
+    drop_log: DropLog,
     step_ms: Vec<f64>,
     tick_ms: Vec<f64>,
     input_ms: Vec<f64>,
@@ -169,15 +181,39 @@ pub struct SimNode {
     started: Instant,
 }
 
-/// A topic for one of the node's writers whose history is bounded by its QoS depth.
+/// Lock-step on a handle steps once per pose accepted on its topic. A handle that
+/// follows a TF frame has no pose topic: its target is looked up at each tick, and /tf
+/// carries every frame of the robot at the broadcasters' rates, so "one step per TF
+/// message" would tie the simulation to unrelated frames. Refused, with the ways out.
+fn lockstep_needs_a_pose_topic(cfg: &NodeConfig) -> Result<(), NodeError> {
+    let Lockstep::Handle(h) = cfg.lockstep else {
+        return Ok(());
+    };
+    match cfg.scene.handle_tf_frames.get(h) {
+        Some(Some(frame)) => Err(NodeError::Config(format!(
+            "--lockstep {name}: handle `{name}` follows TF frame `{frame}` (tf_frame in the \
+             scene), so it has no pose topic to step on; use `--lockstep service` (one step \
+             per ~/step call) or drive the handle from its pose topic",
+            name = cfg
+                .scene
+                .world
+                .handles()
+                .get(h)
+                .map_or("?", |s| s.name.as_str()),
+        ))),
+        _ => Ok(()),
+    }
+}
+
+/// A topic for one of the node's writers, with the writer's QoS.
 ///
-/// RustDDS keeps every sample a reliable writer published until all matched readers
-/// acknowledged it, and with no reader matched it keeps them up to its 8192-sample
-/// backstop (rustdds 0.15 `remove_all_acked_changes_but_keep_depth`): 8192 meshes of
-/// ~20 kB each, memory that grows for minutes. A `KeepLast(depth)` writer owes nobody
-/// more than its last `depth` samples, so the topic carries resource limits of
-/// `depth` samples (ros2-client's `QosProfile` has no resource limits; the writer
-/// inherits them from the topic).
+/// The writers are `KeepLast(depth)`: with the patched RustDDS (vendor/rustdds,
+/// docs/ros2_interop.md "Patched RustDDS") such a writer keeps its newest `depth`
+/// samples plus, for repair, up to 64 a reliable reader has not acknowledged; it
+/// never blocks and never fails on a full history, whatever its readers do, and a
+/// transient-local late joiner gets the newest `depth` samples only. No resource
+/// limits: `max_samples` would also cap that send window (a depth-1 writer would be
+/// stop-and-wait again).
 fn writer_topic(
     context: &Context,
     node_name: &NodeName,
@@ -185,26 +221,17 @@ fn writer_topic(
     type_name: MessageTypeName,
     q: Qos,
 ) -> Result<ros2_client::dds::rustdds::Topic, ros2_client::dds::rustdds::dds::CreateError> {
-    use ros2_client::dds::rustdds::{policy, QosPolicies, QosPolicyBuilder, TopicKind};
-    let depth = q.depth.max(1) as i32;
-    let limits = QosPolicyBuilder::new()
-        .resource_limits(policy::ResourceLimits {
-            max_samples: depth,
-            max_instances: 1,
-            max_samples_per_instance: depth,
-        })
-        .build();
-    let dds_qos = QosPolicies::from(qos(q)).modify_by(&limits);
+    use ros2_client::dds::rustdds::{QosPolicies, TopicKind};
     context.domain_participant().create_topic(
         topic.to_dds_name("rt", node_name, ""),
         type_name.dds_msg_type(),
-        &dds_qos,
+        &QosPolicies::from(qos(q)),
         TopicKind::NoKey,
     )
 }
 
-/// A publisher on `topic` (a resolved ROS name) whose writer history is bounded by its
-/// QoS depth (see [`writer_topic`]). `what` names it in errors.
+/// A publisher on `topic` (a resolved ROS name) whose writer keeps its QoS depth and
+/// never blocks (see [`writer_topic`]). `what` names it in errors.
 pub(super) fn bounded_publisher<M: RosMessage + Serialize>(
     node: &mut Node,
     context: &Context,
@@ -220,8 +247,9 @@ pub(super) fn bounded_publisher<M: RosMessage + Serialize>(
         .map_err(|e| NodeError::Dds(format!("{what} publisher: {e:?}")))
 }
 
-/// The DDS QoS of a recorded-QoS description. Reliable writers never block the loop:
-/// a full window fails the publication (counted) instead.
+/// The DDS QoS of a recorded-QoS description. Reliable writers never block the loop
+/// (KEEP_LAST evicts the oldest sample instead, see [`writer_topic`]); `WhenFull::Fail`
+/// only matters for a writer that is not KEEP_LAST.
 pub(super) fn qos(q: Qos) -> QosProfile {
     let p = QosProfile::subscription_default().history(History::KeepLast {
         depth: q.depth as usize,
@@ -238,6 +266,12 @@ pub(super) fn qos(q: Qos) -> QosProfile {
     })
 }
 
+/// A publication's outcome without its message (a failed write hands the message
+/// back; only why it failed is kept).
+fn sent<M>(r: ros2_client::WriteResult<(), M>) -> Result<(), String> {
+    r.map_err(|e| e.to_string())
+}
+
 pub(super) fn topic_type<M: RosMessage>() -> MessageTypeName {
     let mut parts = M::TYPE.split('/');
     let pkg = parts.next().unwrap_or("");
@@ -248,6 +282,7 @@ pub(super) fn topic_type<M: RosMessage>() -> MessageTypeName {
 impl SimNode {
     /// Join the DDS domain and create every topic, service and the bag.
     pub fn new(cfg: NodeConfig) -> Result<SimNode, NodeError> {
+        lockstep_needs_a_pose_topic(&cfg)?;
         let context = Context::with_options(ContextOptions::new().domain_id(cfg.domain_id))
             .map_err(dds("creating the DDS participant"))?;
         let node_name =
@@ -416,6 +451,23 @@ impl SimNode {
             })
             .transpose()?;
         let services = Services::new(&mut node, &node_name, &names, &poll, SERVICE_TOKEN_BASE)?;
+        let foxglove = match &cfg.foxglove {
+            Some(f) => {
+                let what = Advertised {
+                    content: published,
+                    colliders: colliders.is_some(),
+                    tf: tf_out.is_some(),
+                };
+                let out = FoxgloveOut::start(f, &names, what)?;
+                eprintln!(
+                    "[developable_sim] Foxglove: open ws://{}:{} in Foxglove",
+                    f.bind,
+                    out.port()
+                );
+                Some(out)
+            }
+            None => None,
+        };
 
         let mut handle_topics = names.handles.clone();
         for (h, _) in &tf_handles {
@@ -474,6 +526,7 @@ impl SimNode {
             markers_period,
             last_markers: None,
             colliders,
+            foxglove,
             services,
             params,
             node: Some(node),
@@ -493,6 +546,7 @@ impl SimNode {
             last_step_duration: 0.0,
             pending_input: vec![None; n_handles],
             stats,
+            drop_log: DropLog::default(),
             step_ms: Vec::new(),
             tick_ms: Vec::new(),
             input_ms: Vec::new(),
@@ -675,7 +729,7 @@ impl SimNode {
                         );
                         self.tf_failing[k] = false;
                     }
-                    let arrival_ns = crate::record::bag::now_ns();
+                    let arrival_ns = self.arrival_ns();
                     self.record(|r| r.record_input(h, &msg, arrival_ns, None));
                     if self.session.offer(h, &msg, arrival_ns).is_err() {
                         self.stats.inputs_rejected += 1;
@@ -689,11 +743,28 @@ impl SimNode {
                         );
                         self.tf_failing[k] = true;
                     }
+                    let what = super::msgs::PoseStamped {
+                        header: super::msgs::Header {
+                            stamp: super::msgs::Time::from_nanos(at as i64),
+                            frame_id: frame.clone(),
+                        },
+                        pose: super::msgs::Pose::default(), // identity
+                    };
+                    let arrival_ns = self.arrival_ns();
+                    self.record(|r| r.record_tf_failure(h, &what, arrival_ns));
                     self.session.reject_tf(h);
                     self.stats.inputs_rejected += 1;
                 }
             }
         }
+    }
+
+    /// The arrival time of an input: the recorder's (strictly increasing, it is the
+    /// input's log time in the bag) when recording, else the wall clock, ns.
+    fn arrival_ns(&mut self) -> u64 {
+        self.recorder
+            .as_mut()
+            .map_or_else(crate::record::bag::now_ns, |r| r.arrival_ns())
     }
 
     /// One step now; `trigger` is when the tick started or the lock-step input came.
@@ -718,9 +789,16 @@ impl SimNode {
 
     /// Publish a frame (clock, markers, singular points, status), then record it.
     fn emit(&mut self, frame: &Frame, trigger: Option<Instant>) {
-        let mut dropped = 0u64;
+        // (topic, why) of every publication that failed
+        let mut failed: Vec<(String, String)> = Vec::new();
+        let mut check = |r: Result<(), String>, topic: &String| {
+            if let Err(e) = r {
+                failed.push((topic.clone(), e));
+            }
+        };
+        let names = &self.names;
         if let Some(c) = &self.clock {
-            dropped += c.publish(frame.clock).is_err() as u64;
+            check(sent(c.publish(frame.clock)), &names.clock);
         }
         let t = self.session.scene.world.time();
         let markers_due = match (self.markers_period, self.last_markers) {
@@ -730,17 +808,18 @@ impl SimNode {
         if markers_due && frame.objects.iter().any(|o| o.markers.is_some()) {
             self.last_markers = Some(t);
         }
-        for (o, p) in frame.objects.iter().zip(&self.pubs) {
+        for ((o, p), n) in frame.objects.iter().zip(&self.pubs).zip(&names.objects) {
             if let (Some(m), Some(publisher), true) = (&o.markers, &p.markers, markers_due) {
-                dropped += publisher.publish(m.clone()).is_err() as u64;
+                check(sent(publisher.publish(m.clone())), &n.markers);
             }
         }
-        if let Some(publisher) = &self.tf_out {
-            let tf = super::frames::tf_message(&self.session, frame.stamp);
-            dropped += publisher.publish(tf).is_err() as u64;
+        let tf =
+            (self.tf_out.is_some()).then(|| super::frames::tf_message(&self.session, frame.stamp));
+        if let (Some(publisher), Some(tf)) = (&self.tf_out, &tf) {
+            check(sent(publisher.publish(tf.clone())), &names.tf);
         }
         if let (Some(m), Some(publisher)) = (&frame.colliders, &self.colliders) {
-            dropped += publisher.publish(m.clone()).is_err() as u64;
+            check(sent(publisher.publish(m.clone())), &names.colliders);
         }
         let published_at = Instant::now();
         if let Some(t) = trigger {
@@ -755,16 +834,36 @@ impl SimNode {
                 }
             }
         }
-        for (o, p) in frame.objects.iter().zip(&self.pubs) {
+        for ((o, p), n) in frame.objects.iter().zip(&self.pubs).zip(&names.objects) {
             if let (Some(s), Some(publisher)) = (&o.singular_points, &p.singular_points) {
-                dropped += publisher.publish(s.clone()).is_err() as u64;
+                check(sent(publisher.publish(s.clone())), &n.singular_points);
             }
             if let (Some(s), Some(publisher)) = (&o.status, &p.status) {
-                dropped += publisher.publish(s.clone()).is_err() as u64;
+                check(sent(publisher.publish(s.clone())), &n.status);
             }
         }
-        self.stats.dropped_publications += dropped;
+        self.note_dropped(failed);
+        if let Some(f) = self.foxglove.as_mut() {
+            f.emit(frame, markers_due, tf.as_ref());
+        }
         self.record(|r| r.record_frame(frame));
+    }
+
+    /// Counts failed publications (`SimStatus.dropped_publications` from the next
+    /// frame on, `--stats`) and says the first one per topic and episode on stderr.
+    fn note_dropped(&mut self, failed: Vec<(String, String)>) {
+        self.stats.dropped_publications += failed.len() as u64;
+        self.session.dropped_publications += failed.len() as u64;
+        let episode = self.session.episode;
+        for (topic, why) in failed {
+            if self.drop_log.first(&topic, episode) {
+                eprintln!(
+                    "[developable_sim] warning: a publication on {topic} was dropped ({why}); \
+                     further drops on {topic} in this episode are only counted \
+                     (SimStatus dropped_publications)"
+                );
+            }
+        }
     }
 
     fn record(
@@ -821,6 +920,8 @@ impl SimNode {
                     )) => {
                         self.stats.inputs_received += 1;
                         self.stats.inputs_rejected += 1;
+                        let arrival_ns = self.arrival_ns();
+                        self.record(|r| r.record_tf_failure(h, &msg, arrival_ns));
                         self.session.reject_tf(h);
                         continue;
                     }
