@@ -123,7 +123,7 @@ enum Command {
         /// Write latency and run statistics as JSON at exit.
         #[arg(long, value_name = "OUT.json")]
         stats: Option<PathBuf>,
-        /// Serve a live Foxglove view on this TCP port (foxglove.websocket.v1; connect
+        /// Serve a live Foxglove view on this TCP port (foxglove.sdk.v1; connect
         /// Foxglove to ws://localhost:PORT); 0: off (default, or the `foxglove_port` parameter).
         #[arg(long, value_name = "PORT")]
         foxglove: Option<u16>,

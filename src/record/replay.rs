@@ -333,7 +333,12 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
 
 /// Status fields that depend on the wall clock or on the node's run state, not on the
 /// simulation: not compared.
-pub const WALL_CLOCK_STATUS_FIELDS: &[&str] = &["step_duration", "overrun_ticks", "paused"];
+pub const WALL_CLOCK_STATUS_FIELDS: &[&str] = &[
+    "step_duration",
+    "overrun_ticks",
+    "dropped_publications",
+    "paused",
+];
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Route {

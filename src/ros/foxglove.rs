@@ -1,5 +1,5 @@
 //! The live Foxglove view (`--foxglove PORT`, parameter `foxglove_port`): a Foxglove
-//! WebSocket server (the Foxglove SDK, subprotocol `foxglove.websocket.v1`) that
+//! WebSocket server (the Foxglove SDK, subprotocol `foxglove.sdk.v1`: protocol v1) that
 //! advertises the node's output topics under their ROS names, each with its `ros2msg`
 //! schema (the text the bags carry, [`RosMessage::schema`]) and `cdr` message encoding,
 //! and sends the CDR bytes the DDS writers and the bags send ([`super::cdr::encode`]).

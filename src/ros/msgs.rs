@@ -388,6 +388,7 @@ pub struct SimStatus {
     pub constraint_violation: f64,
     pub singular_point_count: u32,
     pub overrun_ticks: u64,
+    pub dropped_publications: u64,
     pub rejected_inputs: u64,
     pub unconverged_steps: u64,
     pub rejected_steps: u64,
@@ -396,5 +397,5 @@ pub struct SimStatus {
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_701045a6aa651ea3a3694896febf1045c7b5f9190b65413a088775518b898c2b"
+    "RIHS01_7bc849f1a710565d53e33c23dab0444d8f34fb5a18cb879d872e74fff9841fd5"
 );

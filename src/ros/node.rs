@@ -30,6 +30,7 @@ use super::msgs::{
     TFMessage, TriggerResponse,
 };
 use super::names::NodeNames;
+use super::node_stats::DropLog;
 pub use super::node_stats::{rss_kib, LatencyStats, NodeStats, Window};
 use super::param_msgs::{
     DescribeParametersResponse, GetParameterTypesResponse, GetParametersResponse,
@@ -168,6 +169,7 @@ pub struct SimNode {
     last_step_duration: f64,
     pending_input: Vec<Option<Instant>>,
     stats: NodeStats,
+    drop_log: DropLog,
     step_ms: Vec<f64>,
     tick_ms: Vec<f64>,
     input_ms: Vec<f64>,
@@ -203,15 +205,15 @@ fn lockstep_needs_a_pose_topic(cfg: &NodeConfig) -> Result<(), NodeError> {
     }
 }
 
-/// A topic for one of the node's writers whose history is bounded by its QoS depth.
+/// A topic for one of the node's writers, with the writer's QoS.
 ///
-/// RustDDS keeps every sample a reliable writer published until all matched readers
-/// acknowledged it, and with no reader matched it keeps them up to its 8192-sample
-/// backstop (rustdds 0.15 `remove_all_acked_changes_but_keep_depth`): 8192 meshes of
-/// ~20 kB each, memory that grows for minutes. A `KeepLast(depth)` writer owes nobody
-/// more than its last `depth` samples, so the topic carries resource limits of
-/// `depth` samples (ros2-client's `QosProfile` has no resource limits; the writer
-/// inherits them from the topic).
+/// The writers are `KeepLast(depth)`: with the patched RustDDS (vendor/rustdds,
+/// docs/ros2_interop.md "Patched RustDDS") such a writer keeps its newest `depth`
+/// samples plus, for repair, up to 64 a reliable reader has not acknowledged; it
+/// never blocks and never fails on a full history, whatever its readers do, and a
+/// transient-local late joiner gets the newest `depth` samples only. No resource
+/// limits: `max_samples` would also cap that send window (a depth-1 writer would be
+/// stop-and-wait again).
 fn writer_topic(
     context: &Context,
     node_name: &NodeName,
@@ -219,26 +221,17 @@ fn writer_topic(
     type_name: MessageTypeName,
     q: Qos,
 ) -> Result<ros2_client::dds::rustdds::Topic, ros2_client::dds::rustdds::dds::CreateError> {
-    use ros2_client::dds::rustdds::{policy, QosPolicies, QosPolicyBuilder, TopicKind};
-    let depth = q.depth.max(1) as i32;
-    let limits = QosPolicyBuilder::new()
-        .resource_limits(policy::ResourceLimits {
-            max_samples: depth,
-            max_instances: 1,
-            max_samples_per_instance: depth,
-        })
-        .build();
-    let dds_qos = QosPolicies::from(qos(q)).modify_by(&limits);
+    use ros2_client::dds::rustdds::{QosPolicies, TopicKind};
     context.domain_participant().create_topic(
         topic.to_dds_name("rt", node_name, ""),
         type_name.dds_msg_type(),
-        &dds_qos,
+        &QosPolicies::from(qos(q)),
         TopicKind::NoKey,
     )
 }
 
-/// A publisher on `topic` (a resolved ROS name) whose writer history is bounded by its
-/// QoS depth (see [`writer_topic`]). `what` names it in errors.
+/// A publisher on `topic` (a resolved ROS name) whose writer keeps its QoS depth and
+/// never blocks (see [`writer_topic`]). `what` names it in errors.
 pub(super) fn bounded_publisher<M: RosMessage + Serialize>(
     node: &mut Node,
     context: &Context,
@@ -254,8 +247,9 @@ pub(super) fn bounded_publisher<M: RosMessage + Serialize>(
         .map_err(|e| NodeError::Dds(format!("{what} publisher: {e:?}")))
 }
 
-/// The DDS QoS of a recorded-QoS description. Reliable writers never block the loop:
-/// a full window fails the publication (counted) instead.
+/// The DDS QoS of a recorded-QoS description. Reliable writers never block the loop
+/// (KEEP_LAST evicts the oldest sample instead, see [`writer_topic`]); `WhenFull::Fail`
+/// only matters for a writer that is not KEEP_LAST.
 pub(super) fn qos(q: Qos) -> QosProfile {
     let p = QosProfile::subscription_default().history(History::KeepLast {
         depth: q.depth as usize,
@@ -270,6 +264,12 @@ pub(super) fn qos(q: Qos) -> QosProfile {
     } else {
         Durability::Volatile
     })
+}
+
+/// A publication's outcome without its message (a failed write hands the message
+/// back; only why it failed is kept).
+fn sent<M>(r: ros2_client::WriteResult<(), M>) -> Result<(), String> {
+    r.map_err(|e| e.to_string())
 }
 
 pub(super) fn topic_type<M: RosMessage>() -> MessageTypeName {
@@ -546,6 +546,7 @@ impl SimNode {
             last_step_duration: 0.0,
             pending_input: vec![None; n_handles],
             stats,
+            drop_log: DropLog::default(),
             step_ms: Vec::new(),
             tick_ms: Vec::new(),
             input_ms: Vec::new(),
@@ -788,9 +789,16 @@ impl SimNode {
 
     /// Publish a frame (clock, markers, singular points, status), then record it.
     fn emit(&mut self, frame: &Frame, trigger: Option<Instant>) {
-        let mut dropped = 0u64;
+        // (topic, why) of every publication that failed
+        let mut failed: Vec<(String, String)> = Vec::new();
+        let mut check = |r: Result<(), String>, topic: &String| {
+            if let Err(e) = r {
+                failed.push((topic.clone(), e));
+            }
+        };
+        let names = &self.names;
         if let Some(c) = &self.clock {
-            dropped += c.publish(frame.clock).is_err() as u64;
+            check(sent(c.publish(frame.clock)), &names.clock);
         }
         let t = self.session.scene.world.time();
         let markers_due = match (self.markers_period, self.last_markers) {
@@ -800,18 +808,18 @@ impl SimNode {
         if markers_due && frame.objects.iter().any(|o| o.markers.is_some()) {
             self.last_markers = Some(t);
         }
-        for (o, p) in frame.objects.iter().zip(&self.pubs) {
+        for ((o, p), n) in frame.objects.iter().zip(&self.pubs).zip(&names.objects) {
             if let (Some(m), Some(publisher), true) = (&o.markers, &p.markers, markers_due) {
-                dropped += publisher.publish(m.clone()).is_err() as u64;
+                check(sent(publisher.publish(m.clone())), &n.markers);
             }
         }
         let tf =
             (self.tf_out.is_some()).then(|| super::frames::tf_message(&self.session, frame.stamp));
         if let (Some(publisher), Some(tf)) = (&self.tf_out, &tf) {
-            dropped += publisher.publish(tf.clone()).is_err() as u64;
+            check(sent(publisher.publish(tf.clone())), &names.tf);
         }
         if let (Some(m), Some(publisher)) = (&frame.colliders, &self.colliders) {
-            dropped += publisher.publish(m.clone()).is_err() as u64;
+            check(sent(publisher.publish(m.clone())), &names.colliders);
         }
         let published_at = Instant::now();
         if let Some(t) = trigger {
@@ -826,19 +834,36 @@ impl SimNode {
                 }
             }
         }
-        for (o, p) in frame.objects.iter().zip(&self.pubs) {
+        for ((o, p), n) in frame.objects.iter().zip(&self.pubs).zip(&names.objects) {
             if let (Some(s), Some(publisher)) = (&o.singular_points, &p.singular_points) {
-                dropped += publisher.publish(s.clone()).is_err() as u64;
+                check(sent(publisher.publish(s.clone())), &n.singular_points);
             }
             if let (Some(s), Some(publisher)) = (&o.status, &p.status) {
-                dropped += publisher.publish(s.clone()).is_err() as u64;
+                check(sent(publisher.publish(s.clone())), &n.status);
             }
         }
-        self.stats.dropped_publications += dropped;
+        self.note_dropped(failed);
         if let Some(f) = self.foxglove.as_mut() {
             f.emit(frame, markers_due, tf.as_ref());
         }
         self.record(|r| r.record_frame(frame));
+    }
+
+    /// Counts failed publications (`SimStatus.dropped_publications` from the next
+    /// frame on, `--stats`) and says the first one per topic and episode on stderr.
+    fn note_dropped(&mut self, failed: Vec<(String, String)>) {
+        self.stats.dropped_publications += failed.len() as u64;
+        self.session.dropped_publications += failed.len() as u64;
+        let episode = self.session.episode;
+        for (topic, why) in failed {
+            if self.drop_log.first(&topic, episode) {
+                eprintln!(
+                    "[developable_sim] warning: a publication on {topic} was dropped ({why}); \
+                     further drops on {topic} in this episode are only counted \
+                     (SimStatus dropped_publications)"
+                );
+            }
+        }
     }
 
     fn record(

@@ -89,3 +89,41 @@ pub fn rss_kib() -> u64 {
         .map(|pages| pages * 4)
         .unwrap_or(0)
 }
+
+/// Says on stderr when a publication is dropped: once per topic and episode (the
+/// count goes on in `SimStatus.dropped_publications` and `--stats`).
+#[derive(Debug, Default)]
+pub(crate) struct DropLog {
+    episode: u32,
+    said: Vec<String>,
+}
+
+impl DropLog {
+    /// Whether this drop on `topic` in `episode` is the first one (to be said).
+    pub(crate) fn first(&mut self, topic: &str, episode: u32) -> bool {
+        if episode != self.episode {
+            self.episode = episode;
+            self.said.clear();
+        }
+        if self.said.iter().any(|t| t == topic) {
+            return false;
+        }
+        self.said.push(topic.to_string());
+        true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::DropLog;
+
+    #[test]
+    fn a_drop_is_said_once_per_topic_and_episode() {
+        let mut log = DropLog::default();
+        assert!(log.first("/ribbon/markers", 0));
+        assert!(!log.first("/ribbon/markers", 0));
+        assert!(log.first("/ribbon/status", 0));
+        assert!(log.first("/ribbon/markers", 1), "a reset starts a new episode");
+        assert!(!log.first("/ribbon/markers", 1));
+    }
+}

@@ -170,7 +170,7 @@ pub const DECLARED: &[Declared] = &[
         ty: ParamType::Integer,
         default: "0",
         doc: "TCP port of the live Foxglove WebSocket server (as --foxglove PORT; \
-              foxglove.websocket.v1, ros2msg schemas, cdr); 0: none.",
+              subprotocol foxglove.sdk.v1, ros2msg schemas, cdr); 0: none.",
     },
     Declared {
         name: "foxglove_bind",

@@ -95,6 +95,9 @@ pub struct Session {
     pub paused: bool,
     /// Real-time ticks skipped because the simulation could not keep up.
     pub overrun_ticks: u64,
+    /// Publications the node failed to send since start-up (all topics; the node
+    /// counts them).
+    pub dropped_publications: u64,
     /// Per object: steps whose solver stopped on an iteration limit, and steps whose
     /// result was not finite (rejected, previous state kept), since start-up.
     unconverged_steps: Vec<u64>,
@@ -115,6 +118,7 @@ impl Session {
             episode: 0,
             paused: false,
             overrun_ticks: 0,
+            dropped_publications: 0,
             unconverged_steps: vec![0; objects],
             rejected_steps: vec![0; objects],
             targets: vec![None; n],
@@ -250,6 +254,7 @@ impl Session {
             paused: self.paused,
             step_duration,
             overrun_ticks: self.overrun_ticks,
+            dropped_publications: self.dropped_publications,
             unconverged_steps: self.unconverged_steps[object],
             rejected_steps: self.rejected_steps[object],
             ..SimStatus::default()

@@ -177,10 +177,22 @@ class SimStatus(IdlStruct, typename="developable_sim::msg::dds_::SimStatus_"):
     constraint_violation: t.float64 = 0.0
     singular_point_count: t.uint32 = 0
     overrun_ticks: t.uint64 = 0
+    dropped_publications: t.uint64 = 0
     rejected_inputs: t.uint64 = 0
     unconverged_steps: t.uint64 = 0
     rejected_steps: t.uint64 = 0
     handles: t.sequence[HandleStatus] = field(default_factory=list)
+
+
+@dataclass
+class MarkerArrayHead(IdlStruct, typename="visualization_msgs::msg::dds_::MarkerArray_"):
+    """The head of a MarkerArray on the wire: the marker count and the first marker's
+    header (the rest of the sample is not decoded). Decoding whole meshes in Python
+    costs more than the node takes to make them, and a reader that falls behind would
+    measure itself, not the node."""
+
+    count: t.uint32 = 0
+    header: Header = field(default_factory=Header)
 
 
 # Services on the rmw_cyclonedds wire format: every request and reply starts with a
