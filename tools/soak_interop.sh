@@ -24,6 +24,12 @@ for i in $(seq 1 "$n"); do
   fi
   # "FAILED path::test - reason" / "ERROR path::test - reason" lines of the short summary
   grep -E '^(FAILED|ERROR) ' "$out/run_$i.log" | sed -E 's/ - .*//' >>"$out/failures"
+  # a crashed pytest (e.g. a segfault in the Cyclone client) prints no summary: name
+  # the test from the traceback
+  if [ "$verdict" = red ] && ! grep -qE '^(FAILED|ERROR) ' "$out/run_$i.log"; then
+    echo "CRASHED $(grep -oE 'tests/python/[a-z_]+\.py", line [0-9]+ in test_[a-z0-9_]+' "$out/run_$i.log" \
+      | head -n 1 | sed -E 's/", line [0-9]+ in /::/')" >>"$out/failures"
+  fi
   echo "run $i/$n: $verdict ($(( $(date +%s) - start )) s) $(tail -n 1 "$out/run_$i.log")"
 done
 echo "== $green of $n runs green ($(date -u +%Y-%m-%d), commit $(git rev-parse --short HEAD)); logs in $out =="

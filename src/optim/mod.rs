@@ -6,7 +6,10 @@ pub mod lbfgsb;
 pub mod projected_newton;
 
 pub use lbfgsb::{Lbfgsb, LbfgsbOptions, LbfgsbResult, LbfgsbStop};
-pub use projected_newton::{BoxProblem, NewtonOptions, NewtonResult, ProjectedNewton};
+pub use projected_newton::{
+    damped_diagonal, damping_floor, BoxProblem, Dense, NewtonMatrix, NewtonOptions, NewtonResult,
+    ProjectedNewton,
+};
 
 /// Infinity norm of the projected gradient P(x - g) - x on the box [lower, upper].
 pub fn projected_gradient_inf(x: &[f64], g: &[f64], lower: &[f64], upper: &[f64]) -> f64 {

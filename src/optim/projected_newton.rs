@@ -13,21 +13,64 @@ use super::projected_gradient_inf;
 
 /// A box-constrained problem with a Hessian model.
 pub trait BoxProblem {
+    /// How its Hessian is stored and factorized ([`Dense`], or a structured one).
+    type Matrix: NewtonMatrix;
     fn dimension(&self) -> usize;
     /// f(x); writes the gradient if asked and the Hessian model (PSD) if asked.
     fn evaluate(
         &mut self,
         x: &[f64],
         gradient: Option<&mut [f64]>,
-        hessian: Option<&mut DMatrix<f64>>,
+        hessian: Option<&mut Self::Matrix>,
     ) -> f64;
     /// The Hessian model at `x`, called only right after `evaluate(x, Some(g), None)`
     /// at that same `x`: a problem that keeps what that evaluation computed can
     /// assemble the Hessian without a second pass. The solver asks for it only when it
     /// takes another step, so the last iterate never pays for one.
-    fn hessian(&mut self, x: &[f64], hessian: &mut DMatrix<f64>) {
+    fn hessian(&mut self, x: &[f64], hessian: &mut Self::Matrix) {
         self.evaluate(x, None, Some(hessian));
     }
+}
+
+/// The Newton matrix H of a problem and its factorization: what the projected Newton
+/// method needs of it, so that the line search, the held variables and the damping are
+/// shared between a dense matrix and a structured one (the ribbon's chain sweep).
+pub trait NewtonMatrix: Default {
+    /// The diagonal of H into `out` (one entry per unknown).
+    fn diagonal(&mut self, out: &mut [f64]);
+    /// Whether an entry of H on the free set is beyond 1e150 in magnitude or not a
+    /// number: it would square past f64's range in a factorization.
+    fn out_of_range(&self, free: &[usize]) -> bool;
+    /// Factorize H_FF + diag(s) on the free set F, s_i = damping max(|H_ii|, floor) +
+    /// floor with floor = 1e-14 max_F |H_ii| (see [`damped_diagonal`]); false where
+    /// that is not positive definite.
+    fn factor(&mut self, free: &[usize], damping: f64) -> bool;
+    /// Solve with the last factorization: `reduced` holds the right-hand side on the
+    /// free set (in `free`'s order) and receives the solution. False if not finite.
+    fn solve(&mut self, free: &[usize], reduced: &mut [f64]) -> bool;
+}
+
+/// The floor of the Levenberg-Marquardt shift for the largest free diagonal entry
+/// `max_diag`: 1e-14 of it (a zero diagonal entry still gets a positive pivot).
+pub fn damping_floor(max_diag: f64) -> f64 {
+    1e-14 * max_diag.max(1e-300)
+}
+
+/// A diagonal entry `d` of H with the Levenberg-Marquardt shift for `damping` and
+/// `floor` (from [`damping_floor`]): d + damping max(|d|, floor) + floor.
+#[inline]
+pub fn damped_diagonal(d: f64, damping: f64, floor: f64) -> f64 {
+    d + damping * d.abs().max(floor) + floor
+}
+
+/// A dense Newton matrix, factorized by a sequential dense Cholesky (faer; systems
+/// here are at most a few hundred rows, where threads cost more than they save).
+#[derive(Default)]
+pub struct Dense {
+    pub matrix: DMatrix<f64>,
+    /// Reduced system matrix (column-major), then its Cholesky factor.
+    system: Vec<f64>,
+    scratch: Option<(usize, MemBuffer)>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,17 +104,17 @@ pub struct NewtonResult {
 
 /// Workspace of the projected Newton method; buffers are reused between calls.
 #[derive(Default)]
-pub struct ProjectedNewton {
+pub struct ProjectedNewton<M: NewtonMatrix = Dense> {
     g: Vec<f64>,
     /// Gradient at the first (full-step) trial point of the line search.
     g_trial: Vec<f64>,
-    h: DMatrix<f64>,
+    /// The Hessian model and its factorization.
+    h: M,
+    /// Its diagonal (for the scaled-gradient fallback).
+    diagonal: Vec<f64>,
     free: Vec<usize>,
     reduced: Vec<f64>,
     trial: Vec<f64>,
-    /// Reduced system matrix (column-major) and factorization scratch.
-    system: Vec<f64>,
-    scratch: Option<(usize, MemBuffer)>,
     /// Levenberg-Marquardt damping relative to the Hessian diagonal, adapted per step.
     damping: f64,
     /// The damping the first iteration of the last solve needed.
@@ -106,23 +149,14 @@ struct Direction {
     fallback: bool,
 }
 
-impl Clone for ProjectedNewton {
-    /// The damping state is copied (`first_damping`: the next solve starts from a tenth
-    /// of it), the buffers are not: they are scratch that every solve refills, except
-    /// the factorization kept for chord steps within one time step's outer loop
-    /// (`reuse_factorization`), which a clone does without: its next solve factorizes
-    /// afresh. Between time steps, where worlds are cloned, a clone's next solve is the
-    /// original's bit for bit.
+impl<M: NewtonMatrix> Clone for ProjectedNewton<M> {
+    /// Buffers only: a fresh workspace behaves identically.
     fn clone(&self) -> Self {
-        ProjectedNewton {
-            damping: self.damping,
-            first_damping: self.first_damping,
-            ..ProjectedNewton::new()
-        }
+        ProjectedNewton::new()
     }
 }
 
-impl std::fmt::Debug for ProjectedNewton {
+impl<M: NewtonMatrix> std::fmt::Debug for ProjectedNewton<M> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("ProjectedNewton")
             .field("damping", &self.damping)
@@ -130,7 +164,7 @@ impl std::fmt::Debug for ProjectedNewton {
     }
 }
 
-impl ProjectedNewton {
+impl<M: NewtonMatrix> ProjectedNewton<M> {
     pub fn new() -> Self {
         ProjectedNewton {
             damping: 1e-9,
@@ -142,7 +176,7 @@ impl ProjectedNewton {
     /// writing the minimizer to `x`.
     pub fn minimize(
         &mut self,
-        problem: &mut impl BoxProblem,
+        problem: &mut impl BoxProblem<Matrix = M>,
         x: &mut [f64],
         lower: &[f64],
         upper: &[f64],
@@ -298,7 +332,7 @@ impl ProjectedNewton {
     /// with a gradient).
     fn direction(
         &mut self,
-        problem: &mut impl BoxProblem,
+        problem: &mut impl BoxProblem<Matrix = M>,
         x: &[f64],
         lower: &[f64],
         upper: &[f64],
@@ -315,7 +349,7 @@ impl ProjectedNewton {
             direction.ok = if state.chord {
                 self.reduced.clear();
                 self.reduced.extend(self.free.iter().map(|&i| -self.g[i]));
-                self.substitute(m)
+                self.h.solve(&self.free, &mut self.reduced)
             } else {
                 if !state.hessian_ready {
                     // x was the last point evaluated with a gradient (the start or the
@@ -384,7 +418,7 @@ impl ProjectedNewton {
     /// iterate's. Returns (accepted, alpha, f at the last trial).
     fn line_search(
         &mut self,
-        problem: &mut impl BoxProblem,
+        problem: &mut impl BoxProblem<Matrix = M>,
         x: &[f64],
         lower: &[f64],
         upper: &[f64],
@@ -435,7 +469,7 @@ impl ProjectedNewton {
     /// Move x to the accepted trial point, with its value and gradient.
     fn accept(
         &mut self,
-        problem: &mut impl BoxProblem,
+        problem: &mut impl BoxProblem<Matrix = M>,
         x: &mut [f64],
         alpha: f64,
         f_new: f64,
@@ -453,33 +487,83 @@ impl ProjectedNewton {
         state.hessian_ready = false;
     }
 
-    /// Solve (H_FF + damping * diag(H_FF) + tiny I) d = -g_F into `self.reduced` by a
-    /// sequential dense Cholesky (faer; systems here are at most a few hundred rows,
-    /// where threads cost more than they save).
-    fn solve_reduced(&mut self, m: usize) -> bool {
-        let n = self.h.nrows();
+    /// Solve (H_FF + damping * diag(H_FF) + tiny I) d = -g_F into `self.reduced`.
+    fn solve_reduced(&mut self, _m: usize) -> bool {
+        if !self.h.factor(&self.free, self.damping) {
+            return false;
+        }
+        self.reduced.clear();
+        self.reduced.extend(self.free.iter().map(|&i| -self.g[i]));
+        self.h.solve(&self.free, &mut self.reduced)
+    }
+
+    /// d_F = -g_F / |diag H_FF| into `self.reduced` (entries of a vanishing diagonal
+    /// scaled by the largest one).
+    fn scaled_gradient_step(&mut self) -> bool {
+        // A Hessian beyond 1e150 squares past f64's range in the factorization: the
+        // objective itself is out of range (an absurd force), not merely indefinite,
+        // and no step is taken (the caller keeps the last valid state and says so).
+        if self.h.out_of_range(&self.free) {
+            return false;
+        }
+        self.diagonal.resize(self.g.len(), 0.0);
+        self.h.diagonal(&mut self.diagonal);
+        let d = &self.diagonal;
+        let scale = self
+            .free
+            .iter()
+            .map(|&i| d[i].abs())
+            .fold(0.0, f64::max)
+            .max(1e-300);
+        self.reduced.clear();
+        self.reduced.extend(
+            self.free
+                .iter()
+                .map(|&i| -self.g[i] / d[i].abs().max(1e-12 * scale)),
+        );
+        self.reduced.iter().all(|v| v.is_finite())
+    }
+}
+
+impl NewtonMatrix for Dense {
+    fn diagonal(&mut self, out: &mut [f64]) {
+        let n = self.matrix.nrows();
+        let h = self.matrix.as_slice();
+        for (i, o) in out.iter_mut().enumerate().take(n) {
+            *o = h[i * n + i];
+        }
+    }
+
+    fn out_of_range(&self, free: &[usize]) -> bool {
+        let n = self.matrix.nrows();
+        let h = self.matrix.as_slice();
+        free.iter()
+            .any(|&j| free.iter().any(|&i| !(h[j * n + i].abs() < 1e150)))
+    }
+
+    fn factor(&mut self, free: &[usize], damping: f64) -> bool {
+        let n = self.matrix.nrows();
+        let m = free.len();
         self.system.clear();
         let mut max_diag: f64 = 0.0;
         if m == n {
             // nothing held at a bound: the whole (column-major) Hessian
-            self.system.extend_from_slice(self.h.as_slice());
+            self.system.extend_from_slice(self.matrix.as_slice());
         } else {
-            let h = self.h.as_slice();
-            for &j in &self.free {
+            let h = self.matrix.as_slice();
+            for &j in free {
                 let col = &h[j * n..(j + 1) * n];
-                self.system.extend(self.free.iter().map(|&i| col[i]));
+                self.system.extend(free.iter().map(|&i| col[i]));
             }
         }
         for k in 0..m {
             max_diag = max_diag.max(self.system[k * m + k].abs());
         }
-        let floor = 1e-14 * max_diag.max(1e-300);
+        let floor = damping_floor(max_diag);
         for k in 0..m {
             let d = self.system[k * m + k];
-            self.system[k * m + k] = d + self.damping * d.abs().max(floor) + floor;
+            self.system[k * m + k] = damped_diagonal(d, damping, floor);
         }
-        self.reduced.clear();
-        self.reduced.extend(self.free.iter().map(|&i| -self.g[i]));
         if self.scratch.as_ref().map(|(n, _)| *n) != Some(m) {
             let req = StackReq::any_of(&[
                 llt::factor::cholesky_in_place_scratch::<f64>(m, Par::Seq, Default::default()),
@@ -490,55 +574,16 @@ impl ProjectedNewton {
         let (_, buffer) = self.scratch.as_mut().expect("allocated above");
         let stack = MemStack::new(buffer);
         let a = MatMut::from_column_major_slice_mut(&mut self.system, m, m);
-        if llt::factor::cholesky_in_place(
-            a,
-            Default::default(),
-            Par::Seq,
-            stack,
-            Default::default(),
-        )
-        .is_err()
-        {
-            return false;
-        }
-        self.substitute(m)
+        llt::factor::cholesky_in_place(a, Default::default(), Par::Seq, stack, Default::default())
+            .is_ok()
     }
 
-    /// d_F = -g_F / |diag H_FF| into `self.reduced` (entries of a vanishing diagonal
-    /// scaled by the largest one).
-    fn scaled_gradient_step(&mut self) -> bool {
-        let n = self.h.nrows();
-        let h = self.h.as_slice();
-        // A Hessian beyond 1e150 squares past f64's range in the factorization: the
-        // objective itself is out of range (an absurd force), not merely indefinite,
-        // and no step is taken (the caller keeps the last valid state and says so).
-        let out_of_range = self
-            .free
-            .iter()
-            .any(|&j| self.free.iter().any(|&i| !(h[j * n + i].abs() < 1e150)));
-        if out_of_range {
-            return false;
-        }
-        let scale = self
-            .free
-            .iter()
-            .map(|&i| h[i * n + i].abs())
-            .fold(0.0, f64::max)
-            .max(1e-300);
-        self.reduced.clear();
-        self.reduced.extend(
-            self.free
-                .iter()
-                .map(|&i| -self.g[i] / h[i * n + i].abs().max(1e-12 * scale)),
-        );
-        self.reduced.iter().all(|v| v.is_finite())
-    }
-
-    /// d = (L L^T)^{-1} rhs in place in `self.reduced`, L the column-major m x m
+    /// d = (L L^T)^{-1} rhs in place in `reduced`, L the column-major m x m
     /// Cholesky factor in `self.system` (contiguous column sweeps; one right-hand side).
-    fn substitute(&mut self, m: usize) -> bool {
+    fn solve(&mut self, free: &[usize], reduced: &mut [f64]) -> bool {
+        let m = free.len();
         let l = &self.system;
-        let d = &mut self.reduced;
+        let d = reduced;
         for j in 0..m {
             let col = &l[j * m..(j + 1) * m];
             d[j] /= col[j];
@@ -571,7 +616,7 @@ impl ProjectedNewton {
             let dot = (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest;
             d[j] = (d[j] - dot) / col[j];
         }
-        self.reduced.iter().all(|v| v.is_finite())
+        d.iter().all(|v| v.is_finite())
     }
 }
 
@@ -582,6 +627,7 @@ mod tests {
     /// Rosenbrock as least squares r = (10 (y - x^2), 1 - x): GN Hessian J^T J.
     struct Rosen;
     impl BoxProblem for Rosen {
+        type Matrix = Dense;
         fn dimension(&self) -> usize {
             2
         }
@@ -589,7 +635,7 @@ mod tests {
             &mut self,
             x: &[f64],
             g: Option<&mut [f64]>,
-            h: Option<&mut DMatrix<f64>>,
+            h: Option<&mut Dense>,
         ) -> f64 {
             let r = [10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]];
             let j = [[-20.0 * x[0], 10.0], [-1.0, 0.0]];
@@ -599,7 +645,7 @@ mod tests {
                 }
             }
             if let Some(h) = h {
-                *h = DMatrix::from_fn(2, 2, |a, b| j[0][a] * j[0][b] + j[1][a] * j[1][b]);
+                h.matrix = DMatrix::from_fn(2, 2, |a, b| j[0][a] * j[0][b] + j[1][a] * j[1][b]);
             }
             0.5 * (r[0] * r[0] + r[1] * r[1])
         }
@@ -615,7 +661,7 @@ mod tests {
             pgtol_relative_to_start: None,
             reuse_factorization: false,
         };
-        let r = ProjectedNewton::new().minimize(&mut Rosen, &mut x, &[-10.0; 2], &[10.0; 2], &opts);
+        let r = ProjectedNewton::<Dense>::new().minimize(&mut Rosen, &mut x, &[-10.0; 2], &[10.0; 2], &opts);
         assert!(r.converged, "{r:?}");
         assert!(
             (x[0] - 1.0).abs() < 1e-8 && (x[1] - 1.0).abs() < 1e-8,
@@ -634,7 +680,7 @@ mod tests {
             pgtol_relative_to_start: None,
             reuse_factorization: false,
         };
-        let r = ProjectedNewton::new().minimize(
+        let r = ProjectedNewton::<Dense>::new().minimize(
             &mut Rosen,
             &mut x,
             &[-10.0, -10.0],
@@ -652,6 +698,7 @@ mod tests {
         b: [f64; 2],
     }
     impl BoxProblem for Quadratic {
+        type Matrix = Dense;
         fn dimension(&self) -> usize {
             2
         }
@@ -659,7 +706,7 @@ mod tests {
             &mut self,
             x: &[f64],
             g: Option<&mut [f64]>,
-            h: Option<&mut DMatrix<f64>>,
+            h: Option<&mut Dense>,
         ) -> f64 {
             let hx = [
                 self.h[0][0] * x[0] + self.h[0][1] * x[1],
@@ -670,7 +717,7 @@ mod tests {
                 g[1] = hx[1] + self.b[1];
             }
             if let Some(h) = h {
-                *h = DMatrix::from_fn(2, 2, |a, c| self.h[a][c]);
+                h.matrix = DMatrix::from_fn(2, 2, |a, c| self.h[a][c]);
             }
             0.5 * (x[0] * hx[0] + x[1] * hx[1]) + self.b[0] * x[0] + self.b[1] * x[1]
         }
@@ -699,7 +746,7 @@ mod tests {
             b: [-0.2, -0.37],
         };
         let mut x = [0.0, 0.0];
-        let r = ProjectedNewton::new().minimize(
+        let r = ProjectedNewton::<Dense>::new().minimize(
             &mut problem,
             &mut x,
             &[0.0, -10.0],
@@ -719,7 +766,7 @@ mod tests {
         // two problems with the same Hessian (as AL rounds nearly are): the second call
         // reuses the first's factorization and still lands on its own minimum
         let h = [[2.0, 0.5], [0.5, 1.0]];
-        let mut newton = ProjectedNewton::new();
+        let mut newton = ProjectedNewton::<Dense>::new();
         let mut x = [0.3, -0.2];
         let bounds = ([-10.0; 2], [10.0; 2]);
         let first = newton.minimize(
@@ -762,7 +809,7 @@ mod tests {
         let start = [0.2, -0.1];
         let f0 = problem.evaluate(&start, None, None);
         let mut x = start;
-        let r = ProjectedNewton::new().minimize(
+        let r = ProjectedNewton::<Dense>::new().minimize(
             &mut problem,
             &mut x,
             &[-1.0, -1.0],
@@ -772,27 +819,5 @@ mod tests {
         assert!(r.iterations >= 1, "{r:?}");
         assert!(r.f < f0 - 1.0, "no descent from the start: {r:?} at {x:?}");
         assert!(x.iter().all(|v| v.abs() <= 1.0));
-    }
-
-    #[test]
-    fn a_clone_solves_as_the_original_does() {
-        // an indefinite Hessian needs damping; the next solve starts from a tenth of
-        // what the last one needed, so a clone must carry it
-        let problem = || Quadratic {
-            h: [[1.0, 3.0], [3.0, 1.0]],
-            b: [1.0, 0.5],
-        };
-        let (lower, upper) = ([-1.0, -1.0], [1.0, 1.0]);
-        let mut original = ProjectedNewton::new();
-        let mut x = [0.2, -0.1];
-        original.minimize(&mut problem(), &mut x, &lower, &upper, &tight());
-        assert!(original.first_damping > 1e-3, "{}", original.first_damping);
-        let mut clone = original.clone();
-        assert_eq!(clone.first_damping.to_bits(), original.first_damping.to_bits());
-        let (mut xa, mut xb) = ([0.3, 0.1], [0.3, 0.1]);
-        let a = original.minimize(&mut problem(), &mut xa, &lower, &upper, &tight());
-        let b = clone.minimize(&mut problem(), &mut xb, &lower, &upper, &tight());
-        assert_eq!((a.iterations, a.evaluations), (b.iterations, b.evaluations));
-        assert_eq!(xa.map(f64::to_bits), xb.map(f64::to_bits));
     }
 }

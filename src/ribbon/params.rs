@@ -23,6 +23,11 @@ pub enum SolverKind {
     GaussNewton,
     /// The paper's: L-BFGS-B inside the augmented Lagrangian (algorithm 2).
     Lbfgsb,
+    /// Ours: the same projected Newton method (line search, held variables, damping,
+    /// adaptive penalty) with the Newton system solved along the chain in O(n)
+    /// (`ribbon::objective::chain`, docs/ribbon_chain_solver.md). A loop closure's
+    /// coupling of the two ends is not in the chain sweep yet: loops are solved densely.
+    Chain,
 }
 
 /// How a clamp weights the creases next to it.

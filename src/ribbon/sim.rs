@@ -790,6 +790,7 @@ impl ObjectSim for RibbonSim {
         match self.params.solver.kind {
             super::SolverKind::GaussNewton => "gauss_newton",
             super::SolverKind::Lbfgsb => "lbfgsb",
+            super::SolverKind::Chain => "chain",
         }
     }
     /// One implicit-Euler step, timed as one [`Phase::Simulation`].

@@ -20,7 +20,8 @@ use super::objective::{GradientMode, Layout, Objective, RimHistory, StepTerms, W
 use super::params::{SolverKind, SolverSettings};
 use super::reconstruct::Strip;
 use crate::geometry::Pose;
-use crate::optim::{BoxProblem, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton};
+use super::objective::chain::ChainMatrix;
+use crate::optim::{BoxProblem, Dense, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton};
 
 /// Relative objective decrease that ends an inner solve, (f_k - f_k+1)/max(|f|, 1):
 /// the resampling operator R is piecewise linear in c (eq. 4), so the gradient jumps
@@ -61,7 +62,8 @@ pub struct SolveOutcome {
 #[derive(Default)]
 pub struct StepSolver {
     pub workspace: Workspace,
-    newton: ProjectedNewton,
+    newton: ProjectedNewton<Dense>,
+    chain: ProjectedNewton<ChainMatrix>,
     /// L-BFGS-B workspace and the dimension it was built for.
     lbfgsb: Option<(usize, Lbfgsb)>,
     z: Vec<f64>,
@@ -128,7 +130,7 @@ impl ZProblem<'_, '_> {
     }
 }
 
-impl BoxProblem for ZProblem<'_, '_> {
+impl ZProblem<'_, '_> {
     fn dimension(&self) -> usize {
         self.q.len()
     }
@@ -191,6 +193,7 @@ fn hessian_to_z(layout: &Layout, h: &mut DMatrix<f64>) {
 
 struct ZNewton<'p, 'o, 'w>(&'p mut ZProblem<'o, 'w>);
 impl BoxProblem for ZNewton<'_, '_, '_> {
+    type Matrix = Dense;
     fn dimension(&self) -> usize {
         self.0.dimension()
     }
@@ -198,25 +201,55 @@ impl BoxProblem for ZNewton<'_, '_, '_> {
         &mut self,
         z: &[f64],
         gradient: Option<&mut [f64]>,
-        hessian: Option<&mut DMatrix<f64>>,
+        hessian: Option<&mut Dense>,
     ) -> f64 {
         let lay = self.0.objective.layout;
         match hessian {
             Some(h) => {
-                let f = self.0.evaluate(z, gradient, Some(h));
-                hessian_to_z(&lay, h);
+                let f = self.0.evaluate(z, gradient, Some(&mut h.matrix));
+                hessian_to_z(&lay, &mut h.matrix);
                 f
             }
             None => self.0.evaluate(z, gradient, None),
         }
     }
-    fn hessian(&mut self, _z: &[f64], h: &mut DMatrix<f64>) {
+    fn hessian(&mut self, _z: &[f64], h: &mut Dense) {
         // the workspace holds the second-order data of the evaluation at z
         let problem = &mut *self.0;
         problem
             .objective
-            .assemble_newton_hessian(problem.workspace, h);
-        hessian_to_z(&problem.objective.layout, h);
+            .assemble_newton_hessian(problem.workspace, &mut h.matrix);
+        hessian_to_z(&problem.objective.layout, &mut h.matrix);
+    }
+}
+
+/// The same problem with the Newton system in chain form (O(n), already in z).
+struct ZChain<'p, 'o, 'w>(&'p mut ZProblem<'o, 'w>);
+impl BoxProblem for ZChain<'_, '_, '_> {
+    type Matrix = ChainMatrix;
+    fn dimension(&self) -> usize {
+        self.0.dimension()
+    }
+    fn evaluate(
+        &mut self,
+        z: &[f64],
+        gradient: Option<&mut [f64]>,
+        hessian: Option<&mut ChainMatrix>,
+    ) -> f64 {
+        let want = hessian.is_some();
+        let saved = self.0.second_order;
+        self.0.second_order |= want;
+        let f = self.0.evaluate(z, gradient, None);
+        self.0.second_order = saved;
+        if let Some(h) = hessian {
+            let problem = &mut *self.0;
+            problem.objective.chain_model(problem.workspace, &mut h.model);
+        }
+        f
+    }
+    fn hessian(&mut self, _z: &[f64], h: &mut ChainMatrix) {
+        let problem = &mut *self.0;
+        problem.objective.chain_model(problem.workspace, &mut h.model);
     }
 }
 
@@ -243,7 +276,13 @@ impl StepSolver {
         let mut pg0: Option<f64> = None;
         // Adaptive penalty (ours; the paper's solver keeps the scene's fixed mu): mu
         // carries over from the last step, relaxed at its end (below).
-        let adaptive = settings.kind == SolverKind::GaussNewton;
+        let adaptive = matches!(settings.kind, SolverKind::GaussNewton | SolverKind::Chain);
+        // the chain sweep has no loop-closure coupling yet: loops are solved densely
+        let chain = settings.kind == SolverKind::Chain
+            && !objective_terms
+                .equalities
+                .iter()
+                .any(|e| matches!(e, super::objective::Equality::Loop(_)));
         if !adaptive {
             objective_terms.penalty = settings.penalty;
         }
@@ -280,7 +319,7 @@ impl StepSolver {
                 second_order: false,
             };
             let (iterations, converged, f) = match settings.kind {
-                SolverKind::GaussNewton => {
+                SolverKind::GaussNewton | SolverKind::Chain => {
                     // relative gradient tolerance against the first round's start (the
                     // solver measures it at its first evaluation)
                     let opts = NewtonOptions {
@@ -296,13 +335,23 @@ impl StepSolver {
                         reuse_factorization: outer > 0,
                     };
                     problem.second_order = true;
-                    let r = self.newton.minimize(
-                        &mut ZNewton(&mut problem),
-                        &mut self.z,
-                        &self.lower,
-                        &self.upper,
-                        &opts,
-                    );
+                    let r = if chain {
+                        self.chain.minimize(
+                            &mut ZChain(&mut problem),
+                            &mut self.z,
+                            &self.lower,
+                            &self.upper,
+                            &opts,
+                        )
+                    } else {
+                        self.newton.minimize(
+                            &mut ZNewton(&mut problem),
+                            &mut self.z,
+                            &self.lower,
+                            &self.upper,
+                            &opts,
+                        )
+                    };
                     pg0.get_or_insert(r.initial_projected_gradient_inf.max(1e-300));
                     (r.iterations, r.converged, r.f)
                 }

@@ -80,7 +80,8 @@ pub struct SceneFile {
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SolverFile {
-    /// `gauss_newton` (ours, default) or `lbfgsb` (the paper's).
+    /// `gauss_newton` (ours, default), `chain` (ours, the O(n) chain sweep) or `lbfgsb`
+    /// (the paper's).
     #[serde(default = "d_solver_kind")]
     pub kind: String,
     /// Inner stop: projected gradient reduced by this factor (dimensionless). 1e-6.
@@ -348,8 +349,9 @@ impl SceneFile {
 
     fn solver_settings(&self, ck: &Check) -> Result<SolverSettings, SceneError> {
         let s = &self.solver;
-        let kind = match ck.choice("solver.kind", &s.kind, &["gauss_newton", "lbfgsb"])? {
+        let kind = match ck.choice("solver.kind", &s.kind, &["gauss_newton", "lbfgsb", "chain"])? {
             "lbfgsb" => SolverKind::Lbfgsb,
+            "chain" => SolverKind::Chain,
             _ => SolverKind::GaussNewton,
         };
         let tolerance = ck.positive("solver.tolerance", s.tolerance)?;
@@ -360,7 +362,7 @@ impl SceneFile {
             ));
         }
         let max_iterations = s.max_iterations.unwrap_or(match kind {
-            SolverKind::GaussNewton => 200,
+            SolverKind::GaussNewton | SolverKind::Chain => 200,
             SolverKind::Lbfgsb => 5000,
         });
         if max_iterations == 0 {

@@ -177,7 +177,7 @@ impl Objective<'_> {
 
 /// Suffix sums over the elements e >= m: S_m (6x6 Gauss-Newton twist blocks) and, for
 /// the geometric stiffness, P_m = Σ p γ^T, F_m = Σ force, M_m = Σ moment.
-fn suffix_sums(
+pub(super) fn suffix_sums(
     element_hessian: &[Mat8],
     element_gradient: &[Vec8],
     element_second: &[SecondOrder],

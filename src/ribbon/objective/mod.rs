@@ -27,6 +27,7 @@
 //! adjoint and chain rule), `hessian` (the dense Newton matrix).
 
 mod accumulate;
+pub mod chain;
 mod gradient;
 mod hessian;
 pub mod kinetic;

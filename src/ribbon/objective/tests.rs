@@ -435,3 +435,80 @@ fn the_clamped_bending_block_is_the_psd_projection() {
     );
     assert_eq!(obj.bending_block(c, psi, k), exact);
 }
+
+/// A = dq/dz: c_k = z_1 + ... + z_k (the crease-difference substitution).
+fn substitution(lay: &Layout) -> DMatrix<f64> {
+    let nq = lay.len();
+    let mut a = DMatrix::identity(nq, nq);
+    for k in 1..lay.segments {
+        for i in 1..k {
+            a[(lay.c(k), lay.c(i))] = 1.0;
+        }
+    }
+    a
+}
+
+#[test]
+fn chain_solve_is_the_dense_solve() {
+    // the chain factorization solves (H_z + diag(shift)) d = r on the free set exactly as
+    // the dense Cholesky does, and fails exactly where it fails
+    for (i, floating) in [false, true].into_iter().enumerate() {
+        let n = 9 + i;
+        let (strip, mut terms, history, mut q, base) =
+            problem(n, floating, KineticModel::Full, 30 + i as u64);
+        with_closure(&mut terms, None, 31);
+        if floating {
+            q[0..3].copy_from_slice(&[0.3, -0.1, 0.2]);
+        }
+        let obj = Objective::new(strip, floating, &terms, &history, base);
+        let mut ws = Workspace::default();
+        let mut hq = DMatrix::zeros(q.len(), q.len());
+        obj.evaluate(&q, &mut ws, None, Some(&mut hq));
+        let a = substitution(&obj.layout);
+        let hz = a.transpose() * &hq * &a;
+        let mut model = chain::ChainModel::default();
+        obj.chain_model(&mut ws, &mut model);
+        let nq = q.len();
+        let mut diagonal = vec![0.0; nq];
+        model.diagonal(&mut diagonal);
+        for j in 0..nq {
+            assert!(
+                (diagonal[j] - hz[(j, j)]).abs() <= 1e-10 * hz.amax(),
+                "diagonal {j}: chain {} vs dense {}",
+                diagonal[j],
+                hz[(j, j)]
+            );
+        }
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let rhs: Vec<f64> = (0..nq).map(|_| rng.random_range(-1.0..1.0)).collect();
+        for (held, damping) in [(vec![], 1e-3), (vec![obj.layout.c(3), obj.layout.c(5)], 1e-1), (vec![obj.layout.psi(2)], 0.0)] {
+            let free: Vec<bool> = (0..nq).map(|j| !held.contains(&j)).collect();
+            let shift: Vec<f64> = (0..nq).map(|j| damping * hz[(j, j)].abs() + 1e-9).collect();
+            let idx: Vec<usize> = (0..nq).filter(|&j| free[j]).collect();
+            let m = idx.len();
+            let reduced = DMatrix::from_fn(m, m, |r, c| {
+                hz[(idx[r], idx[c])] + if r == c { shift[idx[r]] } else { 0.0 }
+            });
+            let dense = reduced.clone().cholesky();
+            let chain_ok = model.factor(&free, &shift);
+            assert_eq!(chain_ok, dense.is_some(), "positive definite: chain {chain_ok} (held {held:?}, damping {damping})");
+            let Some(dense) = dense else { continue };
+            let r = nalgebra::DVector::from_fn(m, |r, _| rhs[idx[r]]);
+            let expected = dense.solve(&r);
+            let mut out = vec![f64::NAN; nq];
+            assert!(model.solve(&rhs, &mut out));
+            let scale = expected.amax();
+            for (r, &j) in idx.iter().enumerate() {
+                assert!(
+                    (out[j] - expected[r]).abs() <= 1e-9 * scale,
+                    "unknown {j}: chain {} vs dense {} (floating {floating}, held {held:?})",
+                    out[j],
+                    expected[r]
+                );
+            }
+            for &j in &held {
+                assert_eq!(out[j], 0.0);
+            }
+        }
+    }
+}

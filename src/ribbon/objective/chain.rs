@@ -1,0 +1,495 @@
+//! The Newton system of one step solved along the chain in O(n) (see
+//! docs/ribbon_chain_solver.md): the Hessian of [`super::hessian`] written as the
+//! quadratic model of an articulated chain and factorized by a backward Riccati sweep.
+//!
+//! The unknowns are the step's own z-coordinates (the base, the crease differences
+//! z_k = c_k - c_{k-1} and the bending angles psi_k). The state after crease k is
+//! x_k = (V_k, c_k): V_k the twist (rad/unit, m/unit) of element k's frame, c_k its
+//! crease direction; crease k's controls (z_k, psi_k) move it by
+//! x_k = (V_{k-1} + ξ_c (c_{k-1} + z_k) + ξ_psi psi_k, c_{k-1} + z_k).
+//! The model ½ d^T H d (exactly the dense matrix, geometric stiffness included) is
+//! - per element e: ½ y_e^T G̃_e y_e, y_e = (V_e, c_e, c_{e+1}), G̃ the Gauss-Newton block
+//!   with the sliding geometric terms,
+//! - per crease k: the (c_k, psi_k) block L_k (bending, regularizer, the crease's own
+//!   geometric stiffness, the end-crease penalty) and the chain's geometric cross term
+//!   ω_{k-1} . (W_c c_k + W_psi psi_k), ω_{k-1} the angular part of V_{k-1},
+//! - at the root the base's own 6x6 block, and for a loop closure the coupling of the
+//!   last element with the first (a rank <= 16 correction, Woodbury).
+//!
+//! A backward sweep eliminates crease n-1's controls, then n-2's, ... (a 2x2 pivot per
+//! crease, a 6x6 one at a floating base): a block LDL^T of the same matrix, so it
+//! succeeds exactly when the matrix is positive definite, like the dense Cholesky.
+
+use nalgebra::{Cholesky, Matrix2, SMatrix, SVector};
+
+use super::hessian::suffix_sums;
+use super::{Mat8, Objective, Workspace};
+use crate::geometry::{Matrix3, Vector3};
+
+type Vec6 = SVector<f64, 6>;
+type Vec7 = SVector<f64, 7>;
+type Mat6 = SMatrix<f64, 6, 6>;
+type Mat7 = SMatrix<f64, 7, 7>;
+type Mat9 = SMatrix<f64, 9, 9>;
+type Mat2x7 = SMatrix<f64, 2, 7>;
+
+/// The chain form of the Newton matrix and, after [`ChainModel::factor`], its factors.
+/// Buffers are reused from step to step (no allocation once warm).
+#[derive(Clone, Debug, Default)]
+pub struct ChainModel {
+    segments: usize,
+    floating: bool,
+    /// Per crease k (index 0 unused): twists of c_k and psi_k, their geometric cross
+    /// vectors W (J per unit of the coordinate and rad), the local 2x2 block.
+    xi_c: Vec<Vec6>,
+    xi_psi: Vec<Vec6>,
+    w_c: Vec<Vector3>,
+    w_psi: Vec<Vector3>,
+    local: Vec<Matrix2<f64>>,
+    /// Per element: G̃_e over (twist, c_e, c_{e+1}).
+    blocks: Vec<Mat8>,
+    /// Base twists (columns: w_1..3, t_1..3) and the base's own geometric 3x3 block.
+    base_twists: Mat6,
+    base_local: Matrix3,
+    /// Loop closures: (e1, e2, B) with the term y_e1^T B y_e2.
+    cross: Vec<(usize, usize, Mat8)>,
+    // --- factors ---
+    gain: Vec<Mat2x7>,
+    pivot_inverse: Vec<Matrix2<f64>>,
+    free: Vec<bool>,
+    root: Option<Cholesky<f64, nalgebra::Const<6>>>,
+    feedforward: Vec<nalgebra::Vector2<f64>>,
+    prefix: Vec<Vec6>,
+}
+
+impl Objective<'_> {
+    /// Fill `model` with the Newton matrix at the q of the last evaluation that
+    /// recorded second-order data (what [`Self::assemble_newton_hessian`] would
+    /// assemble densely, in z-coordinates), in O(n).
+    pub fn chain_model(&self, ws: &mut Workspace, model: &mut ChainModel) {
+        assert!(
+            ws.second_order_recorded,
+            "chain_model needs an evaluation that recorded second-order data"
+        );
+        let n = self.strip.segments;
+        let lay = self.layout;
+        let t = self.terms;
+        suffix_sums(
+            &ws.element_hessian,
+            &ws.element_gradient,
+            &ws.element_second,
+            &mut ws.hessian_suffix,
+            &mut ws.scratch_psuf,
+        );
+        model.segments = n;
+        model.floating = lay.floating;
+        let base = lay.base_len();
+        let twist = |a: usize| Vec6::from(ws.twists[a].to_array());
+        // W_b = P Ω_b - tr(P) Ω_b + v_b × F at the first element b moves
+        let geometric = |a: usize, s: usize| -> Vector3 {
+            let (p, f, _) = &ws.scratch_psuf[s];
+            let o = ws.twists[a].angular;
+            p * o - o * p.trace() + ws.twists[a].linear.cross(f)
+        };
+        model.xi_c.clear();
+        model.xi_psi.clear();
+        model.w_c.clear();
+        model.w_psi.clear();
+        model.local.clear();
+        model.xi_c.push(Vec6::zeros());
+        model.xi_psi.push(Vec6::zeros());
+        model.w_c.push(Vector3::zeros());
+        model.w_psi.push(Vector3::zeros());
+        model.local.push(Matrix2::zeros());
+        for k in 1..n {
+            let (ic, ip) = (lay.c(k), lay.psi(k));
+            let (wc, wp) = (geometric(ic, k), geometric(ip, k));
+            let (a_k, dd_world, domega_world) = ws.crease_extra[k];
+            let (_, f, m) = &ws.scratch_psuf[k];
+            let arm = m - a_k.cross(f);
+            let (oc, op) = (ws.twists[ic].angular, ws.twists[ip].angular);
+            let mut local = self.bending_block(
+                ws.coords.crease_direction[k],
+                ws.coords.bending_angle[k],
+                k,
+            );
+            local[(0, 0)] += 2.0 * t.crease_regularizer + oc.dot(&wc) + domega_world.dot(&arm);
+            let cross = op.dot(&wc) + dd_world.dot(&arm);
+            local[(0, 1)] += cross;
+            local[(1, 0)] += cross;
+            local[(1, 1)] += op.dot(&wp);
+            model.xi_c.push(twist(ic));
+            model.xi_psi.push(twist(ip));
+            model.w_c.push(wc);
+            model.w_psi.push(wp);
+            model.local.push(local);
+        }
+        if n >= 2 {
+            let c_last = ws.coords.crease_direction[n - 1];
+            for (_, shifted) in self.end_crease_shifts(c_last) {
+                if shifted < 0.0 {
+                    model.local[n - 1][(0, 0)] += t.penalty;
+                }
+            }
+        }
+        model.blocks.clear();
+        for e in 0..n {
+            let mut g = ws.element_hessian[e];
+            for col in 0..2 {
+                let s = ws.element_second[e].slide[col];
+                for i in 0..3 {
+                    g[(i, 6 + col)] += s[i];
+                }
+            }
+            // symmetric from the columns the dense assembly reads
+            for j in 6..8 {
+                for i in 0..j {
+                    g[(j, i)] = g[(i, j)];
+                }
+            }
+            model.blocks.push(g);
+        }
+        model.base_twists = Mat6::zeros();
+        model.base_local = Matrix3::zeros();
+        if base == 6 {
+            for a in 0..6 {
+                model.base_twists.set_column(a, &twist(a));
+            }
+            for j in 0..3 {
+                for i in 0..3 {
+                    let (wi, wj) = (geometric(i, 0), geometric(j, 0));
+                    model.base_local[(i, j)] = 0.5
+                        * (ws.twists[i].angular.dot(&wj) + ws.twists[j].angular.dot(&wi));
+                }
+            }
+        }
+        model.cross.clone_from(&ws.cross_blocks);
+    }
+}
+
+impl ChainModel {
+    /// Number of unknowns (the layout's length).
+    pub fn dimension(&self) -> usize {
+        let base = if self.floating { 6 } else { 0 };
+        base + 2 * (self.segments - 1)
+    }
+
+    fn c_index(&self, k: usize) -> usize {
+        (if self.floating { 6 } else { 0 }) + k - 1
+    }
+    fn psi_index(&self, k: usize) -> usize {
+        (if self.floating { 6 } else { 0 }) + self.segments - 1 + k - 1
+    }
+
+    /// The diagonal of the matrix (what the dense solver scales its damping by), in
+    /// O(n) with suffix sums: a unit step of psi_k moves elements k.. rigidly by ξ_psi;
+    /// one of z_k turns every crease from k on, moving element e >= k by C_e - C_{k-1}
+    /// with C_e = Σ_{i<=e} ξ_{c_i} (prefix sums), which expands into suffix sums of
+    /// C^T G C, G C and G.
+    pub fn diagonal(&mut self, out: &mut [f64]) {
+        let n = self.segments;
+        // prefix twists C_e of the crease directions
+        let mut prefix = std::mem::take(&mut self.prefix);
+        prefix.clear();
+        prefix.resize(n, Vec6::zeros());
+        for e in 1..n {
+            prefix[e] = prefix[e - 1] + self.xi_c[e];
+        }
+        let mut s = Mat6::zeros();
+        let mut alpha = 0.0;
+        let mut beta = Vec6::zeros();
+        let mut local_c = 0.0;
+        let mut w_sum = Vector3::zeros();
+        let mut w_moment = 0.0;
+        for k in (1..n).rev() {
+            // element k (it is moved by crease k and slid by c_k, c_{k+1})
+            let g = &self.blocks[k];
+            let tt: Mat6 = g.fixed_view::<6, 6>(0, 0).into_owned();
+            let inner = k + 1 < n;
+            let mut gv: Vec6 = g.fixed_view::<6, 1>(0, 6).into_owned();
+            let mut l = g[(6, 6)];
+            if inner {
+                gv += g.fixed_view::<6, 1>(0, 7);
+                l += 2.0 * g[(6, 7)] + g[(7, 7)];
+            }
+            let c = &prefix[k];
+            s += tt;
+            alpha += c.dot(&(tt * c)) + 2.0 * c.dot(&gv) + l;
+            beta += tt * c + gv;
+            local_c += self.local[k][(0, 0)];
+            let ang = |v: &Vec6| Vector3::new(v[0], v[1], v[2]);
+            w_sum += self.w_c[k];
+            w_moment += ang(&prefix[k - 1]).dot(&self.w_c[k]);
+            let xp = &self.xi_psi[k];
+            out[self.psi_index(k)] = xp.dot(&(s * xp)) + self.local[k][(1, 1)];
+            let cb = &prefix[k - 1];
+            let previous = self.blocks[k - 1][(7, 7)];
+            out[self.c_index(k)] = alpha - 2.0 * cb.dot(&beta)
+                + cb.dot(&(s * cb))
+                + previous
+                + local_c
+                + 2.0 * (w_moment - ang(cb).dot(&w_sum));
+        }
+        if self.floating {
+            let g0: Mat6 = self.blocks[0].fixed_view::<6, 6>(0, 0).into_owned();
+            let s0 = s + g0;
+            for a in 0..6 {
+                let x = self.base_twists.column(a);
+                out[a] = x.dot(&(s0 * x)) + if a < 3 { self.base_local[(a, a)] } else { 0.0 };
+            }
+        }
+        self.prefix = prefix;
+    }
+
+    /// Factorize H + diag(shift) restricted to the unknowns with `free[i]` (the others
+    /// are held at a zero step). False where it is not positive definite.
+    pub fn factor(&mut self, free: &[bool], shift: &[f64]) -> bool {
+        assert!(
+            self.cross.is_empty(),
+            "loop closures need the Woodbury step (not built)"
+        );
+        let n = self.segments;
+        self.free.clear();
+        self.free.extend_from_slice(free);
+        self.gain.clear();
+        self.gain.resize(n, Mat2x7::zeros());
+        self.pivot_inverse.clear();
+        self.pivot_inverse.resize(n, Matrix2::zeros());
+        // value Hessian after the last crease: element n-1 with c_n = 0
+        let mut p: Mat7 = self.blocks[n - 1].fixed_view::<7, 7>(0, 0).into_owned();
+        for k in (1..n).rev() {
+            let q = self.stage_matrix(k, &p, shift);
+            let (ic, ip) = (self.c_index(k), self.psi_index(k));
+            let mask = [free[ic], free[ip]];
+            let mut quu = q.fixed_view::<2, 2>(7, 7).into_owned();
+            let mut qux: Mat2x7 = q.fixed_view::<2, 7>(7, 0).into_owned();
+            for (r, &f) in mask.iter().enumerate() {
+                if !f {
+                    // a held control: its row and column drop out, its step is 0
+                    quu.row_mut(r).fill(0.0);
+                    quu.column_mut(r).fill(0.0);
+                    quu[(r, r)] = 1.0;
+                    qux.row_mut(r).fill(0.0);
+                }
+            }
+            let Some(inv) = spd_inverse_2x2(&quu) else {
+                return false;
+            };
+            let gain = -(inv * qux);
+            let qxx: Mat7 = q.fixed_view::<7, 7>(0, 0).into_owned();
+            p = qxx + qux.transpose() * gain;
+            p = (p + p.transpose()) * 0.5;
+            self.gain[k] = gain;
+            self.pivot_inverse[k] = inv;
+        }
+        self.root = None;
+        if self.floating {
+            let pv: Mat6 = p.fixed_view::<6, 6>(0, 0).into_owned();
+            let x = self.base_twists;
+            let mut r = x.transpose() * pv * x;
+            for i in 0..3 {
+                for j in 0..3 {
+                    r[(i, j)] += self.base_local[(i, j)];
+                }
+            }
+            for i in 0..6 {
+                if free[i] {
+                    r[(i, i)] += shift[i];
+                } else {
+                    r.row_mut(i).fill(0.0);
+                    r.column_mut(i).fill(0.0);
+                    r[(i, i)] = 1.0;
+                }
+            }
+            let r = (r + r.transpose()) * 0.5;
+            match Cholesky::new(r) {
+                Some(chol) => self.root = Some(chol),
+                None => return false,
+            }
+        }
+        true
+    }
+
+    /// The 9x9 quadratic of stage k over w = (V_{k-1}, c_{k-1}, z_k, psi_k): what
+    /// crease k, element k-1 and the value after crease k (Hessian `p`) contribute.
+    fn stage_matrix(&self, k: usize, p: &Mat7, shift: &[f64]) -> Mat9 {
+        let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
+        // x_k = M w, M = [I ξ_c ξ_c ξ_psi; 0 1 1 0]
+        let mut m = SMatrix::<f64, 7, 9>::zeros();
+        for i in 0..6 {
+            m[(i, i)] = 1.0;
+            m[(i, 6)] = xc[i];
+            m[(i, 7)] = xc[i];
+            m[(i, 8)] = xp[i];
+        }
+        m[(6, 6)] = 1.0;
+        m[(6, 7)] = 1.0;
+        let mut q: Mat9 = m.transpose() * p * m;
+        // element k-1 over y = (V_{k-1}, c_{k-1}, c_k = c_{k-1} + z_k)
+        let mut e = SMatrix::<f64, 8, 9>::zeros();
+        for i in 0..7 {
+            e[(i, i)] = 1.0;
+        }
+        e[(7, 6)] = 1.0;
+        e[(7, 7)] = 1.0;
+        q += e.transpose() * self.blocks[k - 1] * e;
+        // crease k's own block over (c_k, psi_k)
+        let l = &self.local[k];
+        let rows = [[6usize, 7], [8, 8]];
+        for (a, ra) in rows.iter().enumerate() {
+            for (b, rb) in rows.iter().enumerate() {
+                let v = l[(a, b)];
+                for &i in ra.iter().take(if a == 0 { 2 } else { 1 }) {
+                    for &j in rb.iter().take(if b == 0 { 2 } else { 1 }) {
+                        q[(i, j)] += v;
+                    }
+                }
+            }
+        }
+        // the chain's geometric cross term ω_{k-1} . (W_c c_k + W_psi psi_k)
+        let (wc, wp) = (&self.w_c[k], &self.w_psi[k]);
+        for i in 0..3 {
+            for (j, v) in [(6, wc[i]), (7, wc[i]), (8, wp[i])] {
+                q[(i, j)] += v;
+                q[(j, i)] += v;
+            }
+        }
+        q[(7, 7)] += shift[self.c_index(k)];
+        q[(8, 8)] += shift[self.psi_index(k)];
+        q
+    }
+
+    /// Solve the factorized system for the right-hand side `rhs` (full length; held
+    /// entries ignored), writing the step to `out` (held entries 0).
+    pub fn solve(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
+        let n = self.segments;
+        self.feedforward.clear();
+        self.feedforward.resize(n, nalgebra::Vector2::zeros());
+        // backward: the value's linear term p after crease k
+        let mut p = Vec7::zeros();
+        for k in (1..n).rev() {
+            let (ic, ip) = (self.c_index(k), self.psi_index(k));
+            let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
+            let pv = p.fixed_rows::<6>(0);
+            let along_c = xc.dot(&pv) + p[6];
+            // q_x = M_x^T p, q_u = M_u^T p - rhs_u
+            let mut qu = nalgebra::Vector2::new(
+                along_c - rhs[ic],
+                xp.dot(&pv) - rhs[ip],
+            );
+            if !self.free[ic] {
+                qu[0] = 0.0;
+            }
+            if !self.free[ip] {
+                qu[1] = 0.0;
+            }
+            let mut qx = p;
+            qx[6] = along_c;
+            self.feedforward[k] = -(self.pivot_inverse[k] * qu);
+            p = qx + self.gain[k].transpose() * qu;
+        }
+        let mut x = Vec7::zeros();
+        if self.floating {
+            let mut r = Vec6::zeros();
+            let pv: Vec6 = p.fixed_rows::<6>(0).into_owned();
+            let force = self.base_twists.transpose() * pv;
+            for i in 0..6 {
+                r[i] = if self.free[i] { rhs[i] - force[i] } else { 0.0 };
+            }
+            let Some(root) = self.root.as_ref() else {
+                return false;
+            };
+            let u = root.solve(&r);
+            out[..6].copy_from_slice(u.as_slice());
+            let v = self.base_twists * u;
+            x.fixed_rows_mut::<6>(0).copy_from(&v);
+        }
+        for k in 1..n {
+            let u = self.gain[k] * x + self.feedforward[k];
+            let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
+            let c = x[6] + u[0];
+            let v = x.fixed_rows::<6>(0) + xc * c + xp * u[1];
+            x.fixed_rows_mut::<6>(0).copy_from(&v);
+            x[6] = c;
+            out[self.c_index(k)] = u[0];
+            out[self.psi_index(k)] = u[1];
+        }
+        out.iter().all(|v| v.is_finite())
+    }
+}
+
+/// The inverse of a symmetric 2x2 matrix if it is positive definite (both Cholesky
+/// pivots positive), else None.
+fn spd_inverse_2x2(m: &Matrix2<f64>) -> Option<Matrix2<f64>> {
+    let (a, b, d) = (m[(0, 0)], m[(0, 1)], m[(1, 1)]);
+    let det = a * d - b * b;
+    if !(a > 0.0 && det > 0.0 && det.is_finite()) {
+        return None;
+    }
+    Some(Matrix2::new(d, -b, -b, a) / det)
+}
+
+/// The chain model as the projected Newton method's matrix: the damping and the held
+/// variables of [`crate::optim::NewtonMatrix`] on top of [`ChainModel`].
+#[derive(Clone, Debug, Default)]
+pub struct ChainMatrix {
+    pub model: ChainModel,
+    mask: Vec<bool>,
+    shift: Vec<f64>,
+    diagonal: Vec<f64>,
+    rhs: Vec<f64>,
+    out: Vec<f64>,
+}
+
+impl crate::optim::NewtonMatrix for ChainMatrix {
+    fn diagonal(&mut self, out: &mut [f64]) {
+        self.model.diagonal(out);
+    }
+
+    fn out_of_range(&self, _free: &[usize]) -> bool {
+        let m = &self.model;
+        let bad = |x: f64| !(x.abs() < 1e150);
+        m.blocks.iter().any(|b| b.iter().any(|&x| bad(x)))
+            || m.local.iter().any(|b| b.iter().any(|&x| bad(x)))
+            || m.w_c.iter().chain(&m.w_psi).any(|w| w.iter().any(|&x| bad(x)))
+    }
+
+    fn factor(&mut self, free: &[usize], damping: f64) -> bool {
+        let nq = self.model.dimension();
+        self.diagonal.resize(nq, 0.0);
+        self.model.diagonal(&mut self.diagonal);
+        self.mask.clear();
+        self.mask.resize(nq, false);
+        let mut max_diag: f64 = 0.0;
+        for &i in free {
+            self.mask[i] = true;
+            max_diag = max_diag.max(self.diagonal[i].abs());
+        }
+        let floor = crate::optim::damping_floor(max_diag);
+        self.shift.clear();
+        self.shift.extend(
+            self.diagonal
+                .iter()
+                .map(|&d| crate::optim::damped_diagonal(d, damping, floor) - d),
+        );
+        self.model.factor(&self.mask, &self.shift)
+    }
+
+    fn solve(&mut self, free: &[usize], reduced: &mut [f64]) -> bool {
+        let nq = self.model.dimension();
+        self.rhs.clear();
+        self.rhs.resize(nq, 0.0);
+        self.out.clear();
+        self.out.resize(nq, 0.0);
+        for (k, &i) in free.iter().enumerate() {
+            self.rhs[i] = reduced[k];
+        }
+        if !self.model.solve(&self.rhs, &mut self.out) {
+            return false;
+        }
+        for (k, &i) in free.iter().enumerate() {
+            reduced[k] = self.out[i];
+        }
+        true
+    }
+}
