@@ -84,6 +84,8 @@ class HandleStatus(IdlStruct, typename="developable_sim::msg::dds_::HandleStatus
     rejected_stale_stamp: t.uint64 = 0
     rejected_unknown_frame: t.uint64 = 0
     rejected_future_stamp: t.uint64 = 0
+    tf_frame: str = ""
+    rejected_tf_lookup: t.uint64 = 0
 
 
 @dataclass
@@ -109,8 +111,16 @@ class SimStatus(IdlStruct, typename="developable_sim::msg::dds_::SimStatus_"):
     isometry_error: t.float64 = 0.0
     constraint_violation: t.float64 = 0.0
     singular_point_count: t.uint32 = 0
+    compression_mean_pct: t.float64 = 0.0
+    compressed_edges_pct: t.float64 = 0.0
+    strain_mean_pct: t.float64 = 0.0
+    strain_max_pct: t.float64 = 0.0
+    strained_edges_pct: t.float64 = 0.0
     overrun_ticks: t.uint64 = 0
+    dropped_publications: t.uint64 = 0
     rejected_inputs: t.uint64 = 0
+    unconverged_steps: t.uint64 = 0
+    rejected_steps: t.uint64 = 0
     handles: t.sequence[HandleStatus] = field(default_factory=list)
 
 

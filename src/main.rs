@@ -545,6 +545,19 @@ fn run_command(
         println!(
             "paper: compression mean {c:.3} %, edges compressed > 1 %: {n:.2} %, triangles mean {t:.1}, singular vertices {sv}{phases}"
         );
+        if let Some(e) = &run_stats.edge_strain {
+            let (f, m) = (&e.final_frame, &e.max);
+            println!(
+                "paper final frame: compression mean {:.3} %, edges compressed > 1 %: {:.2} %, |strain| mean {:.3} % max {:.2} %, edges |strain| > 1 %: {:.2} %; over frames max |strain| {:.2} %, edges |strain| > 1 % max {:.2} %",
+                f.compression_mean_pct,
+                f.compressed_edges_pct,
+                f.strain_mean_pct,
+                f.strain_max_pct,
+                f.strained_edges_pct,
+                m.strain_max_pct,
+                m.strained_edges_pct
+            );
+        }
     }
     if let Some(c) = &run_stats.contact {
         println!(

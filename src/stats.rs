@@ -3,6 +3,7 @@
 
 use serde::Serialize;
 
+use crate::geometry::EdgeStrain;
 use crate::sim::{CompressionStats, ObjectSim, StepReport, World};
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -127,13 +128,19 @@ pub struct RunStats {
     /// Wall time of the whole run, s.
     pub wall_s: f64,
     /// Paper objects (Schreck et al. table IV): mean over frames of the mean over S_P
-    /// edges of max(0, rest - length)/rest, %.
+    /// edges of max(0, rest - length)/rest, %; the final frame, which table IV
+    /// measures, is `edge_strain.final`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub compression_mean_pct: Option<f64>,
     /// Paper objects: mean over frames of the share of S_P edges compressed by more
     /// than 1 %, %.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub compressed_edges_pct: Option<f64>,
+    /// Paper objects: edge strains of S_P against the pattern (compression as table IV,
+    /// and stretch), per frame, on the final frame, as the maximum over frames and as
+    /// the mean over frames.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub edge_strain: Option<EdgeStrainStats>,
     /// Paper objects (table V, N_t): mean over frames of the S_P triangle count.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub triangles_mean: Option<f64>,
@@ -148,6 +155,113 @@ pub struct RunStats {
     pub phase_ms: Option<PhaseMs>,
     #[serde(rename = "final")]
     pub final_state: FinalState,
+}
+
+/// Edge strains of one frame (the serializable counterpart of [`EdgeStrain`]), %:
+/// strain = (l - l_rest) / l_rest per S_P edge.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct EdgeStrainPct {
+    /// Mean of max(0, -strain) (table IV's mean compression).
+    pub compression_mean_pct: f64,
+    /// Share of edges with strain < -1 % (table IV).
+    pub compressed_edges_pct: f64,
+    /// Mean of |strain|.
+    pub strain_mean_pct: f64,
+    /// Largest |strain|.
+    pub strain_max_pct: f64,
+    /// Largest stretch max(0, strain).
+    pub stretch_max_pct: f64,
+    /// Share of edges with |strain| > 1 %.
+    pub strained_edges_pct: f64,
+}
+
+impl EdgeStrainPct {
+    fn of(e: &EdgeStrain) -> Self {
+        EdgeStrainPct {
+            compression_mean_pct: e.compression_mean_pct,
+            compressed_edges_pct: e.compressed_edges_pct,
+            strain_mean_pct: e.strain_mean_pct,
+            strain_max_pct: e.strain_max_pct,
+            stretch_max_pct: e.stretch_max_pct,
+            strained_edges_pct: e.strained_edges_pct,
+        }
+    }
+    fn fields_mut(&mut self) -> [&mut f64; 6] {
+        [
+            &mut self.compression_mean_pct,
+            &mut self.compressed_edges_pct,
+            &mut self.strain_mean_pct,
+            &mut self.strain_max_pct,
+            &mut self.stretch_max_pct,
+            &mut self.strained_edges_pct,
+        ]
+    }
+    fn fields(mut self) -> [f64; 6] {
+        self.fields_mut().map(|x| *x)
+    }
+    /// Several sheets in one frame: shares and means averaged, maxima the largest.
+    fn combine(sheets: &[EdgeStrain]) -> Self {
+        let n = sheets.len().max(1) as f64;
+        let mut out = EdgeStrainPct::default();
+        for e in sheets {
+            let e = EdgeStrainPct::of(e);
+            out.compression_mean_pct += e.compression_mean_pct / n;
+            out.compressed_edges_pct += e.compressed_edges_pct / n;
+            out.strain_mean_pct += e.strain_mean_pct / n;
+            out.strained_edges_pct += e.strained_edges_pct / n;
+            out.strain_max_pct = out.strain_max_pct.max(e.strain_max_pct);
+            out.stretch_max_pct = out.stretch_max_pct.max(e.stretch_max_pct);
+        }
+        out
+    }
+}
+
+/// One frame's edge strains with its simulation time.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct FrameStrain {
+    /// s
+    pub time: f64,
+    #[serde(flatten)]
+    pub strain: EdgeStrainPct,
+}
+
+/// Edge strains over a run, each field taken over the frames (the step-0 flat sheet
+/// is not a frame).
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct EdgeStrainStats {
+    /// The final frame (what a figure of the paper shows; compare with table IV).
+    #[serde(rename = "final")]
+    pub final_frame: EdgeStrainPct,
+    /// Each field's maximum over frames.
+    pub max: EdgeStrainPct,
+    /// Each field's mean over frames.
+    pub time_mean: EdgeStrainPct,
+    pub frames: Vec<FrameStrain>,
+}
+
+impl EdgeStrainStats {
+    fn summarize(frames: Vec<FrameStrain>) -> Self {
+        let mut max = EdgeStrainPct::default();
+        let mut mean = EdgeStrainPct::default();
+        let n = frames.len().max(1) as f64;
+        for f in &frames {
+            for ((m, a), x) in max
+                .fields_mut()
+                .into_iter()
+                .zip(mean.fields_mut())
+                .zip(f.strain.fields())
+            {
+                *m = m.max(x);
+                *a += x / n;
+            }
+        }
+        EdgeStrainStats {
+            final_frame: frames.last().map(|f| f.strain).unwrap_or_default(),
+            max,
+            time_mean: mean,
+            frames,
+        }
+    }
 }
 
 /// Median wall time of the phases of a paper frame, ms.
@@ -193,8 +307,7 @@ pub struct StatsCollector {
     step_ms: Vec<f64>,
     iterations: Vec<f64>,
     outer: Vec<f64>,
-    paper_compression: Vec<f64>,
-    paper_compressed: Vec<f64>,
+    paper_strain: Vec<FrameStrain>,
     paper_triangles: Vec<f64>,
     phase_ms: [Vec<f64>; 3],
     contact_ms: Vec<f64>,
@@ -257,8 +370,11 @@ impl StatsCollector {
             let f = |g: &dyn Fn(&CompressionStats) -> f64| {
                 papers.iter().map(|(_, c)| g(c)).sum::<f64>() / n
             };
-            self.paper_compression.push(f(&|x| x.compression_mean_pct));
-            self.paper_compressed.push(f(&|x| x.compressed_edges_pct));
+            let sheets: Vec<EdgeStrain> = papers.iter().map(|(_, c)| c.edges).collect();
+            self.paper_strain.push(FrameStrain {
+                time: world.time(),
+                strain: EdgeStrainPct::combine(&sheets),
+            });
             self.paper_triangles.push(f(&|x| x.triangles as f64));
             if s.first_singular_point.is_none() {
                 if let Some(sp) = papers.iter().find_map(|(p, _)| p.singular_points().first()) {
@@ -314,9 +430,11 @@ impl StatsCollector {
 
     pub fn finish(mut self, world: &World, gradient_us: f64, wall_s: f64) -> RunStats {
         let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-        if !self.paper_compression.is_empty() {
-            self.stats.compression_mean_pct = Some(mean(&self.paper_compression));
-            self.stats.compressed_edges_pct = Some(mean(&self.paper_compressed));
+        if !self.paper_strain.is_empty() {
+            let strain = EdgeStrainStats::summarize(std::mem::take(&mut self.paper_strain));
+            self.stats.compression_mean_pct = Some(strain.time_mean.compression_mean_pct);
+            self.stats.compressed_edges_pct = Some(strain.time_mean.compressed_edges_pct);
+            self.stats.edge_strain = Some(strain);
             self.stats.triangles_mean = Some(mean(&self.paper_triangles));
             if !self.phase_ms[0].is_empty() {
                 self.stats.phase_ms = Some(PhaseMs {

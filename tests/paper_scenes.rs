@@ -250,9 +250,37 @@ fn paper_stats_fields_only_for_paper_scenes() {
     for key in ["simulation", "remesh", "isometry"] {
         assert!(json["phase_ms"][key].as_f64().unwrap() >= 0.0);
     }
+    // edge strains per frame, on the final frame, as the max and the mean over frames
+    let strain = &json["edge_strain"];
+    let frames = strain["frames"].as_array().expect("edge_strain.frames");
+    assert_eq!(frames.len(), stats.steps);
+    let fields = [
+        "compression_mean_pct",
+        "compressed_edges_pct",
+        "strain_mean_pct",
+        "strain_max_pct",
+        "stretch_max_pct",
+        "strained_edges_pct",
+    ];
+    for key in fields {
+        let of = |f: &serde_json::Value| f[key].as_f64().unwrap_or_else(|| panic!("{key}"));
+        let series: Vec<f64> = frames.iter().map(of).collect();
+        assert_eq!(of(&strain["final"]), *series.last().unwrap(), "{key}");
+        let max = series.iter().cloned().fold(f64::MIN, f64::max);
+        assert_eq!(of(&strain["max"]), max, "{key}");
+        let mean = series.iter().sum::<f64>() / series.len() as f64;
+        assert!((of(&strain["time_mean"]) - mean).abs() <= 1e-12 * mean.abs().max(1.0));
+    }
+    assert_eq!(
+        json["compression_mean_pct"].as_f64(),
+        strain["time_mean"]["compression_mean_pct"].as_f64()
+    );
+    // the crease folds the sheet: stretch or compression is measured, not all zero
+    assert!(strain["max"]["strain_max_pct"].as_f64().unwrap() > 0.0);
     let (_, ribbon) = run("ribbon_extreme_torsion", &["duration=0.05"]);
     let json = serde_json::to_value(&ribbon).unwrap();
     assert!(json.get("compression_mean_pct").is_none());
+    assert!(json.get("edge_strain").is_none());
     assert!(json.get("phase_ms").is_none());
 }
 

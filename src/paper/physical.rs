@@ -708,27 +708,6 @@ impl PhysicalMesh {
             }
         }
     }
-
-    /// Mean over edges of max(0, rest - length)/rest, and the fraction of edges
-    /// compressed by more than 1 % (both in %, table IV).
-    pub fn compression_pct(&self) -> (f64, f64) {
-        if self.edges.is_empty() {
-            return (0.0, 0.0);
-        }
-        let mut sum = 0.0;
-        let mut count = 0usize;
-        for [a, b] in &self.edges {
-            let rest = (self.material[*a as usize] - self.material[*b as usize]).norm();
-            let len = (self.position[*a as usize] - self.position[*b as usize]).norm();
-            let c = ((rest - len) / rest).max(0.0);
-            sum += c;
-            if c > 0.01 {
-                count += 1;
-            }
-        }
-        let n = self.edges.len() as f64;
-        (100.0 * sum / n, 100.0 * count as f64 / n)
-    }
 }
 
 /// Signed dihedral angle of hinge (x0, x1; x2 left, x3 right), rad: 0 flat, > 0 when

@@ -21,7 +21,7 @@ use super::params::{PaperError, PaperParams};
 use super::pattern::Pattern;
 use super::physical::{build_physical, Interpolator, PhysicalMesh};
 use super::tracking::{fit_cones, update_junctions, ConeReport, JunctionReport};
-use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3};
+use crate::geometry::{EdgeStrain, Point2, Point3, Pose, SurfaceMesh, Vector3};
 use crate::sim::handle::{HandleSpec, OrientationMode};
 use crate::sim::object::{
     CompressionStats, Energies, NoClock, ObjectSim, ObjectStepReport, Phase, PhaseClock,
@@ -42,10 +42,9 @@ struct PaperHandle {
 /// Per-frame measurements (table IV, V of the paper).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PaperFrameStats {
-    /// Mean over S_P edges of max(0, rest - length)/rest, %.
-    pub compression_mean_pct: f64,
-    /// S_P edges compressed by more than 1 %, %.
-    pub compressed_edges_pct: f64,
+    /// Edge strains of S_P against the pattern: compression as table IV measures it
+    /// (mean of max(0, rest - length)/rest, share of edges over 1 %), and stretch.
+    pub edges: EdgeStrain,
     /// Triangles of S_P (N_t).
     pub triangles: usize,
     /// Triangles and curved regions of S_G.
@@ -598,9 +597,7 @@ impl PaperSim {
                 })
             })
             .collect();
-        let (mean, count) = sp.compression_pct();
-        self.frame.compression_mean_pct = mean;
-        self.frame.compressed_edges_pct = count;
+        self.frame.edges = self.mesh.edge_strain();
         self.frame.triangles = sp.triangles.len();
         self.frame.geometric_triangles = self
             .gmesh
@@ -675,8 +672,7 @@ impl ObjectSim for PaperSim {
     fn compression_stats(&self) -> Option<CompressionStats> {
         let f = &self.frame;
         Some(CompressionStats {
-            compression_mean_pct: f.compression_mean_pct,
-            compressed_edges_pct: f.compressed_edges_pct,
+            edges: f.edges,
             triangles: f.triangles,
         })
     }

@@ -387,6 +387,11 @@ pub struct SimStatus {
     pub isometry_error: f64,
     pub constraint_violation: f64,
     pub singular_point_count: u32,
+    pub compression_mean_pct: f64,
+    pub compressed_edges_pct: f64,
+    pub strain_mean_pct: f64,
+    pub strain_max_pct: f64,
+    pub strained_edges_pct: f64,
     pub overrun_ticks: u64,
     pub dropped_publications: u64,
     pub rejected_inputs: u64,
@@ -397,5 +402,5 @@ pub struct SimStatus {
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_7bc849f1a710565d53e33c23dab0444d8f34fb5a18cb879d872e74fff9841fd5"
+    "RIHS01_1dc8726f278337a6a78742ed2c42980012ea59b9f37b8f624210ecb92b5bb453"
 );

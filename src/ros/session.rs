@@ -287,6 +287,12 @@ impl Session {
                 s.singular_point_count = world.singular_points(object).len() as u32;
             }
         }
+        let strain = world.mesh(object).edge_strain();
+        s.compression_mean_pct = strain.compression_mean_pct;
+        s.compressed_edges_pct = strain.compressed_edges_pct;
+        s.strain_mean_pct = strain.strain_mean_pct;
+        s.strain_max_pct = strain.strain_max_pct;
+        s.strained_edges_pct = strain.strained_edges_pct;
         for (h, spec) in world.handles().iter().enumerate() {
             if spec.object != object {
                 continue;

@@ -9,7 +9,7 @@ use std::any::Any;
 use std::fmt::Debug;
 
 use crate::contact::BodyTopology;
-use crate::geometry::{Point2, Point3, Pose, SurfaceMesh};
+use crate::geometry::{EdgeStrain, Point2, Point3, Pose, SurfaceMesh};
 
 use super::handle::HandleSpec;
 
@@ -142,14 +142,12 @@ impl<'a> StepContext<'a> {
     }
 }
 
-/// Compression of an object's physical mesh in its last frame (Schreck et al. table
-/// IV, V), for objects that measure it (the paper).
+/// Edge strains of an object's physical mesh in its last frame (Schreck et al. table
+/// IV, V: compression; stretch as well), for objects that measure them (the paper).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CompressionStats {
-    /// Mean over edges of max(0, rest - length)/rest, %.
-    pub compression_mean_pct: f64,
-    /// Edges compressed by more than 1 %, %.
-    pub compressed_edges_pct: f64,
+    /// Compression (table IV) and stretch of the mesh's edges, %.
+    pub edges: EdgeStrain,
     /// Triangles of the physical mesh (N_t).
     pub triangles: usize,
 }

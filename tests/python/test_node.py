@@ -120,6 +120,9 @@ def test_every_output_decodes_and_is_well_formed(start_node, ros, domain_id):
         assert s.handles[0].name == "twist_end" and not s.handles[0].external
         # counters since start-up: never a non-finite step in this scene
         assert s.rejected_steps == 0 and 0 <= s.unconverged_steps <= s.step
+        # the ribbon is isometric by construction: its edge strains are round-off
+        assert 0.0 <= s.strain_max_pct < 1e-6 and s.strained_edges_pct == 0.0
+        assert s.compression_mean_pct <= s.strain_mean_pct <= s.strain_max_pct
     with_points = [s for s in got["singular"] if s.points]
     stamps_singular = [s.header.stamp.sec + 1e-9 * s.header.stamp.nanosec for s in got["singular"]]
     assert with_points, (
