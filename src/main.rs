@@ -202,12 +202,29 @@ fn main() -> ExitCode {
     let cli = Cli::parse_from(std::iter::once(args[0].clone()).chain(own));
     match real_main(cli, ros) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<CheckFailed>().is_some() => {
+            eprintln!("{e}");
+            ExitCode::from(1)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(2)
         }
     }
 }
+
+/// A check that ran to the end and found a difference: exit code 1 (an error that
+/// stops a command, such as an unreadable bag, is exit code 2).
+#[derive(Debug)]
+struct CheckFailed(String);
+
+impl std::fmt::Display for CheckFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for CheckFailed {}
 
 fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
     let non_node = !matches!(cli.command, Command::Node { .. });
@@ -299,10 +316,11 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             );
             for t in &report.topics {
                 println!(
-                    "  {:<32} {:>7} compared  {:>6} differ  max |diff| {:.3e}{}{}",
+                    "  {:<32} {:>7} compared  {:>6} differ  {:>4} missing  max |diff| {:.3e}{}{}{}",
                     t.topic,
                     t.compared,
                     t.differing,
+                    t.missing,
                     t.max_abs_difference,
                     if t.max_at.is_empty() {
                         String::new()
@@ -312,7 +330,12 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
                     t.structural
                         .as_ref()
                         .map(|s| format!("; structure: {s}"))
-                        .unwrap_or_default()
+                        .unwrap_or_default(),
+                    if t.first_difference.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; first: {}", t.first_difference)
+                    }
                 );
             }
             if let Some(t) = &report.truncated {
@@ -332,6 +355,13 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             if let Some(path) = stats {
                 std::fs::write(&path, serde_json::to_string_pretty(&report)?)
                     .with_context(|| format!("writing {}", path.display()))?;
+            }
+            if !report.identical {
+                return Err(CheckFailed(format!(
+                    "replay of {}: the outputs differ from the recording",
+                    report.bag
+                ))
+                .into());
             }
             Ok(())
         }
