@@ -11,6 +11,7 @@ use clap::{Parser, Subcommand};
 use developable_sim::record::bag::{BagOptions, Compression};
 use developable_sim::record::recorder::RunRecorder;
 use developable_sim::record::{read, replay};
+use developable_sim::ros::foxglove::FoxgloveConfig;
 use developable_sim::ros::input::InputPolicy;
 use developable_sim::ros::names::NodeNames;
 use developable_sim::ros::node::{Lockstep, NodeConfig, Pacing, SimNode};
@@ -122,6 +123,14 @@ enum Command {
         /// Write latency and run statistics as JSON at exit.
         #[arg(long, value_name = "OUT.json")]
         stats: Option<PathBuf>,
+        /// Serve a live Foxglove view on this TCP port (foxglove.sdk.v1; connect
+        /// Foxglove to ws://localhost:PORT); 0: off (default, or the `foxglove_port` parameter).
+        #[arg(long, value_name = "PORT")]
+        foxglove: Option<u16>,
+        /// IP address of the Foxglove server (default 127.0.0.1: this machine only;
+        /// 0.0.0.0: every interface, no authentication).
+        #[arg(long, value_name = "ADDR")]
+        foxglove_bind: Option<String>,
     },
     /// Re-simulate a bag from its recorded handle poses and compare every output.
     Replay {
@@ -263,6 +272,8 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             paused,
             sets,
             stats,
+            foxglove,
+            foxglove_bind,
         } => node_command(NodeArgs {
             scene,
             record,
@@ -277,6 +288,8 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             paused,
             sets,
             stats,
+            foxglove,
+            foxglove_bind,
             ros,
         }),
         Command::Render {
@@ -598,6 +611,8 @@ struct NodeArgs {
     paused: bool,
     sets: Vec<String>,
     stats: Option<PathBuf>,
+    foxglove: Option<u16>,
+    foxglove_bind: Option<String>,
     ros: params::RosArgs,
 }
 
@@ -788,6 +803,7 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
     if let Some(r) = p.double("markers_rate") {
         non_negative("markers_rate", r)?;
     }
+    let foxglove = foxglove_config(&a.foxglove, &a.foxglove_bind, &mut p)?;
     p.set_effective(
         "scene",
         ParamValue::String(scene_path.display().to_string()),
@@ -820,6 +836,7 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
         use_sim_time,
         tf_max_lag,
         params: p,
+        foxglove,
     })?;
     let stop = Arc::new(AtomicBool::new(false));
     {
@@ -851,6 +868,41 @@ fn node_command(a: NodeArgs) -> anyhow::Result<()> {
         bail!("recording failed: {e}");
     }
     Ok(())
+}
+
+/// The Foxglove server's address from `--foxglove` / `--foxglove-bind` or the
+/// `foxglove_port` / `foxglove_bind` parameters (flags win); port 0 or none: off.
+fn foxglove_config(
+    port: &Option<u16>,
+    bind: &Option<String>,
+    p: &mut Params,
+) -> anyhow::Result<Option<FoxgloveConfig>> {
+    let port = match (port, p.integer("foxglove_port")) {
+        (Some(port), _) => *port,
+        (None, Some(i)) => u16::try_from(i).map_err(|_| {
+            p.invalid(
+                "foxglove_port",
+                format!("must be a TCP port 0..=65535, got {i}"),
+            )
+        })?,
+        (None, None) => 0,
+    };
+    let bind_flag = bind;
+    let bind = match (bind, p.string("foxglove_bind")) {
+        (Some(b), _) => b.clone(),
+        (None, Some(b)) => b.to_string(),
+        (None, None) => developable_sim::ros::foxglove::DEFAULT_BIND.to_string(),
+    };
+    if bind.parse::<std::net::IpAddr>().is_err() {
+        let msg = format!("`{bind}` is not an IP address (e.g. 127.0.0.1, 0.0.0.0)");
+        if bind_flag.is_some() {
+            bail!("--foxglove-bind {msg}");
+        }
+        return Err(p.invalid("foxglove_bind", msg).into());
+    }
+    p.set_effective("foxglove_port", ParamValue::Integer(port.into()));
+    p.set_effective("foxglove_bind", ParamValue::String(bind.clone()));
+    Ok((port > 0).then_some(FoxgloveConfig { bind, port }))
 }
 
 fn banner(
@@ -932,8 +984,36 @@ fn report_command(
     };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let command = format!("developable_sim {}", args.join(" "));
-    developable_sim::report::run_report(&options, &command)?;
+    let report = developable_sim::report::run_report(&options, &command)?;
+    if !report.exact.is_empty() {
+        // the README's table of errors against the exact solutions
+        println!(
+            "{}",
+            developable_sim::report::exact_output::readme_table(&report.exact)
+        );
+        for c in report.exact.iter().flat_map(|s| &s.checks) {
+            println!(
+                "{} {}: {}: measured {}",
+                if c.pass { "PASS" } else { "FAIL" },
+                c.scene,
+                c.what,
+                c.measured.map_or("n/a".into(), |m| format!("{m:.4}"))
+            );
+        }
+    }
     println!("wrote {}", out.join("summary.md").display());
+    let failed = report.failed_checks();
+    if !failed.is_empty() {
+        bail!(
+            "accuracy against the exact solutions regressed: {} check(s) failed ({})",
+            failed.len(),
+            failed
+                .iter()
+                .map(|c| format!("{}: {}", c.scene, c.what))
+                .collect::<Vec<_>>()
+                .join("; ")
+        );
+    }
     Ok(())
 }
 

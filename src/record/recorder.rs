@@ -52,6 +52,20 @@ pub struct SessionInfo {
     pub colliders_topic: Option<String>,
     /// Per object: (markers, singular points, status); None when not recorded.
     pub object_topics: Vec<(Option<String>, Option<String>, String)>,
+    /// Per handle: the input topic its status reports (`/tf` for a TF-driven handle);
+    /// bags from before it existed: `handle_topics`.
+    #[serde(default)]
+    pub status_handle_topics: Vec<String>,
+    /// Per handle: the bag topic of its failed TF lookups (see
+    /// [`SessionRecorder::record_tf_failure`]); bags from before it existed have none.
+    #[serde(default)]
+    pub tf_failure_topics: Vec<String>,
+}
+
+/// The bag topic of a handle's failed TF lookups: beside its input topic, so it reads as
+/// "what became of that handle's input".
+pub fn tf_failure_topic(handle_topic: &str) -> String {
+    format!("{handle_topic}/tf_lookup_failed")
 }
 
 impl SessionInfo {
@@ -85,6 +99,9 @@ struct ObjectIds {
 pub struct SessionRecorder {
     bag: BagWriter,
     handles: Vec<TopicId>,
+    /// Per handle: its TF-failure topic, created at the first failure.
+    tf_failure_topics: Vec<String>,
+    tf_failures: Vec<Option<TopicId>>,
     clock: Option<TopicId>,
     colliders: Option<TopicId>,
     objects: Vec<ObjectIds>,
@@ -135,6 +152,8 @@ impl SessionRecorder {
                     )
                 })
                 .collect(),
+            status_handle_topics: session.handle_topics.clone(),
+            tf_failure_topics: names.handles.iter().map(|t| tf_failure_topic(t)).collect(),
         };
         bag.write_metadata(SESSION_RECORD, info.to_record())?;
         let mut handles = Vec::new();
@@ -167,6 +186,8 @@ impl SessionRecorder {
         Ok(SessionRecorder {
             bag,
             handles,
+            tf_failures: vec![None; info.tf_failure_topics.len()],
+            tf_failure_topics: info.tf_failure_topics,
             clock,
             colliders,
             objects,
@@ -204,6 +225,33 @@ impl SessionRecorder {
         let t = arrival_ns;
         let data = crate::ros::cdr::encode(msg)?;
         self.bag.write_raw(id, t, publish_ns.unwrap_or(t), &data)
+    }
+
+    /// Record a failed TF lookup for handle `handle` at `arrival_ns`: `what` is the
+    /// handle's TF frame at the lookup time (a TF-driven handle; identity pose) or the
+    /// pose that could not be brought into the scene frame (a pose in another frame of
+    /// the tree, older than the buffer or too far ahead). `replay` counts it as the node
+    /// did (`rejected_tf_lookup`; the handle keeps its target): the TF tree itself is not
+    /// in the bag, so the lookup's outcome is.
+    pub fn record_tf_failure(
+        &mut self,
+        handle: usize,
+        what: &PoseStamped,
+        arrival_ns: u64,
+    ) -> Result<(), RecordError> {
+        let Some(topic) = self.tf_failure_topics.get(handle) else {
+            return Ok(());
+        };
+        let id = match self.tf_failures[handle] {
+            Some(id) => id,
+            None => {
+                let id = self.bag.add_topic::<PoseStamped>(topic, Qos::DATA)?;
+                self.tf_failures[handle] = Some(id);
+                id
+            }
+        };
+        let data = crate::ros::cdr::encode(what)?;
+        self.bag.write_raw(id, arrival_ns, arrival_ns, &data)
     }
 
     /// Record a frame: statuses, then clock, markers and singular points.

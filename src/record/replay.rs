@@ -206,11 +206,19 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                         accept_empty_frame_id: i.accept_empty_frame_id,
                         max_stamp_lead: i.max_stamp_lead,
                     };
-                    let mut s = Session::new(scene, policy, i.handle_topics.clone());
+                    let status_topics = if i.status_handle_topics.len() == i.handle_topics.len() {
+                        i.status_handle_topics.clone()
+                    } else {
+                        i.handle_topics.clone()
+                    };
+                    let mut s = Session::new(scene, policy, status_topics);
                     s.style.line_width = i.line_width;
                     s.style.sphere_diameter = i.sphere_diameter;
                     for (h, t) in i.handle_topics.iter().enumerate() {
                         routes.insert(t.clone(), Route::Input(h));
+                    }
+                    for (h, t) in i.tf_failure_topics.iter().enumerate() {
+                        routes.insert(t.clone(), Route::TfFailure(h));
                     }
                     if let Some(c) = &i.clock_topic {
                         routes.insert(c.clone(), Route::Output(Output::Clock));
@@ -254,6 +262,13 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                             // the node judged the stamp against the arrival time it recorded as the
                             // message's log time
                             let _ = s.offer(h, &pose, m.log_time);
+                            report.inputs += 1;
+                            inputs_since_frame = true;
+                        }
+                        Route::TfFailure(h) => {
+                            // the node looked the handle's frame up and found no transform
+                            let _: PoseStamped = cdr::decode(&m.data).map_err(decode_err)?;
+                            s.reject_tf(h);
                             report.inputs += 1;
                             inputs_since_frame = true;
                         }
@@ -411,6 +426,8 @@ pub const WALL_CLOCK_STATUS_FIELDS: &[&str] = &["step_duration", "overrun_ticks"
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 enum Route {
     Input(usize),
+    /// A failed TF lookup of this handle.
+    TfFailure(usize),
     Output(Output),
 }
 

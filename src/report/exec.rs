@@ -231,8 +231,21 @@ pub fn execute(
     spec: &RunSpec,
     times: &[f64],
 ) -> anyhow::Result<RunOutput> {
+    execute_with(file, kind, duration, spec, times, &[])
+}
+
+/// [`execute`] with `extra` `--set` overrides applied after the plan's.
+pub fn execute_with(
+    file: &Path,
+    kind: SceneKind,
+    duration: f64,
+    spec: &RunSpec,
+    times: &[f64],
+    extra: &[String],
+) -> anyhow::Result<RunOutput> {
     let mut set = overrides(kind, duration, spec);
     set.extend(same_shape_overrides(file, kind, spec)?);
+    set.extend(extra.iter().cloned());
     let mut scene = scene::load(file, &set)?;
     let mut sampler = Sampler::new(times);
     if spec.method == Method::ConformingFem {

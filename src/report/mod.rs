@@ -16,6 +16,9 @@
 //! on a shared one.
 
 pub mod errors;
+pub mod exact;
+pub mod exact_output;
+pub mod exact_run;
 pub mod exec;
 pub mod output;
 pub mod plan;
@@ -29,6 +32,7 @@ use crate::geometry::Point2;
 use crate::metrics::grid_samples;
 use crate::ribbon::RibbonSim;
 use errors::{error_against, log_log_slope};
+use exact_run::ExactSceneReport;
 use output::{Row, SceneReport};
 use plan::{Method, SceneKind, Sweep};
 
@@ -38,7 +42,8 @@ pub struct ReportOptions {
     /// Directory of the scene files.
     pub scene_dir: PathBuf,
     /// File-name glob (`*`, `?`) selecting scenes in `scene_dir`; default: the report's
-    /// scenes (extreme torsion, helix unrolling, paper cylinder then bend).
+    /// scenes (extreme torsion, helix unrolling, paper cylinder then bend) and the
+    /// exact-solution scenes ([`exact::EXACT_SCENES`]).
     pub scenes: Option<String>,
     /// Short durations, 3 time steps, small references (CI).
     pub quick: bool,
@@ -180,7 +185,9 @@ fn select_scenes(opts: &ReportOptions) -> anyhow::Result<Vec<PathBuf>> {
     let Some(pattern) = &opts.scenes else {
         return Ok(DEFAULT_SCENES
             .iter()
-            .map(|s| opts.scene_dir.join(format!("{}.yaml", s.name)))
+            .map(|s| s.name)
+            .chain(exact::EXACT_SCENES)
+            .map(|name| opts.scene_dir.join(format!("{name}.yaml")))
             .collect());
     };
     let mut files: Vec<PathBuf> = std::fs::read_dir(&opts.scene_dir)
@@ -229,10 +236,30 @@ fn material_points(file: &Path) -> anyhow::Result<Vec<Point2>> {
     })
 }
 
-/// Run the report and write `report.csv`, `<scene>.png` and `summary.md` into
+/// What a report measured: the scenes compared with a reference run, and the
+/// exact-solution scenes with their checks.
+#[derive(Clone, Debug)]
+pub struct Report {
+    pub scenes: Vec<SceneReport>,
+    pub exact: Vec<ExactSceneReport>,
+}
+
+impl Report {
+    /// The exact-solution checks that failed (the CLI exits non-zero on any).
+    pub fn failed_checks(&self) -> Vec<&exact::Check> {
+        self.exact
+            .iter()
+            .flat_map(|s| &s.checks)
+            .filter(|c| !c.pass)
+            .collect()
+    }
+}
+
+/// Run the report and write `report.csv`, `<scene>.png` and `summary.md` (and, for the
+/// exact-solution scenes, `exact.csv`, `<scene>.png` and `<scene>_order.png`) into
 /// `opts.out`. `command` is quoted in summary.md. Every simulation runs on one thread
 /// (a one-thread rayon pool; faer's global parallelism is sequential meanwhile).
-pub fn run_report(opts: &ReportOptions, command: &str) -> anyhow::Result<Vec<SceneReport>> {
+pub fn run_report(opts: &ReportOptions, command: &str) -> anyhow::Result<Report> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .thread_name(|_| "report".into())
@@ -245,15 +272,19 @@ pub fn run_report(opts: &ReportOptions, command: &str) -> anyhow::Result<Vec<Sce
     result
 }
 
-fn run_report_on_this_thread(
-    opts: &ReportOptions,
-    command: &str,
-) -> anyhow::Result<Vec<SceneReport>> {
+fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> anyhow::Result<Report> {
     let started = Instant::now();
     let cpu_started = exec::process_cpu_s();
     std::fs::create_dir_all(&opts.out)
         .with_context(|| format!("cannot create {}", opts.out.display()))?;
-    let files = select_scenes(opts)?;
+    let mut files = Vec::new();
+    let mut exact_files = Vec::new();
+    for file in select_scenes(opts)? {
+        match exact_run::problem_of(&file)? {
+            Some(problem) => exact_files.push((file, problem)),
+            None => files.push(file),
+        }
+    }
     let mut plans = Vec::new();
     for file in &files {
         let stem = file
@@ -286,8 +317,12 @@ fn run_report_on_this_thread(
             ),
         ));
     }
-    // every run plus the reference and its 2 dt and 4 dt checks
-    let total: usize = plans.iter().map(|(_, _, p)| p.runs.len() + 3).sum();
+    // every run plus the reference and its 2 dt and 4 dt checks, and the exact runs
+    let total: usize = plans.iter().map(|(_, _, p)| p.runs.len() + 3).sum::<usize>()
+        + exact_files
+            .iter()
+            .map(|(_, p)| exact::exact_plan(p, opts.quick, 0.0, 0.0, 1.0, "").len())
+            .sum::<usize>();
     let bar = if opts.progress {
         indicatif::ProgressBar::new(total as u64)
     } else {
@@ -400,20 +435,55 @@ fn run_report_on_this_thread(
             successive_differences,
         });
     }
+    let mut exact_reports = Vec::new();
+    for (file, problem) in exact_files {
+        let name = file
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("scene")
+            .to_string();
+        let mut on_run = |what: String| {
+            bar.set_message(what);
+            bar.inc(1);
+        };
+        exact_reports.push(exact_run::run_exact_scene(
+            &file,
+            &name,
+            problem,
+            opts.quick,
+            &mut on_run,
+        )?);
+    }
     bar.finish_and_clear();
     output::write_csv(&opts.out.join("report.csv"), &reports)?;
     for s in &reports {
         output::write_plot(&opts.out.join(format!("{}.png", s.name)), s)?;
     }
+    exact_output::write_exact_csv(&opts.out.join("exact.csv"), &exact_reports)?;
+    for s in &exact_reports {
+        exact_output::write_exact_plots(&opts.out, s)?;
+    }
+    let summary = opts.out.join("summary.md");
     output::write_summary(
-        &opts.out.join("summary.md"),
+        &summary,
         &reports,
         opts.quick,
         command,
         started.elapsed().as_secs_f64(),
         exec::process_cpu_s() - cpu_started,
     )?;
-    Ok(reports)
+    if !exact_reports.is_empty() {
+        let mut md = std::fs::read_to_string(&summary)
+            .with_context(|| format!("cannot read {}", summary.display()))?;
+        md.push('\n');
+        md.push_str(&exact_output::exact_summary(&exact_reports)?);
+        std::fs::write(&summary, md)
+            .with_context(|| format!("cannot write {}", summary.display()))?;
+    }
+    Ok(Report {
+        scenes: reports,
+        exact: exact_reports,
+    })
 }
 
 #[cfg(test)]

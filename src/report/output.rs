@@ -162,7 +162,7 @@ pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
     std::fs::write(path, out).with_context(|| format!("cannot write {}", path.display()))
 }
 
-fn color(method: Method) -> RGBColor {
+pub(super) fn color(method: Method) -> RGBColor {
     match method {
         Method::GaussNewton => RGBColor(31, 119, 180),
         Method::Lbfgsb => RGBColor(255, 127, 14),
@@ -176,7 +176,7 @@ static FONT: std::sync::Once = std::sync::Once::new();
 
 /// Plot labels use DejaVu Sans Mono embedded in the binary (assets/fonts): no
 /// fontconfig or system fonts needed.
-fn register_font() {
+pub(super) fn register_font() {
     FONT.call_once(|| {
         let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
         // a font that does not parse leaves text undrawn; the plot itself still renders

@@ -7,6 +7,7 @@
 
 pub mod cdr;
 pub mod convert;
+pub mod foxglove;
 pub mod frames;
 pub mod graph;
 pub mod input;

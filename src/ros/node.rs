@@ -22,6 +22,7 @@ use ros2_client::{
 };
 use serde::Serialize;
 
+use super::foxglove::{Advertised, FoxgloveConfig, FoxgloveOut};
 use super::graph::{tf_pose, ClockIn, TfIn};
 use super::input::InputPolicy;
 use super::msgs::{
@@ -85,6 +86,8 @@ pub struct NodeConfig {
     /// The parameters as read (the parameter services report them; the node's own
     /// settings above win where they differ).
     pub params: Params,
+    /// The live Foxglove WebSocket server (None: off).
+    pub foxglove: Option<FoxgloveConfig>,
 }
 
 /// A problem starting or running the node.
@@ -96,6 +99,11 @@ pub enum NodeError {
     Record(#[from] crate::record::RecordError),
     #[error("poll: {0}")]
     Poll(#[from] std::io::Error),
+    /// Settings that cannot work together (found before anything starts).
+    #[error("{0}")]
+    Config(String),
+    #[error("{0}")]
+    Foxglove(#[from] super::foxglove::FoxgloveStartError),
 }
 
 pub(super) fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> NodeError + '_ {
@@ -136,6 +144,8 @@ pub struct SimNode {
     last_markers: Option<f64>,
     /// The colliders' markers (only for a scene with colliders and markers on).
     colliders: Option<Publisher<MarkerArray>>,
+    /// The same outputs to Foxglove WebSocket clients (`--foxglove PORT`).
+    foxglove: Option<FoxgloveOut>,
     services: Services,
     /// The parameters as the parameter services report them.
     params: ParamTable,
@@ -167,6 +177,30 @@ pub struct SimNode {
     window_steps: u64,
     window_inputs: u64,
     started: Instant,
+}
+
+/// Lock-step on a handle steps once per pose accepted on its topic. A handle that
+/// follows a TF frame has no pose topic: its target is looked up at each tick, and /tf
+/// carries every frame of the robot at the broadcasters' rates, so "one step per TF
+/// message" would tie the simulation to unrelated frames. Refused, with the ways out.
+fn lockstep_needs_a_pose_topic(cfg: &NodeConfig) -> Result<(), NodeError> {
+    let Lockstep::Handle(h) = cfg.lockstep else {
+        return Ok(());
+    };
+    match cfg.scene.handle_tf_frames.get(h) {
+        Some(Some(frame)) => Err(NodeError::Config(format!(
+            "--lockstep {name}: handle `{name}` follows TF frame `{frame}` (tf_frame in the \
+             scene), so it has no pose topic to step on; use `--lockstep service` (one step \
+             per ~/step call) or drive the handle from its pose topic",
+            name = cfg
+                .scene
+                .world
+                .handles()
+                .get(h)
+                .map_or("?", |s| s.name.as_str()),
+        ))),
+        _ => Ok(()),
+    }
 }
 
 /// A topic for one of the node's writers whose history is bounded by its QoS depth.
@@ -248,6 +282,7 @@ pub(super) fn topic_type<M: RosMessage>() -> MessageTypeName {
 impl SimNode {
     /// Join the DDS domain and create every topic, service and the bag.
     pub fn new(cfg: NodeConfig) -> Result<SimNode, NodeError> {
+        lockstep_needs_a_pose_topic(&cfg)?;
         let context = Context::with_options(ContextOptions::new().domain_id(cfg.domain_id))
             .map_err(dds("creating the DDS participant"))?;
         let node_name =
@@ -416,6 +451,23 @@ impl SimNode {
             })
             .transpose()?;
         let services = Services::new(&mut node, &node_name, &names, &poll, SERVICE_TOKEN_BASE)?;
+        let foxglove = match &cfg.foxglove {
+            Some(f) => {
+                let what = Advertised {
+                    content: published,
+                    colliders: colliders.is_some(),
+                    tf: tf_out.is_some(),
+                };
+                let out = FoxgloveOut::start(f, &names, what)?;
+                eprintln!(
+                    "[developable_sim] Foxglove: open ws://{}:{} in Foxglove",
+                    f.bind,
+                    out.port()
+                );
+                Some(out)
+            }
+            None => None,
+        };
 
         let mut handle_topics = names.handles.clone();
         for (h, _) in &tf_handles {
@@ -474,6 +526,7 @@ impl SimNode {
             markers_period,
             last_markers: None,
             colliders,
+            foxglove,
             services,
             params,
             node: Some(node),
@@ -675,7 +728,7 @@ impl SimNode {
                         );
                         self.tf_failing[k] = false;
                     }
-                    let arrival_ns = crate::record::bag::now_ns();
+                    let arrival_ns = self.arrival_ns();
                     self.record(|r| r.record_input(h, &msg, arrival_ns, None));
                     if self.session.offer(h, &msg, arrival_ns).is_err() {
                         self.stats.inputs_rejected += 1;
@@ -689,11 +742,28 @@ impl SimNode {
                         );
                         self.tf_failing[k] = true;
                     }
+                    let what = super::msgs::PoseStamped {
+                        header: super::msgs::Header {
+                            stamp: super::msgs::Time::from_nanos(at as i64),
+                            frame_id: frame.clone(),
+                        },
+                        pose: super::msgs::Pose::default(), // identity
+                    };
+                    let arrival_ns = self.arrival_ns();
+                    self.record(|r| r.record_tf_failure(h, &what, arrival_ns));
                     self.session.reject_tf(h);
                     self.stats.inputs_rejected += 1;
                 }
             }
         }
+    }
+
+    /// The arrival time of an input: the recorder's (strictly increasing, it is the
+    /// input's log time in the bag) when recording, else the wall clock, ns.
+    fn arrival_ns(&mut self) -> u64 {
+        self.recorder
+            .as_mut()
+            .map_or_else(crate::record::bag::now_ns, |r| r.arrival_ns())
     }
 
     /// One step now; `trigger` is when the tick started or the lock-step input came.
@@ -735,9 +805,10 @@ impl SimNode {
                 dropped += publisher.publish(m.clone()).is_err() as u64;
             }
         }
-        if let Some(publisher) = &self.tf_out {
-            let tf = super::frames::tf_message(&self.session, frame.stamp);
-            dropped += publisher.publish(tf).is_err() as u64;
+        let tf =
+            (self.tf_out.is_some()).then(|| super::frames::tf_message(&self.session, frame.stamp));
+        if let (Some(publisher), Some(tf)) = (&self.tf_out, &tf) {
+            dropped += publisher.publish(tf.clone()).is_err() as u64;
         }
         if let (Some(m), Some(publisher)) = (&frame.colliders, &self.colliders) {
             dropped += publisher.publish(m.clone()).is_err() as u64;
@@ -764,6 +835,9 @@ impl SimNode {
             }
         }
         self.stats.dropped_publications += dropped;
+        if let Some(f) = self.foxglove.as_mut() {
+            f.emit(frame, markers_due, tf.as_ref());
+        }
         self.record(|r| r.record_frame(frame));
     }
 
@@ -821,6 +895,8 @@ impl SimNode {
                     )) => {
                         self.stats.inputs_received += 1;
                         self.stats.inputs_rejected += 1;
+                        let arrival_ns = self.arrival_ns();
+                        self.record(|r| r.record_tf_failure(h, &msg, arrival_ns));
                         self.session.reject_tf(h);
                         continue;
                     }

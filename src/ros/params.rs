@@ -169,8 +169,15 @@ pub const DECLARED: &[Declared] = &[
         name: "foxglove_port",
         ty: ParamType::Integer,
         default: "0",
-        doc: "TCP port of the live Foxglove WebSocket server on 127.0.0.1 (as --foxglove \
-              PORT); 0: none.",
+        doc: "TCP port of the live Foxglove WebSocket server (as --foxglove PORT; \
+              subprotocol foxglove.sdk.v1, ros2msg schemas, cdr); 0: none.",
+    },
+    Declared {
+        name: "foxglove_bind",
+        ty: ParamType::String,
+        default: "127.0.0.1",
+        doc: "IP address the Foxglove WebSocket server binds (as --foxglove-bind): \
+              127.0.0.1 this machine only, 0.0.0.0 every interface (no authentication).",
     },
     Declared {
         name: "tf_max_lag",
@@ -226,6 +233,12 @@ impl Params {
     pub fn bool(&self, name: &str) -> Option<bool> {
         match self.get(name) {
             Some(ParamValue::Bool(b)) => Some(*b),
+            _ => None,
+        }
+    }
+    pub fn integer(&self, name: &str) -> Option<i64> {
+        match self.get(name) {
+            Some(ParamValue::Integer(i)) => Some(*i),
             _ => None,
         }
     }

@@ -133,6 +133,16 @@ impl Objective<'_> {
             }
             if let Some(hs) = acc.ws_hessian.as_deref_mut() {
                 hs[e] += kinetic_element_block(&mass.k, &xs, &sigma, &column, t.density, h);
+                // the mass depends on Δc: ∂²/∂Δc∂q of rho/2 Σ K_ab(Δc) D_a.D_b is
+                // Σ_b w_b . ∂D_b/∂q with w_b = rho Σ_a K'_ab D_a (K is linear in Δc, so
+                // there is no ∂²/∂Δc² term)
+                let mut rate = [Vector3::zeros(); 4];
+                for (b, rate_b) in rate.iter_mut().enumerate() {
+                    for a in 0..4 {
+                        *rate_b += d[a] * (t.density * mass.dk_ddelta_c[a][b]);
+                    }
+                }
+                hs[e] += mass_rate_coupling(&xs, &rate, &sigma, &column, 1.0 / h);
             }
         }
         value
@@ -215,6 +225,35 @@ impl Objective<'_> {
         }
         value
     }
+}
+
+/// The coupling of an element's mass rate with its motion, over [twist; c_e; c_{e+1}]:
+/// a term Σ_b w_b(q) . ∂y_b/∂q_{Δc} whose w_b = ∂²(...)/∂Δc∂y_b at vertex b gives the
+/// row r = Σ_b [x_b × w_b; w_b] `scale` + w_b . σ_b (sliding column of b), and the
+/// symmetric block e r^T + r e^T with e = ∂Δc/∂(c_e, c_{e+1}) = (-1, +1). `scale` is
+/// ∂y/∂x (1/h for the kinetic residual, 1 for a position); `sigma` is ∂y_b/∂c_j.
+pub(super) fn mass_rate_coupling(
+    xs: &[Vector3; 4],
+    rate: &[Vector3; 4],
+    sigma: &[Vector3; 4],
+    column: &[Option<usize>; 4],
+    scale: f64,
+) -> Mat8 {
+    let mut r = super::Vec8::zeros();
+    for b in 0..4 {
+        let moment = xs[b].cross(&rate[b]) * scale;
+        for i in 0..3 {
+            r[i] += moment[i];
+            r[3 + i] += rate[b][i] * scale;
+        }
+        if let Some(cb) = column[b] {
+            r[cb] += rate[b].dot(&sigma[b]);
+        }
+    }
+    let mut e = super::Vec8::zeros();
+    e[6] = -1.0;
+    e[7] = 1.0;
+    e * r.transpose() + r * e.transpose()
 }
 
 /// The Gauss-Newton block of one element's kinetic term over [twist; c_e; c_{e+1}]:

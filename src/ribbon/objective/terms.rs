@@ -4,6 +4,7 @@
 //! directly in (c, psi): bending, the crease regularizer, the end-crease bound.
 
 use super::accumulate::{direction_jacobian, point_jacobian, sliding_rate, Accumulator};
+use super::kinetic::mass_rate_coupling;
 use super::{Mat8, Objective, Workspace};
 use crate::geometry::{Matrix3, Point2, Point3, Vector3};
 use crate::ribbon::mass::element_mass;
@@ -118,6 +119,12 @@ impl Objective<'_> {
             let mass = element_mass(self.strip.length, w, n, c[e + 1] - c[e]);
             let verts = [(e, false), (e, true), (e + 1, false), (e + 1, true)];
             let mut dvalue = 0.0;
+            // for the Hessian: positions, the mass-rate force -m'_a g and the sliding
+            // of each vertex on a free crease (see `mass_rate_coupling`)
+            let mut xs = [Vector3::zeros(); 4];
+            let mut rate = [Vector3::zeros(); 4];
+            let mut sigma = [Vector3::zeros(); 4];
+            let mut column = [None::<usize>; 4];
             for (a, &(j, top)) in verts.iter().enumerate() {
                 let m_a: f64 = t.density * mass.k[a].iter().sum::<f64>();
                 let dm_a: f64 = t.density * mass.dk_ddelta_c[a].iter().sum::<f64>();
@@ -131,6 +138,12 @@ impl Objective<'_> {
                 } else {
                     self.strip.material_bottom(j, c[j])
                 };
+                xs[a] = x.coords;
+                rate[a] = -t.gravity * dm_a;
+                if j != 0 && j != n {
+                    sigma[a] = acc.frames.rotation[e].column(0) * sliding_rate(w, top);
+                    column[a] = Some(if j == e { 6 } else { 7 });
+                }
                 value -= m_a * t.gravity.dot(&x.coords);
                 dvalue -= dm_a * t.gravity.dot(&x.coords);
                 acc.add_point_gradient(
@@ -142,6 +155,9 @@ impl Objective<'_> {
                 );
             }
             acc.add_local(e, -dvalue, dvalue);
+            if let Some(hs) = acc.ws_hessian.as_deref_mut() {
+                hs[e] += mass_rate_coupling(&xs, &rate, &sigma, &column, 1.0);
+            }
         }
         value
     }
