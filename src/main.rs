@@ -83,6 +83,10 @@ fn main() -> ExitCode {
     let cli = Cli::parse_from(std::iter::once(args[0].clone()).chain(own));
     match real_main(cli, ros) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<CheckFailed>().is_some() => {
+            eprintln!("{e}");
+            ExitCode::from(1)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(2)
@@ -101,6 +105,19 @@ fn write_json(path: &Path, value: &impl serde::Serialize, what: &str) -> anyhow:
         .with_context(|| format!("writing {what}{}", path.display()))
 }
 
+/// A check that ran to the end and found a difference: exit code 1 (an error that
+/// stops a command, such as an unreadable bag, is exit code 2).
+#[derive(Debug)]
+struct CheckFailed(String);
+
+impl std::fmt::Display for CheckFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for CheckFailed {}
+
 fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
     let non_node = !matches!(cli.command, Command::Node(_));
     if non_node && ros != params::RosArgs::default() {
@@ -114,10 +131,17 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
             let options = replay::ReplayOptions { scene: a.scene };
             let report = replay::replay(&a.bag, &options)?;
             print(summary::replay_summary(&report));
-            match a.stats {
-                Some(path) => write_json(&path, &report, ""),
-                None => Ok(()),
+            if let Some(path) = a.stats {
+                write_json(&path, &report, "")?;
             }
+            if !report.identical {
+                return Err(CheckFailed(format!(
+                    "replay of {}: the outputs differ from the recording",
+                    report.bag
+                ))
+                .into());
+            }
+            Ok(())
         }
         Command::Bag {
             command: BagCommand::Reindex { bag },

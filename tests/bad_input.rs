@@ -138,3 +138,69 @@ fn a_full_disk_while_recording_ends_the_run_clearly_and_keeps_the_bag_readable()
     let out = bin().args(["bag", "info"]).arg(&bag).output().unwrap();
     assert!(out.status.success(), "{}", stderr(&out));
 }
+
+/// The node under the same limit: it says once that recording stopped, keeps
+/// simulating (and publishing) to the end of its run, then exits with code 2; the bag
+/// holds what was written before the failure, and replays identical up to there.
+#[test]
+fn a_full_disk_while_the_node_records_is_logged_once_and_the_node_goes_on() {
+    if !Path::new("/bin/sh").exists() {
+        eprintln!("skipped: no /bin/sh");
+        return;
+    }
+    let dir = scratch("node_full_disk");
+    let bag = dir.join("bag");
+    let domain = (100 + std::process::id() % 100).to_string();
+    // as fast as possible: 200 steps of the torsion scene, far more than 32 KiB
+    let script = format!(
+        "trap '' XFSZ; ulimit -f 64 && exec '{}' node '{}' --as-fast-as-possible --duration 2 \
+         --domain-id {domain} --record '{}'",
+        env!("CARGO_BIN_EXE_developable_sim"),
+        TORSION,
+        bag.display()
+    );
+    let out = Command::new("/bin/sh")
+        .args(["-c", &script])
+        .output()
+        .unwrap();
+    let e = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
+    let stopped: Vec<&str> = e.lines().filter(|l| l.contains("recording stopped")).collect();
+    assert_eq!(stopped.len(), 1, "logged once: {e}");
+    assert!(
+        stopped[0].contains("bag_0.mcap") && stopped[0].contains("File too large"),
+        "{e}"
+    );
+    assert!(stopped[0].contains("the simulation goes on"), "{e}");
+    // it kept simulating to the end of its duration
+    assert!(e.contains("stopped at t = 2.000 s after 200 steps"), "{e}");
+    // and said why it exits non-zero, last
+    assert!(
+        e.lines().last().unwrap_or("").starts_with("error: recording failed"),
+        "{e}"
+    );
+    // the bag: what was written is readable, metadata.yaml counts exactly that
+    let mcap = bag.join("bag_0.mcap");
+    let s = scan(&mcap).unwrap();
+    let recorded = s.message_count();
+    assert!(recorded > 0, "{e}");
+    let status_count = s
+        .topics()
+        .into_iter()
+        .find(|t| t.name == "/ribbon/status")
+        .map(|t| t.count)
+        .unwrap_or(0);
+    assert!(
+        status_count > 0 && status_count < 201,
+        "the failure came before the end: {status_count} statuses"
+    );
+    let meta: developable_sim::record::metadata::MetadataFile =
+        serde_yaml::from_str(&std::fs::read_to_string(bag.join("metadata.yaml")).unwrap()).unwrap();
+    assert_eq!(meta.rosbag2_bagfile_information.message_count, recorded);
+    // replay compares everything up to the failure, and finds it identical
+    let out = bin().arg("replay").arg(&bag).output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{stdout}{}", stderr(&out));
+    assert!(stdout.contains("identical"), "{stdout}");
+}

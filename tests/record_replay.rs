@@ -8,10 +8,11 @@ use std::path::{Path, PathBuf};
 
 use developable_sim::record::bag::{BagOptions, BagWriter};
 use developable_sim::record::metadata::{MetadataFile, Qos};
-use developable_sim::record::read::{reindex, scan};
+use developable_sim::record::read::{mcap_files, reindex, scan, BagEvent, BagMessage, McapStream};
 use developable_sim::record::recorder::RunRecorder;
 use developable_sim::record::replay::{replay, ReplayOptions};
-use developable_sim::ros::msgs::{Clock, Time};
+use developable_sim::ros::cdr;
+use developable_sim::ros::msgs::{Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints, Time};
 use developable_sim::{runner, scene};
 
 const TORSION: &str = concat!(
@@ -132,6 +133,11 @@ fn a_bag_cut_short_is_streamed_replayed_and_repaired_by_reindex() {
         metadata(&bag).rosbag2_bagfile_information.message_count,
         readable
     );
+    // the repaired file is complete, but its last state may still lack outputs the cut
+    // took: replay knows the file was repaired and compares up to there
+    let r = replay(&bag, &ReplayOptions::default()).unwrap();
+    assert!(r.truncated.is_none(), "{r:?}");
+    assert!(r.identical, "{r:?}");
     // a complete bag: reindex only rewrites metadata.yaml
     let again = reindex(&bag).unwrap();
     assert!(again.repaired.is_empty());
@@ -230,4 +236,178 @@ fn bags_are_never_written_over_and_unwritable_folders_fail_clearly() {
         .to_string();
     assert!(e.contains("cannot create it"), "{e}");
     assert!(e.contains(&under_a_file.display().to_string()), "{e}");
+}
+
+/// Copy the bag `src` into `dst` message by message through the project's reader and
+/// writer; `edit` sees each message and returns its new payload, or None to drop it.
+fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&BagMessage) -> Option<Vec<u8>>) {
+    let mut out = BagWriter::create(dst, BagOptions::default()).unwrap();
+    let mut ids = std::collections::BTreeMap::new();
+    for file in mcap_files(src).unwrap() {
+        let mut stream = McapStream::open(&file).unwrap();
+        for event in stream.by_ref() {
+            match event.unwrap() {
+                BagEvent::Metadata { name, values } => out.write_metadata(&name, values).unwrap(),
+                BagEvent::Message(m) => {
+                    let id = *ids.entry(m.topic.clone()).or_insert_with(|| {
+                        match m.type_name.as_str() {
+                            "rosgraph_msgs/msg/Clock" => out.add_topic::<Clock>(&m.topic, Qos::CLOCK),
+                            "visualization_msgs/msg/MarkerArray" => {
+                                out.add_topic::<MarkerArray>(&m.topic, Qos::MARKERS)
+                            }
+                            "developable_sim/msg/SingularPoints" => {
+                                out.add_topic::<SingularPoints>(&m.topic, Qos::DATA)
+                            }
+                            "developable_sim/msg/SimStatus" => {
+                                out.add_topic::<SimStatus>(&m.topic, Qos::DATA)
+                            }
+                            "geometry_msgs/msg/PoseStamped" => {
+                                out.add_topic::<PoseStamped>(&m.topic, Qos::SENSOR_DATA)
+                            }
+                            other => panic!("unexpected type {other}"),
+                        }
+                        .unwrap()
+                    });
+                    if let Some(data) = edit(&m) {
+                        out.write_raw(id, m.log_time, m.publish_time, &data).unwrap();
+                    }
+                }
+            }
+        }
+        assert!(stream.truncated.is_none());
+    }
+    out.close().unwrap();
+}
+
+/// `developable_sim replay BAG`: (exit code, stdout).
+fn replay_cli(bag: &Path) -> (Option<i32>, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_developable_sim"))
+        .arg("replay")
+        .arg(bag)
+        .output()
+        .unwrap();
+    (out.status.code(), String::from_utf8_lossy(&out.stdout).into_owned())
+}
+
+/// The status of step `step` on `/ribbon/status`, decoded.
+fn status_at(m: &BagMessage, step: u64) -> Option<SimStatus> {
+    if m.topic != "/ribbon/status" {
+        return None;
+    }
+    let s: SimStatus = cdr::decode(&m.data).unwrap();
+    (s.step == step).then_some(s)
+}
+
+#[test]
+fn an_untouched_copy_replays_identical_and_exits_0() {
+    // the rewriting itself changes nothing: the tampering tests below see only their edit
+    let dir = scratch("copy");
+    let bag = record(&dir, 0.1, BagOptions::default());
+    let copy = dir.join("copy");
+    rewrite(&bag, &copy, |m| Some(m.data.clone()));
+    let r = replay(&copy, &ReplayOptions::default()).unwrap();
+    assert!(r.identical, "{r:?}");
+    let (code, out) = replay_cli(&copy);
+    assert_eq!(code, Some(0), "{out}");
+    assert!(out.contains("identical"), "{out}");
+}
+
+#[test]
+fn a_zero_flipped_in_sign_is_a_difference_and_exits_1() {
+    let dir = scratch("signed_zero");
+    let bag = record(&dir, 0.1, BagOptions::default());
+    let tampered = dir.join("tampered");
+    let mut flipped = 0;
+    rewrite(&bag, &tampered, |m| {
+        let Some(mut s) = status_at(m, 3) else {
+            return Some(m.data.clone());
+        };
+        // gravity is off in the torsion scene: its potential is a zero, whose sign we flip
+        assert_eq!(s.gravity_energy, 0.0);
+        s.gravity_energy = -s.gravity_energy;
+        flipped += 1;
+        Some(cdr::encode(&s).unwrap())
+    });
+    assert_eq!(flipped, 1);
+    let r = replay(&tampered, &ReplayOptions::default()).unwrap();
+    assert!(!r.identical, "{r:?}");
+    let status = r.topics.iter().find(|t| t.topic == "/ribbon/status").unwrap();
+    assert_eq!(status.differing, 1, "{status:?}");
+    assert_eq!(status.max_abs_difference, 0.0, "a sign of zero has no magnitude");
+    assert_eq!(status.first_difference, "step 3: gravity_energy", "{status:?}");
+    let (code, out) = replay_cli(&tampered);
+    assert_eq!(code, Some(1), "{out}");
+    assert!(out.contains("DIFFERENT"), "{out}");
+}
+
+#[test]
+fn a_nan_with_other_bits_is_a_difference() {
+    // a NaN in place of a NaN with different bits (the sign): not identical
+    let dir = scratch("nan_bits");
+    let bag = record(&dir, 0.1, BagOptions::default());
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    let nan = |sign: f64| {
+        move |m: &BagMessage| {
+            let Some(mut s) = status_at(m, 2) else {
+                return Some(m.data.clone());
+            };
+            s.isometry_error = f64::NAN.copysign(sign);
+            Some(cdr::encode(&s).unwrap())
+        }
+    };
+    rewrite(&bag, &a, nan(1.0));
+    rewrite(&a, &b, nan(-1.0));
+    // both differ from the replay, which computes a finite isometry error
+    for bag in [&a, &b] {
+        let r = replay(bag, &ReplayOptions::default()).unwrap();
+        let status = r.topics.iter().find(|t| t.topic == "/ribbon/status").unwrap();
+        assert_eq!(status.differing, 1, "{status:?}");
+        assert_eq!(status.max_abs_difference, f64::INFINITY);
+    }
+}
+
+#[test]
+fn an_output_missing_from_the_bag_is_a_difference_and_exits_1() {
+    let dir = scratch("missing");
+    let bag = record(&dir, 0.1, BagOptions::default());
+    let tampered = dir.join("tampered");
+    // drop the markers of step 4 (the statuses say which step a message belongs to)
+    let mut step = 0;
+    let mut dropped = 0;
+    rewrite(&bag, &tampered, |m| {
+        if m.topic == "/ribbon/status" {
+            step = cdr::decode::<SimStatus>(&m.data).unwrap().step;
+        }
+        if m.topic == "/ribbon/markers" && step == 4 {
+            dropped += 1;
+            return None;
+        }
+        Some(m.data.clone())
+    });
+    assert_eq!(dropped, 1);
+    let r = replay(&tampered, &ReplayOptions::default()).unwrap();
+    assert!(!r.identical, "{r:?}");
+    let markers = r.topics.iter().find(|t| t.topic == "/ribbon/markers").unwrap();
+    assert_eq!((markers.missing, markers.differing), (1, 0), "{markers:?}");
+    assert!(markers.first_difference.starts_with("step 4:"), "{markers:?}");
+    let (code, out) = replay_cli(&tampered);
+    assert_eq!(code, Some(1), "{out}");
+
+    // the last state's markers missing from a complete bag count too
+    let last = dir.join("last");
+    let mut seen = 0;
+    let total = 11; // steps 0..10
+    rewrite(&bag, &last, |m| {
+        if m.topic == "/ribbon/markers" {
+            seen += 1;
+            if seen == total {
+                return None;
+            }
+        }
+        Some(m.data.clone())
+    });
+    let r = replay(&last, &ReplayOptions::default()).unwrap();
+    let markers = r.topics.iter().find(|t| t.topic == "/ribbon/markers").unwrap();
+    assert_eq!(markers.missing, 1, "{markers:?}");
+    assert!(markers.first_difference.starts_with("step 10:"), "{markers:?}");
 }

@@ -92,9 +92,14 @@ pub fn replay_summary(r: &ReplayReport) -> Vec<String> {
             .as_ref()
             .map(|s| format!("; structure: {s}"))
             .unwrap_or_default();
+        let first = if t.first_difference.is_empty() {
+            String::new()
+        } else {
+            format!("; first: {}", t.first_difference)
+        };
         lines.push(format!(
-            "  {:<32} {:>7} compared  {:>6} differ  max |diff| {:.3e}{at}{structure}",
-            t.topic, t.compared, t.differing, t.max_abs_difference,
+            "  {:<32} {:>7} compared  {:>6} differ  {:>4} missing  max |diff| {:.3e}{at}{structure}{first}",
+            t.topic, t.compared, t.differing, t.missing, t.max_abs_difference,
         ));
     }
     if let Some(t) = &r.truncated {

@@ -147,7 +147,7 @@ impl BagWriter {
             .compression(compression)
             .chunk_size(Some(options.chunk_size))
             .create(sink)
-            .map_err(|source| RecordError::Mcap { path, source })?;
+            .map_err(|error| RecordError::Mcap { path, error })?;
         Ok(BagWriter {
             dir: dir.to_path_buf(),
             file_name: file_name.to_string(),
@@ -178,10 +178,10 @@ impl BagWriter {
         self.failed.as_deref()
     }
 
-    fn mcap_error(&self, source: mcap::McapError) -> RecordError {
+    fn mcap_error(&self, error: mcap::McapError) -> RecordError {
         RecordError::Mcap {
             path: self.mcap_path(),
-            source,
+            error,
         }
     }
 

@@ -31,14 +31,23 @@ pub enum RecordError {
         #[source]
         source: std::io::Error,
     },
-    #[error("{path}: MCAP: {source}")]
+    /// The MCAP writer's or reader's error with its OS cause (`File too large (os error
+    /// 27)`), which the MCAP crate's own message leaves out: the node logs this line.
+    #[error("{path}: MCAP: {}", mcap_cause(.error))]
     Mcap {
         path: PathBuf,
-        #[source]
-        source: mcap::McapError,
+        error: mcap::McapError,
     },
     #[error("{path}: {message}")]
     Bag { path: PathBuf, message: String },
     #[error("encoding a message: {0}")]
     Cdr(#[from] crate::ros::cdr::CdrError),
+}
+
+/// An MCAP error and, for an I/O error, the OS error under it.
+fn mcap_cause(e: &mcap::McapError) -> String {
+    match e {
+        mcap::McapError::Io(io) => format!("{e}: {io}"),
+        _ => e.to_string(),
+    }
 }

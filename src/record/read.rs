@@ -65,7 +65,13 @@ pub struct McapStream {
     pub truncated: Option<String>,
     /// True once the data-end record was reached.
     pub reached_data_end: bool,
+    /// The MCAP header's `library` (who wrote the file), once read.
+    pub library: Option<String>,
 }
+
+/// How `reindex` ends the `library` of the files it rewrites: such a file was cut short
+/// (crash, full disk) before it was repaired, so its last state may be incomplete.
+pub const REINDEX_LIBRARY_SUFFIX: &str = "(reindex)";
 
 impl McapStream {
     pub fn open(path: &Path) -> Result<McapStream, RecordError> {
@@ -84,6 +90,7 @@ impl McapStream {
             done: false,
             truncated: None,
             reached_data_end: false,
+            library: None,
         })
     }
 
@@ -140,6 +147,7 @@ impl Iterator for McapStream {
                         }
                     };
                     match record {
+                        Record::Header(h) => self.library = Some(h.library),
                         Record::Schema { header, data } => {
                             self.schemas.insert(
                                 header.id,
@@ -404,18 +412,18 @@ fn repair(path: &Path) -> Result<PathBuf, RecordError> {
         let mut w = mcap::WriteOptions::new()
             .profile("ros2")
             .library(format!(
-                "developable_sim {} (reindex)",
+                "developable_sim {} {REINDEX_LIBRARY_SUFFIX}",
                 env!("CARGO_PKG_VERSION")
             ))
             .compression(None)
             .create(BufWriter::new(out))
-            .map_err(|source| RecordError::Mcap {
+            .map_err(|error| RecordError::Mcap {
                 path: tmp.clone(),
-                source,
+                error,
             })?;
-        let mcap_err = |source| RecordError::Mcap {
+        let mcap_err = |error| RecordError::Mcap {
             path: tmp.clone(),
-            source,
+            error,
         };
         let mut stream = McapStream::open(path)?;
         let mut channel_map: BTreeMap<u16, u16> = BTreeMap::new();

@@ -2,21 +2,25 @@
 //! handle poses in recorded order (through the same input filter), step it whenever
 //! the recording stepped (the statuses are the ledger: `step` counts steps since the
 //! last reset, `episode` counts resets), and compare every recorded output with the
-//! recomputed one. The same build gives zero difference; otherwise the report names
-//! the largest difference per topic.
+//! recomputed one bit for bit (`f64::to_bits`: -0.0 and +0.0 differ, and so do NaNs
+//! with different bits). An output the replay produces for a state that the bag lacks
+//! is a difference too (except in the last state of a bag cut short, or repaired by
+//! `bag reindex` after it was). The same build
+//! gives zero difference; otherwise the report names the largest difference per topic
+//! and the first differing field, and `developable_sim replay` exits with code 1.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::read::{mcap_files, BagEvent, McapStream};
+use super::read::{mcap_files, BagEvent, McapStream, REINDEX_LIBRARY_SUFFIX};
 use super::recorder::{SessionInfo, SESSION_RECORD};
 use super::RecordError;
 use crate::ros::cdr;
 use crate::ros::input::InputPolicy;
 use crate::ros::introspect::{compare, to_value, Value};
-use crate::ros::msgs::{Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints};
+use crate::ros::msgs::{Clock, MarkerArray, PoseStamped, RosMessage, SimStatus, SingularPoints};
 use crate::ros::session::{Frame, FrameContent, Session};
 use crate::sim::StepReport;
 
@@ -34,8 +38,13 @@ pub struct TopicReport {
     pub type_name: String,
     /// Recorded messages compared.
     pub compared: u64,
-    /// Messages that differ at all.
+    /// Messages that differ at all (one bit is enough).
     pub differing: u64,
+    /// Outputs the replay produced for a state that has none in the bag.
+    pub missing: u64,
+    /// The first difference: `step <n>: <field path>` (also when its magnitude is 0,
+    /// e.g. -0.0 vs +0.0).
+    pub first_difference: String,
     /// Largest absolute difference of a numeric field.
     pub max_abs_difference: f64,
     /// Where it was: `step <n>: <field path>`.
@@ -66,13 +75,72 @@ pub struct ReplayReport {
     pub wall_s: f64,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 enum Output {
     Clock,
     Markers(usize),
     Singular(usize),
     Status(usize),
     Colliders,
+}
+
+impl Output {
+    fn type_name(self) -> &'static str {
+        match self {
+            Output::Clock => Clock::TYPE,
+            Output::Markers(_) | Output::Colliders => MarkerArray::TYPE,
+            Output::Singular(_) => SingularPoints::TYPE,
+            Output::Status(_) => SimStatus::TYPE,
+        }
+    }
+
+    /// Whether `frame` holds this output.
+    fn in_frame(self, frame: &Frame) -> bool {
+        match self {
+            Output::Clock => true,
+            Output::Markers(o) => frame.objects[o].markers.is_some(),
+            Output::Singular(o) => frame.objects[o].singular_points.is_some(),
+            Output::Status(o) => frame.objects[o].status.is_some(),
+            Output::Colliders => frame.colliders.is_some(),
+        }
+    }
+}
+
+/// Count, per topic, the outputs `frame` (the state `step`) holds that the bag did not
+/// record for that state (`seen`).
+fn count_missing(
+    frame: &Frame,
+    step: u64,
+    routes: &BTreeMap<String, Route>,
+    seen: &std::collections::BTreeSet<Output>,
+    per_topic: &mut BTreeMap<String, TopicReport>,
+) {
+    for (topic, route) in routes {
+        let Route::Output(out) = *route else { continue };
+        if seen.contains(&out) || !out.in_frame(frame) {
+            continue;
+        }
+        let entry = topic_entry(per_topic, topic, out.type_name());
+        entry.missing += 1;
+        if entry.first_difference.is_empty() {
+            entry.first_difference =
+                format!("step {step}: produced by the replay, not in the bag");
+        }
+    }
+}
+
+fn topic_entry<'a>(
+    per_topic: &'a mut BTreeMap<String, TopicReport>,
+    topic: &str,
+    type_name: &str,
+) -> &'a mut TopicReport {
+    per_topic
+        .entry(topic.to_string())
+        .or_insert_with(|| TopicReport {
+            topic: topic.to_string(),
+            type_name: type_name.to_string(),
+            ..TopicReport::default()
+        })
 }
 
 /// Replay the bag folder `dir`.
@@ -101,6 +169,9 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
     let mut last_step: Option<(StepReport, f64)> = None;
     let mut inputs_since_frame = false;
     let mut per_topic: BTreeMap<String, TopicReport> = BTreeMap::new();
+    // the outputs recorded for the current state
+    let mut seen = std::collections::BTreeSet::new();
+    let mut truncated = false;
     for file in &files {
         let mut stream = McapStream::open(file)?;
         for event in stream.by_ref() {
@@ -216,6 +287,10 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                                     let st: SimStatus = cdr::decode(&m.data).map_err(decode_err)?;
                                     let key = (st.episode, st.step);
                                     if current != Some(key) {
+                                        if let (Some(f), Some((_, step))) = (&frame, current) {
+                                            count_missing(f, step, &routes, &seen, &mut per_topic);
+                                        }
+                                        seen.clear();
                                         advance(
                                             s,
                                             current,
@@ -261,14 +336,8 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                             }
                             .transpose()
                             .map_err(|e| bag_err(e.to_string()))?;
-                            let entry =
-                                per_topic
-                                    .entry(m.topic.clone())
-                                    .or_insert_with(|| TopicReport {
-                                        topic: m.topic.clone(),
-                                        type_name: m.type_name.clone(),
-                                        ..TopicReport::default()
-                                    });
+                            seen.insert(out);
+                            let entry = topic_entry(&mut per_topic, &m.topic, &m.type_name);
                             entry.compared += 1;
                             let step = current.map(|c| c.1).unwrap_or(0);
                             match computed {
@@ -279,6 +348,11 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                                             "step {step}: recorded but not produced by the replay"
                                         )
                                     });
+                                    if entry.first_difference.is_empty() {
+                                        entry.first_difference = format!(
+                                            "step {step}: recorded, not produced by the replay"
+                                        );
+                                    }
                                 }
                                 Some(mut c) => {
                                     let mut r = recorded;
@@ -291,6 +365,10 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                                     let d = compare(&r, &c);
                                     if !d.is_zero() {
                                         entry.differing += 1;
+                                        if entry.first_difference.is_empty() {
+                                            let at = d.structural.as_deref().unwrap_or(&d.first_path);
+                                            entry.first_difference = format!("step {step}: {at}");
+                                        }
                                     }
                                     if d.max_abs > entry.max_abs_difference {
                                         entry.max_abs_difference = d.max_abs;
@@ -311,6 +389,16 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
         if let Some(t) = &stream.truncated {
             report.truncated = Some(format!("{}: {t}", file.display()));
         }
+        // cut short now, or before `bag reindex` repaired it
+        truncated = stream.truncated.is_some()
+            || stream
+                .library
+                .as_deref()
+                .is_some_and(|l| l.ends_with(REINDEX_LIBRARY_SUFFIX));
+    }
+    // the last state: complete unless the bag was cut short in it
+    if let (Some(f), Some((_, step)), false) = (&frame, current, truncated) {
+        count_missing(f, step, &routes, &seen, &mut per_topic);
     }
     if info.is_none() {
         return Err(bag_err(format!(
@@ -326,7 +414,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
     report.identical = report
         .topics
         .iter()
-        .all(|t| t.differing == 0 && t.structural.is_none());
+        .all(|t| t.differing == 0 && t.missing == 0 && t.structural.is_none());
     report.wall_s = start.elapsed().as_secs_f64();
     Ok(report)
 }

@@ -431,9 +431,8 @@ impl RibbonSim {
         report.energies = self.energies();
         report.isometry_error = self.mesh.isometry_error();
         report.singular_points = self.singular.len();
-        if !report.constraint_violation.is_finite() {
-            report.constraint_violation = 0.0;
-        }
+        // a rejected step keeps its NaN violation: the new state is unknown, and 0 would
+        // read as "every constraint met"
         report
     }
 

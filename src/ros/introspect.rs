@@ -71,22 +71,39 @@ impl Value {
     }
 }
 
-/// The largest difference found between two values.
+/// The differences found between two values.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Difference {
-    /// Largest absolute difference of a numeric leaf (0 when all equal).
+    /// Numeric leaves whose bits differ (floats by `f64::to_bits`: -0.0 and +0.0
+    /// differ, and so do NaNs with different bits; integers exactly).
+    pub leaves: u64,
+    /// Path of the first such leaf, e.g. `markers[0].points[12].x`.
+    pub first_path: String,
+    /// Largest absolute difference of a numeric leaf: 0 when the only differences are
+    /// in the sign of zero or a NaN's bits, infinite when one side is not finite.
     pub max_abs: f64,
-    /// Path of that leaf, e.g. `markers[0].points[12].x`.
+    /// Path of that leaf (empty when `max_abs` is 0).
     pub max_path: String,
     /// Structural differences (lengths, strings, types): the first one found.
     pub structural: Option<String>,
 }
 
 impl Difference {
-    /// True when the two values are identical (bit for bit for floats, treating
-    /// NaN == NaN).
+    /// True when the two values are identical bit for bit.
     pub fn is_zero(&self) -> bool {
-        self.max_abs == 0.0 && self.structural.is_none()
+        self.leaves == 0 && self.structural.is_none()
+    }
+
+    /// A numeric leaf at `path` differs by `magnitude`.
+    fn note(&mut self, path: &str, magnitude: f64) {
+        if self.leaves == 0 {
+            self.first_path = path.to_string();
+        }
+        self.leaves += 1;
+        if magnitude > self.max_abs {
+            self.max_abs = magnitude;
+            self.max_path = path.to_string();
+        }
     }
 }
 
@@ -107,15 +124,6 @@ fn note_structural(d: &mut Difference, path: &str, what: String) {
 }
 
 fn walk(a: &Value, b: &Value, path: &mut String, d: &mut Difference) {
-    let num = |v: &Value| -> Option<f64> {
-        match v {
-            Value::Int(x, _) => Some(*x as f64),
-            Value::UInt(x, _) => Some(*x as f64),
-            Value::Float(x, _) => Some(*x),
-            Value::Bool(x) => Some(*x as u8 as f64),
-            _ => None,
-        }
-    };
     match (a, b) {
         (Value::Struct(na, fa), Value::Struct(nb, fb)) => {
             if na != nb || fa.len() != fb.len() {
@@ -149,23 +157,53 @@ fn walk(a: &Value, b: &Value, path: &mut String, d: &mut Difference) {
                 note_structural(d, path, format!("{sa:?} vs {sb:?}"));
             }
         }
-        _ => match (num(a), num(b)) {
-            (Some(x), Some(y)) => {
-                let diff = if x.to_bits() == y.to_bits() || (x.is_nan() && y.is_nan()) {
-                    0.0
-                } else if x.is_finite() && y.is_finite() {
-                    (x - y).abs()
-                } else {
-                    f64::INFINITY
-                };
-                if diff > d.max_abs || (diff == 0.0 && x.to_bits() != y.to_bits() && x != y) {
-                    d.max_abs = diff;
-                    d.max_path = path.clone();
-                }
-            }
-            _ => note_structural(d, path, format!("{a:?} vs {b:?}")),
+        _ => match leaf_difference(a, b) {
+            Some(None) => {}
+            Some(Some(magnitude)) => d.note(path, magnitude),
+            None => note_structural(d, path, format!("{a:?} vs {b:?}")),
         },
     }
+}
+
+/// Compare two numeric leaves of the same type bit for bit: `Some(None)` when
+/// identical, `Some(Some(|a - b|))` when not (0 for -0.0 vs +0.0 or two NaNs with
+/// different bits, infinite when one side is not finite), `None` when they are not
+/// numbers of the same type.
+fn leaf_difference(a: &Value, b: &Value) -> Option<Option<f64>> {
+    let magnitude = match (a, b) {
+        (Value::Float(x, ta), Value::Float(y, tb)) if ta == tb => {
+            if x.to_bits() == y.to_bits() {
+                return Some(None);
+            }
+            if x.is_finite() && y.is_finite() {
+                (x - y).abs()
+            } else if x.is_nan() && y.is_nan() {
+                0.0
+            } else {
+                f64::INFINITY
+            }
+        }
+        (Value::Int(x, ta), Value::Int(y, tb)) if ta == tb => {
+            if x == y {
+                return Some(None);
+            }
+            (*x as i128 - *y as i128).unsigned_abs() as f64
+        }
+        (Value::UInt(x, ta), Value::UInt(y, tb)) if ta == tb => {
+            if x == y {
+                return Some(None);
+            }
+            x.abs_diff(*y) as f64
+        }
+        (Value::Bool(x), Value::Bool(y)) => {
+            if x == y {
+                return Some(None);
+            }
+            1.0
+        }
+        _ => return None,
+    };
+    Some(Some(magnitude))
 }
 
 /// Serialize `value` into a [`Value`] tree.
@@ -393,6 +431,39 @@ impl ser::SerializeStruct for StructBuilder {
 mod tests {
     use super::*;
     use crate::ros::msgs::{Point, SingularPoint, SingularPoints};
+
+    #[test]
+    fn compare_is_bit_exact() {
+        let f = |x: f64| Value::Float(x, "float64");
+        let same = |a: &Value, b: &Value| compare(a, b).is_zero();
+        assert!(same(&f(1.5), &f(1.5)));
+        // the sign of zero
+        let d = compare(&f(0.0), &f(-0.0));
+        assert!(!d.is_zero());
+        assert_eq!((d.leaves, d.max_abs), (1, 0.0));
+        // NaNs: the same bits are identical, different bits are not
+        let quiet = f64::NAN;
+        let other = f64::from_bits(quiet.to_bits() | 1);
+        assert!(other.is_nan());
+        assert!(same(&f(quiet), &f(quiet)));
+        assert!(!same(&f(quiet), &f(other)));
+        assert!(!same(&f(quiet), &f(-quiet)));
+        assert_eq!(compare(&f(quiet), &f(1.0)).max_abs, f64::INFINITY);
+        // integers beyond 2^53 are compared exactly, not through f64
+        let big = 1u64 << 60;
+        let d = compare(&Value::UInt(big, "uint64"), &Value::UInt(big + 1, "uint64"));
+        assert_eq!((d.leaves, d.max_abs), (1, 1.0));
+        let d = compare(&Value::Int(i64::MIN, "int64"), &Value::Int(i64::MAX, "int64"));
+        assert!(!d.is_zero() && d.max_abs > 1e19);
+        // the first differing leaf is named even when the magnitude is 0
+        let mut a = SingularPoints::default();
+        a.points.push(SingularPoint::default());
+        let mut b = a.clone();
+        b.points[0].position.z = -0.0;
+        let d = compare(&to_value(&a).unwrap(), &to_value(&b).unwrap());
+        assert_eq!(d.first_path, "points[0].position.z");
+        assert!(!d.is_zero());
+    }
 
     #[test]
     fn compare_finds_the_largest_difference_and_structure_changes() {

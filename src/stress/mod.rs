@@ -13,15 +13,19 @@
 //!   separately), W(t) the running sum of [`ObjectStepReport::work_bound`] (force at
 //!   the end of a step times the displacement of the point it acts on, |F| |Δx|, for
 //!   handle constraints, normal guides and point forces) and
-//!   `tol(t) = r * (|E(0)| + W(t)) + ENERGY_ABSOLUTE_TOLERANCE`, r =
-//!   [`ENERGY_RELATIVE_TOLERANCE`] (ribbons) or [`PAPER_ENERGY_RELATIVE_TOLERANCE`].
-//!   Implicit Euler dissipates energy, so a healthy step never exceeds the bound; the
-//!   tolerance covers what the discrete identity does not: the non-convex bending energy
-//!   and, for paper, the remeshing and isometry projection between FEM steps;
+//!   `tol(t) = r * (S(0) + W(t)) + ENERGY_ABSOLUTE_TOLERANCE`, r =
+//!   [`ENERGY_RELATIVE_TOLERANCE`] (ribbons) or [`PAPER_ENERGY_RELATIVE_TOLERANCE`],
+//!   S(0) the kinetic + elastic energy of the initial state. Everything in the bound is
+//!   measured relative to the initial state: E(t) - E(0), W and S(0) do not change when
+//!   the scene is moved relative to the world origin (the gravity and external
+//!   potentials in E(0) do, which is why they are not in the tolerance). Implicit Euler
+//!   dissipates energy, so a healthy step never exceeds the bound; the tolerance covers
+//!   what the discrete identity does not: the non-convex bending energy and, for
+//!   paper, the remeshing and isometry projection between FEM steps;
+//! - at most [`UNCONVERGED_FRACTION`] of its object steps stopped on the solver's
+//!   iteration limit, and none was rejected (non-finite, previous state kept), unless
+//!   the case states a larger [`Allowance`] and why;
 //! - the case's own expectation holds (over-stretch: the violation is reported).
-//!
-//! Unconverged and rejected (non-finite, previous state kept) steps are counted and
-//! listed; they do not fail a run by themselves, since the fallback is what is tested.
 //!
 //! [`ObjectStepReport::work_bound`]: crate::sim::ObjectStepReport::work_bound
 
@@ -33,7 +37,7 @@ use serde::Serialize;
 
 use crate::runner::{self, ObserverError, StepObserver};
 use crate::scene::{self, Scene};
-use crate::sim::StepReport;
+use crate::sim::{StepReport, World};
 
 /// Share of |E(0)| + W(t) the energy may exceed the work bound by (see the module doc):
 /// ribbons, whose step is one implicit-Euler minimization.
@@ -46,6 +50,28 @@ pub const PAPER_ENERGY_RELATIVE_TOLERANCE: f64 = 0.25;
 pub const ENERGY_ABSOLUTE_TOLERANCE: f64 = 1e-6;
 /// The time steps of every case, s.
 pub const TIME_STEPS: [f64; 3] = [0.001, 0.01, 0.1];
+/// Share of a run's object steps that may stop on the solver's iteration limit (the
+/// best finite iterate is kept): a healthy case converges nearly everywhere; a solver
+/// that never moves (every step on the limit) fails.
+pub const UNCONVERGED_FRACTION: f64 = 0.05;
+
+/// How many unconverged and rejected steps a case may have, and why.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Allowance {
+    /// Largest share of object steps that stop on the iteration limit, in [0, 1].
+    pub unconverged_fraction: f64,
+    /// Rejected steps (non-finite result, previous state kept) the case expects.
+    pub rejected_steps: usize,
+    /// Why the case needs more than the suite's default (empty for the default).
+    pub reason: &'static str,
+}
+
+/// The suite's default: [`UNCONVERGED_FRACTION`], no rejected step.
+pub const DEFAULT_ALLOWANCE: Allowance = Allowance {
+    unconverged_fraction: UNCONVERGED_FRACTION,
+    rejected_steps: 0,
+    reason: "",
+};
 
 /// What a case checks beyond finiteness and the energy bound.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -79,6 +105,8 @@ pub struct StressCase {
     pub expectation: Expectation,
     /// Relative energy tolerance of the bound.
     pub energy_tolerance: f64,
+    /// Unconverged and rejected steps the case may have.
+    pub allowance: Allowance,
 }
 
 impl StressCase {
@@ -127,6 +155,7 @@ pub fn cases() -> Vec<StressCase> {
             quick_dts: ALL,
             expectation: Expectation::Stable,
             energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
+            allowance: DEFAULT_ALLOWANCE,
         },
         StressCase {
             name: "bending_x1e-4",
@@ -140,6 +169,7 @@ pub fn cases() -> Vec<StressCase> {
             quick_dts: ALL,
             expectation: Expectation::Stable,
             energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
+            allowance: DEFAULT_ALLOWANCE,
         },
         StressCase {
             name: "twist_8pi",
@@ -161,6 +191,7 @@ pub fn cases() -> Vec<StressCase> {
             quick_dts: ALL,
             expectation: Expectation::Stable,
             energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
+            allowance: DEFAULT_ALLOWANCE,
         },
         StressCase {
             name: "extreme_drag",
@@ -174,6 +205,14 @@ pub fn cases() -> Vec<StressCase> {
             quick_dts: ALL,
             expectation: Expectation::Stable,
             energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
+            allowance: Allowance {
+                unconverged_fraction: 0.1,
+                rejected_steps: 0,
+                reason: "at dt 0.001 s the 20 N drag on the closed loop leaves 3 of 40 quick steps \
+                         (10, 18, 19; 2026-12-02) with one augmented-Lagrangian round on the \
+                         200-iteration inner limit short of the 1e-6 gradient reduction, the loop \
+                         closed to 1e-6 m and the energy bound met",
+            },
         },
         StressCase {
             name: "handle_jump",
@@ -195,6 +234,7 @@ pub fn cases() -> Vec<StressCase> {
             quick_dts: ALL,
             expectation: Expectation::Stable,
             energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
+            allowance: DEFAULT_ALLOWANCE,
         },
         StressCase {
             name: "over_stretch",
@@ -215,6 +255,7 @@ pub fn cases() -> Vec<StressCase> {
             // violations is at least (1.5 - 1) / 2 m (less a round-off margin)
             expectation: Expectation::ViolationAtLeast(0.25 - 1e-6),
             energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
+            allowance: DEFAULT_ALLOWANCE,
         },
         StressCase {
             name: "segments_500",
@@ -229,6 +270,7 @@ pub fn cases() -> Vec<StressCase> {
             quick_dts: &[0.001, 0.1],
             expectation: Expectation::Stable,
             energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
+            allowance: DEFAULT_ALLOWANCE,
         },
         StressCase {
             name: "paper_crumple",
@@ -242,6 +284,14 @@ pub fn cases() -> Vec<StressCase> {
             quick_dts: ALL,
             expectation: Expectation::Stable,
             energy_tolerance: PAPER_ENERGY_RELATIVE_TOLERANCE,
+            allowance: Allowance {
+                unconverged_fraction: 0.2,
+                rejected_steps: 0,
+                reason: "at dt 0.1 s (3 x the paper's 1/30 s frame) the handles move 3 x farther per \
+                         frame and the FEM Newton of step 1 stops on its 20-iteration limit in \
+                         frames 2 and 4 of 10 (2026-12-02); the best iterate is kept and the energy \
+                         bound holds",
+            },
         },
         StressCase {
             name: "paper_compression_50",
@@ -260,6 +310,7 @@ pub fn cases() -> Vec<StressCase> {
             quick_dts: ALL,
             expectation: Expectation::Stable,
             energy_tolerance: PAPER_ENERGY_RELATIVE_TOLERANCE,
+            allowance: DEFAULT_ALLOWANCE,
         },
     ]
 }
@@ -275,8 +326,10 @@ pub struct CaseResult {
     /// Simulated time, s.
     pub duration: f64,
     pub finite: bool,
-    /// Total energy at t = 0, J.
+    /// Total energy at t = 0, J (depends on where the scene sits: not in the bound).
     pub energy_initial: f64,
+    /// S(0): kinetic + elastic energy at t = 0, J (the tolerance's scale with W).
+    pub energy_initial_stored: f64,
     /// Largest E(t) - E(0) over the run, J.
     pub energy_rise_max: f64,
     /// W at the end of the run: summed work bound of handles and forces, J.
@@ -286,8 +339,11 @@ pub struct CaseResult {
     /// Largest handle / loop constraint violation reported, m.
     pub constraint_violation_max: f64,
     pub unconverged_steps: usize,
+    /// Object steps of the run (steps x objects): the base of the unconverged share.
+    pub object_steps: usize,
     pub rejected_steps: usize,
     pub expectation: Expectation,
+    pub allowance: Allowance,
     /// Relative tolerance of the energy bound.
     pub energy_tolerance: f64,
     pub pass: bool,
@@ -298,28 +354,40 @@ pub struct CaseResult {
 }
 
 /// The energy bound, checked after every step.
-#[derive(Debug)]
-struct EnergyWatch {
+struct EnergyWatch<'a> {
+    /// E(0), J.
     initial: f64,
+    /// S(0): kinetic + elastic energy at t = 0, J.
+    stored: f64,
     tolerance: f64,
     work: f64,
     rise_max: f64,
     ratio_max: f64,
+    hook: Option<&'a mut dyn FnMut(&mut StepReport)>,
 }
 
-impl StepObserver for EnergyWatch {
+impl StepObserver for EnergyWatch<'_> {
     fn after_step(
         &mut self,
         _: &Scene,
         report: &StepReport,
         _: f64,
     ) -> Result<(), ObserverError> {
+        let tampered;
+        let report = match self.hook.as_mut() {
+            Some(hook) => {
+                let mut r = report.clone();
+                hook(&mut r);
+                tampered = r;
+                &tampered
+            }
+            None => report,
+        };
         self.work += report.objects.iter().map(|o| o.work_bound).sum::<f64>();
         let e: f64 = report.objects.iter().map(|o| o.energies.total()).sum();
         let rise = e - self.initial;
-        let allowance = self.work
-            + self.tolerance * (self.initial.abs() + self.work)
-            + ENERGY_ABSOLUTE_TOLERANCE;
+        let allowance =
+            self.work + self.tolerance * (self.stored + self.work) + ENERGY_ABSOLUTE_TOLERANCE;
         self.rise_max = self.rise_max.max(rise);
         // a NaN energy must fail, not vanish in max()
         let ratio = if rise.is_finite() {
@@ -345,6 +413,44 @@ pub struct SuiteOptions {
     pub max_steps: Option<usize>,
 }
 
+/// Changes to one run, for tests of the suite itself (the suite uses the default).
+#[derive(Default)]
+pub struct RunTweaks<'a> {
+    /// `--set` overrides after the case's own (e.g. `solver.max_iterations=0`).
+    pub sets: Vec<String>,
+    /// Move the whole scene by this, m (the ribbon's base or the paper's placement;
+    /// handle motions are relative to the grasp points).
+    pub offset: Option<[f64; 3]>,
+    /// Sees each step's report before the suite judges it (a test injects energy).
+    pub report_hook: Option<&'a mut dyn FnMut(&mut StepReport)>,
+    /// Changes the world once it is built (a test swaps in a solver that never moves).
+    pub world_hook: Option<&'a mut dyn FnMut(&mut World)>,
+}
+
+/// The override that moves a single-object scene (`source`) by `offset`, m.
+fn offset_override(source: &scene::SceneFile, offset: [f64; 3]) -> anyhow::Result<String> {
+    let moved = |p: [f64; 3]| {
+        format!(
+            "[{:?}, {:?}, {:?}]",
+            p[0] + offset[0],
+            p[1] + offset[1],
+            p[2] + offset[2]
+        )
+    };
+    anyhow::ensure!(
+        source.ribbons.is_empty() && source.colliders.is_empty(),
+        "moving a scene with a `ribbons:` list or colliders is not supported"
+    );
+    match (&source.ribbon, &source.paper) {
+        (Some(r), None) => Ok(format!("ribbon.base.position={}", moved(r.base.position))),
+        (None, Some(p)) => {
+            let at = p.placement.as_ref().map_or([0.0; 3], |x| x.position);
+            Ok(format!("paper.placement.position={}", moved(at)))
+        }
+        _ => anyhow::bail!("moving a scene needs exactly one ribbon or paper"),
+    }
+}
+
 /// Run `case` with step `dt`; scene paths are relative to `config` (the repository's
 /// `config/` folder). `max_steps` replaces the case's step limit.
 pub fn run_case(
@@ -354,24 +460,55 @@ pub fn run_case(
     max_steps: Option<usize>,
     config: &Path,
 ) -> anyhow::Result<CaseResult> {
+    run_case_with(case, dt, quick, max_steps, config, RunTweaks::default())
+}
+
+/// [`run_case`] with `tweaks`.
+pub fn run_case_with(
+    case: &StressCase,
+    dt: f64,
+    quick: bool,
+    max_steps: Option<usize>,
+    config: &Path,
+    tweaks: RunTweaks,
+) -> anyhow::Result<CaseResult> {
     let duration = case.duration_for(dt, quick, max_steps);
     let mut sets = vec![format!("dt={dt}"), format!("duration={duration}")];
     sets.extend((case.overrides)(duration, dt));
+    sets.extend(tweaks.sets);
     let path = config.join(case.scene);
-    let mut scene = scene::load(&path, &sets)
-        .with_context(|| format!("stress case {} (dt {dt} s)", case.name))?;
+    let context = || format!("stress case {} (dt {dt} s)", case.name);
+    let mut scene = scene::load(&path, &sets).with_context(context)?;
+    if let Some(offset) = tweaks.offset {
+        sets.push(offset_override(&scene.source, offset).with_context(context)?);
+        scene = scene::load(&path, &sets).with_context(context)?;
+    }
+    if let Some(hook) = tweaks.world_hook {
+        hook(&mut scene.world);
+    }
     let initial: f64 = scene
         .world
         .objects()
         .iter()
         .map(|o| o.energies().total())
         .sum();
+    let stored: f64 = scene
+        .world
+        .objects()
+        .iter()
+        .map(|o| {
+            let e = o.energies();
+            e.kinetic + e.elastic
+        })
+        .sum();
     let mut watch = EnergyWatch {
         initial,
+        stored,
         tolerance: case.energy_tolerance,
         work: 0.0,
         rise_max: f64::NEG_INFINITY,
         ratio_max: f64::NEG_INFINITY,
+        hook: tweaks.report_hook,
     };
     let wall = Instant::now();
     let stats = runner::run(&mut scene, &mut watch, &|| false)?;
@@ -385,6 +522,21 @@ pub fn run_case(
         reasons.push(format!(
             "energy rose {:.3e} J, above the work bound {:.3e} J + tolerance",
             watch.rise_max, watch.work
+        ));
+    }
+    let object_steps = stats.steps * scene.world.objects().len();
+    let allowed = case.allowance;
+    let unconverged = stats.solver.unconverged_steps;
+    if unconverged as f64 > allowed.unconverged_fraction * object_steps as f64 {
+        reasons.push(format!(
+            "{unconverged} of {object_steps} steps unconverged, more than {} %",
+            allowed.unconverged_fraction * 100.0
+        ));
+    }
+    if stats.solver.rejected_steps > allowed.rejected_steps {
+        reasons.push(format!(
+            "{} steps rejected (non-finite, previous state kept), {} expected",
+            stats.solver.rejected_steps, allowed.rejected_steps
         ));
     }
     if let Expectation::ViolationAtLeast(v) = case.expectation {
@@ -403,13 +555,16 @@ pub fn run_case(
         duration: stats.duration,
         finite: stats.finite,
         energy_initial: initial,
+        energy_initial_stored: stored,
         energy_rise_max: watch.rise_max,
         work_bound: watch.work,
         energy_ratio_max: watch.ratio_max,
         constraint_violation_max: stats.constraint_violation_max,
-        unconverged_steps: stats.solver.unconverged_steps,
+        unconverged_steps: unconverged,
+        object_steps,
         rejected_steps: stats.solver.rejected_steps,
         expectation: case.expectation,
+        allowance: allowed,
         energy_tolerance: case.energy_tolerance,
         pass: reasons.is_empty(),
         reason: reasons.join("; "),
@@ -425,6 +580,8 @@ pub struct StressReport {
     pub energy_relative_tolerance: f64,
     pub paper_energy_relative_tolerance: f64,
     pub energy_absolute_tolerance_j: f64,
+    /// Default share of unconverged steps a run may have.
+    pub unconverged_fraction: f64,
     pub results: Vec<CaseResult>,
     pub passed: usize,
     pub failed: usize,
@@ -480,6 +637,7 @@ pub fn run_suite(
         energy_relative_tolerance: ENERGY_RELATIVE_TOLERANCE,
         paper_energy_relative_tolerance: PAPER_ENERGY_RELATIVE_TOLERANCE,
         energy_absolute_tolerance_j: ENERGY_ABSOLUTE_TOLERANCE,
+        unconverged_fraction: UNCONVERGED_FRACTION,
         passed: results.len() - failed,
         failed,
         results,
@@ -516,13 +674,17 @@ pub fn markdown(report: &StressReport) -> String {
          tol(t) = ",
     );
     s.push_str(&format!(
-        "r (|E(0)| + W(t)) + {:e} J with r = {} for ribbons and {} for paper (its remeshing and \
-         isometry projection move S_P between FEM steps with no energy balance); over_stretch: the \
-         reported violation reaches (1.5 m - l)/2 = 0.25 m. Unconverged and rejected steps \
-         (non-finite result, previous state kept) are counted, not failed.\n\n",
+        "r (S(0) + W(t)) + {:e} J with S(0) the kinetic + elastic energy at t = 0 (all \
+         relative to the initial state: moving the scene changes nothing) and r = {} for ribbons \
+         and {} for paper (its remeshing and isometry projection move S_P between FEM steps with \
+         no energy balance); at most {} % of the steps unconverged (iteration limit) and none \
+         rejected (non-finite result, previous state kept), unless the case's allowance says \
+         otherwise (listed below with its reason); over_stretch: the reported violation reaches \
+         (1.5 m - l)/2 = 0.25 m.\n\n",
         report.energy_absolute_tolerance_j,
         report.energy_relative_tolerance,
-        report.paper_energy_relative_tolerance
+        report.paper_energy_relative_tolerance,
+        report.unconverged_fraction * 100.0
     ));
     s.push_str("| case | dt (s) | steps | finite | E rise max (J) | W bound (J) | rise / allowance | violation max (m) | unconverged | rejected | result |\n");
     s.push_str("|---|---|---|---|---|---|---|---|---|---|---|\n");
@@ -548,8 +710,19 @@ pub fn markdown(report: &StressReport) -> String {
     }
     s.push_str("\nCases:\n\n");
     for c in cases() {
+        let a = c.allowance;
+        let allowance = if a == DEFAULT_ALLOWANCE {
+            String::new()
+        } else {
+            format!(
+                "; allowed {} % unconverged, {} rejected: {}",
+                a.unconverged_fraction * 100.0,
+                a.rejected_steps,
+                a.reason
+            )
+        };
         s.push_str(&format!(
-            "- `{}`: {} (`config/{}`)\n",
+            "- `{}`: {} (`config/{}`){allowance}\n",
             c.name, c.description, c.scene
         ));
     }
