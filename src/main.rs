@@ -13,15 +13,13 @@ use clap::{Parser, Subcommand};
 use developable_sim::cli::args::{
     NodeArgs, RenderArgs, ReplayArgs, ReportArgs, RunArgs, StressArgs,
 };
-use developable_sim::cli::{bag_name, banner, node_launch, summary};
+use developable_sim::cli::{bag_name, banner, node_launch, summary, CheckFailed, CliObserver};
 use developable_sim::record::bag::{BagOptions, Compression};
 use developable_sim::record::recorder::RunRecorder;
 use developable_sim::record::{read, replay};
 use developable_sim::ros::node::SimNode;
 use developable_sim::ros::params;
-use developable_sim::runner::{ObserverError, StepObserver};
-use developable_sim::scene::Scene;
-use developable_sim::sim::{ReachWatch, StepReport};
+use developable_sim::sim::ReachWatch;
 use developable_sim::{render, runner, scene};
 
 #[derive(Parser)]
@@ -104,19 +102,6 @@ fn write_json(path: &Path, value: &impl serde::Serialize, what: &str) -> anyhow:
     std::fs::write(path, serde_json::to_string_pretty(value)?)
         .with_context(|| format!("writing {what}{}", path.display()))
 }
-
-/// A check that ran to the end and found a difference: exit code 1 (an error that
-/// stops a command, such as an unreadable bag, is exit code 2).
-#[derive(Debug)]
-struct CheckFailed(String);
-
-impl std::fmt::Display for CheckFailed {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for CheckFailed {}
 
 fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
     let non_node = !matches!(cli.command, Command::Node(_));
@@ -292,32 +277,4 @@ fn report_command(a: ReportArgs) -> anyhow::Result<()> {
         );
     }
     Ok(())
-}
-
-/// The `run` command's observer: records when asked, and says on stderr when a handle
-/// target goes out of reach and when it is reached again (as the node does).
-struct CliObserver<'a> {
-    recorder: Option<&'a mut RunRecorder>,
-    reach: ReachWatch,
-}
-
-impl StepObserver for CliObserver<'_> {
-    fn after_step(
-        &mut self,
-        scene: &Scene,
-        report: &StepReport,
-        step_ms: f64,
-    ) -> Result<(), ObserverError> {
-        let world = &scene.world;
-        for m in self
-            .reach
-            .update(report, world.object_names(), world.handles())
-        {
-            eprintln!("{m}");
-        }
-        match self.recorder.as_deref_mut() {
-            Some(r) => r.after_step(scene, report, step_ms),
-            None => Ok(()),
-        }
-    }
 }

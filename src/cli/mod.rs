@@ -9,3 +9,49 @@ pub mod bag_name;
 pub mod banner;
 pub mod node_launch;
 pub mod summary;
+
+use crate::record::recorder::RunRecorder;
+use crate::runner::{ObserverError, StepObserver};
+use crate::scene::Scene;
+use crate::sim::{ReachWatch, StepReport};
+
+/// A check that ran to the end and found a difference: exit code 1 (an error that
+/// stops a command, such as an unreadable bag, is exit code 2).
+#[derive(Debug)]
+pub struct CheckFailed(pub String);
+
+impl std::fmt::Display for CheckFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for CheckFailed {}
+
+/// The `run` command's observer: records when asked, and says on stderr when a handle
+/// target goes out of reach and when it is reached again (as the node does).
+pub struct CliObserver<'a> {
+    pub recorder: Option<&'a mut RunRecorder>,
+    pub reach: ReachWatch,
+}
+
+impl StepObserver for CliObserver<'_> {
+    fn after_step(
+        &mut self,
+        scene: &Scene,
+        report: &StepReport,
+        step_ms: f64,
+    ) -> Result<(), ObserverError> {
+        let world = &scene.world;
+        for m in self
+            .reach
+            .update(report, world.object_names(), world.handles())
+        {
+            eprintln!("{m}");
+        }
+        match self.recorder.as_deref_mut() {
+            Some(r) => r.after_step(scene, report, step_ms),
+            None => Ok(()),
+        }
+    }
+}
