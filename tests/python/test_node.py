@@ -143,7 +143,10 @@ def test_colliders_are_published_as_markers_and_follow_their_handle(start_node, 
     """ribbon_gripper_push: a table (half-space) and a finger box carried by the handle
     `finger`. Both are drawn on /colliders; the finger's marker moves with its handle's
     scripted sweep, the table's stays."""
-    start_node(domain_id, PUSH, "--as-fast-as-possible", "--duration", "30")
+    # a tenth of real time: the scripted sweep (t = 0.2-1.2 s) lasts 10 s of wall time, so
+    # a reader that matches late still sees it (as fast as possible, the sweep could be
+    # over before discovery: seen 2026-12-02, every array at the sweep's end)
+    start_node(domain_id, PUSH, "--real-time-factor", "0.1", "--duration", "30")
     reader = ros.reader("/colliders", rt.MarkerArray, reliable_qos(1, True))
     got = []
     deadline = time.monotonic() + 15.0
