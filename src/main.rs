@@ -230,9 +230,7 @@ fn run_command(a: RunArgs) -> anyhow::Result<()> {
 
 fn node_command(a: NodeArgs, ros: params::RosArgs) -> anyhow::Result<()> {
     let env_domain = std::env::var("ROS_DOMAIN_ID").ok();
-    let config = node_launch::resolve(&a, &ros, env_domain.as_deref(), &mut |l| {
-        eprintln!("{l}")
-    })?;
+    let config = node_launch::resolve(&a, &ros, env_domain.as_deref(), &mut |l| eprintln!("{l}"))?;
     for l in banner::banner(&config) {
         eprintln!("{l}");
     }
@@ -269,7 +267,10 @@ fn report_command(a: ReportArgs) -> anyhow::Result<()> {
     println!("wrote {}", a.out.join("summary.md").display());
     let failed = report.failed_checks();
     if !failed.is_empty() {
-        let which: Vec<String> = failed.iter().map(|c| format!("{}: {}", c.scene, c.what)).collect();
+        let which: Vec<String> = failed
+            .iter()
+            .map(|c| format!("{}: {}", c.scene, c.what))
+            .collect();
         bail!(
             "accuracy against the exact solutions regressed: {} check(s) failed ({})",
             failed.len(),

@@ -166,7 +166,10 @@ fn a_full_disk_while_the_node_records_is_logged_once_and_the_node_goes_on() {
     let e = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{e}");
     assert!(!e.contains("panicked"), "{e}");
-    let stopped: Vec<&str> = e.lines().filter(|l| l.contains("recording stopped")).collect();
+    let stopped: Vec<&str> = e
+        .lines()
+        .filter(|l| l.contains("recording stopped"))
+        .collect();
     assert_eq!(stopped.len(), 1, "logged once: {e}");
     assert!(
         stopped[0].contains("bag_0.mcap") && stopped[0].contains("File too large"),
@@ -177,7 +180,10 @@ fn a_full_disk_while_the_node_records_is_logged_once_and_the_node_goes_on() {
     assert!(e.contains("stopped at t = 2.000 s after 200 steps"), "{e}");
     // and said why it exits non-zero, last
     assert!(
-        e.lines().last().unwrap_or("").starts_with("error: recording failed"),
+        e.lines()
+            .last()
+            .unwrap_or("")
+            .starts_with("error: recording failed"),
         "{e}"
     );
     // the bag: what was written is readable, metadata.yaml counts exactly that

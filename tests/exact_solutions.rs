@@ -95,7 +95,13 @@ fn the_paper_clamp_fails_the_report() {
     assert!(order.measured.unwrap() < 1.3, "{order:?}");
     let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("exact_paper_clamp_out");
     let status = Command::new(env!("CARGO_BIN_EXE_developable_sim"))
-        .args(["report", "--quick", "--scenes", "exact_heavy_cantilever", "--scene-dir"])
+        .args([
+            "report",
+            "--quick",
+            "--scenes",
+            "exact_heavy_cantilever",
+            "--scene-dir",
+        ])
         .arg(paper.parent().unwrap())
         .arg("--out")
         .arg(&out)
@@ -109,14 +115,27 @@ fn the_paper_clamp_fails_the_report() {
     // the scene as shipped passes through the binary
     let ok_out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("exact_ok_out");
     let ok = Command::new(env!("CARGO_BIN_EXE_developable_sim"))
-        .args(["report", "--quick", "--scenes", "exact_heavy_cantilever", "--out"])
+        .args([
+            "report",
+            "--quick",
+            "--scenes",
+            "exact_heavy_cantilever",
+            "--out",
+        ])
         .arg(&ok_out)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .unwrap();
-    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
     let stdout = String::from_utf8_lossy(&ok.stdout);
-    assert!(stdout.contains("| exact_heavy_cantilever | moment_matched |"), "{stdout}");
+    assert!(
+        stdout.contains("| exact_heavy_cantilever | moment_matched |"),
+        "{stdout}"
+    );
 }
 
 /// The vibrating cantilever's error falls at first order in dt (implicit Euler).

@@ -117,7 +117,8 @@ fn inline_paths(code: &str) -> Vec<String> {
         let mut from = 0;
         while let Some(i) = code[from..].find(start) {
             let i = from + i;
-            let boundary = i == 0 || !code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == ':');
+            let boundary = i == 0
+                || !code[..i].ends_with(|c: char| c.is_alphanumeric() || c == '_' || c == ':');
             let len = code[i..]
                 .find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
                 .unwrap_or(code.len() - i);
@@ -178,7 +179,9 @@ fn graph(src: &Path) -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
     let mut reexports: BTreeMap<(Module, String), PathBuf> = BTreeMap::new();
     for (m, text) in &texts {
         for u in uses(text, true) {
-            let Some(abs) = absolute(&u, m, &files) else { continue };
+            let Some(abs) = absolute(&u, m, &files) else {
+                continue;
+            };
             if abs.len() == m.len() + 2 && abs.starts_with(m) {
                 let child: Module = abs[..m.len() + 1].to_vec();
                 if let Some(f) = files.get(&child) {
@@ -191,15 +194,23 @@ fn graph(src: &Path) -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
     for (m, text) in &texts {
         let from = &files[*m];
         for path in uses(text, false).into_iter().chain(inline_paths(text)) {
-            let Some(abs) = absolute(&path, m, &files) else { continue };
-            let Some(k) = (0..=abs.len()).rev().find(|&k| files.contains_key(&abs[..k].to_vec())) else {
+            let Some(abs) = absolute(&path, m, &files) else {
+                continue;
+            };
+            let Some(k) = (0..=abs.len())
+                .rev()
+                .find(|&k| files.contains_key(&abs[..k].to_vec()))
+            else {
                 continue;
             };
             let module = abs[..k].to_vec();
             if module.is_empty() {
                 continue; // the crate root
             }
-            let to = match abs.get(k).and_then(|item| reexports.get(&(module.clone(), item.clone()))) {
+            let to = match abs
+                .get(k)
+                .and_then(|item| reexports.get(&(module.clone(), item.clone())))
+            {
                 Some(f) => f.clone(),
                 None => files[&module].clone(),
             };
@@ -287,7 +298,11 @@ fn no_file_imports_a_file_that_imports_it_back() {
     assert!(edges[&src.join("scene/file.rs")].contains(&src.join("scene/contact.rs")));
     let found = cycles(&edges);
     let text: Vec<String> = found.iter().map(|c| describe(&src, &edges, c)).collect();
-    assert!(found.is_empty(), "import cycles between files:\n{}", text.join("\n"));
+    assert!(
+        found.is_empty(),
+        "import cycles between files:\n{}",
+        text.join("\n")
+    );
 }
 
 /// A tree of files, each `(path, text)`, under a fresh temporary `src`.

@@ -12,7 +12,9 @@ use developable_sim::record::read::{mcap_files, reindex, scan, BagEvent, BagMess
 use developable_sim::record::recorder::RunRecorder;
 use developable_sim::record::replay::{replay, ReplayOptions};
 use developable_sim::ros::cdr;
-use developable_sim::ros::msgs::{Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints, Time};
+use developable_sim::ros::msgs::{
+    Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints, Time,
+};
 use developable_sim::{runner, scene};
 
 const TORSION: &str = concat!(
@@ -251,7 +253,9 @@ fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&BagMessage) -> Option<V
                 BagEvent::Message(m) => {
                     let id = *ids.entry(m.topic.clone()).or_insert_with(|| {
                         match m.type_name.as_str() {
-                            "rosgraph_msgs/msg/Clock" => out.add_topic::<Clock>(&m.topic, Qos::CLOCK),
+                            "rosgraph_msgs/msg/Clock" => {
+                                out.add_topic::<Clock>(&m.topic, Qos::CLOCK)
+                            }
                             "visualization_msgs/msg/MarkerArray" => {
                                 out.add_topic::<MarkerArray>(&m.topic, Qos::MARKERS)
                             }
@@ -269,7 +273,8 @@ fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&BagMessage) -> Option<V
                         .unwrap()
                     });
                     if let Some(data) = edit(&m) {
-                        out.write_raw(id, m.log_time, m.publish_time, &data).unwrap();
+                        out.write_raw(id, m.log_time, m.publish_time, &data)
+                            .unwrap();
                     }
                 }
             }
@@ -286,7 +291,10 @@ fn replay_cli(bag: &Path) -> (Option<i32>, String) {
         .arg(bag)
         .output()
         .unwrap();
-    (out.status.code(), String::from_utf8_lossy(&out.stdout).into_owned())
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+    )
 }
 
 /// The status of step `step` on `/ribbon/status`, decoded.
@@ -331,10 +339,20 @@ fn a_zero_flipped_in_sign_is_a_difference_and_exits_1() {
     assert_eq!(flipped, 1);
     let r = replay(&tampered, &ReplayOptions::default()).unwrap();
     assert!(!r.identical, "{r:?}");
-    let status = r.topics.iter().find(|t| t.topic == "/ribbon/status").unwrap();
+    let status = r
+        .topics
+        .iter()
+        .find(|t| t.topic == "/ribbon/status")
+        .unwrap();
     assert_eq!(status.differing, 1, "{status:?}");
-    assert_eq!(status.max_abs_difference, 0.0, "a sign of zero has no magnitude");
-    assert_eq!(status.first_difference, "step 3: gravity_energy", "{status:?}");
+    assert_eq!(
+        status.max_abs_difference, 0.0,
+        "a sign of zero has no magnitude"
+    );
+    assert_eq!(
+        status.first_difference, "step 3: gravity_energy",
+        "{status:?}"
+    );
     let (code, out) = replay_cli(&tampered);
     assert_eq!(code, Some(1), "{out}");
     assert!(out.contains("DIFFERENT"), "{out}");
@@ -360,7 +378,11 @@ fn a_nan_with_other_bits_is_a_difference() {
     // both differ from the replay, which computes a finite isometry error
     for bag in [&a, &b] {
         let r = replay(bag, &ReplayOptions::default()).unwrap();
-        let status = r.topics.iter().find(|t| t.topic == "/ribbon/status").unwrap();
+        let status = r
+            .topics
+            .iter()
+            .find(|t| t.topic == "/ribbon/status")
+            .unwrap();
         assert_eq!(status.differing, 1, "{status:?}");
         assert_eq!(status.max_abs_difference, f64::INFINITY);
     }
@@ -387,9 +409,16 @@ fn an_output_missing_from_the_bag_is_a_difference_and_exits_1() {
     assert_eq!(dropped, 1);
     let r = replay(&tampered, &ReplayOptions::default()).unwrap();
     assert!(!r.identical, "{r:?}");
-    let markers = r.topics.iter().find(|t| t.topic == "/ribbon/markers").unwrap();
+    let markers = r
+        .topics
+        .iter()
+        .find(|t| t.topic == "/ribbon/markers")
+        .unwrap();
     assert_eq!((markers.missing, markers.differing), (1, 0), "{markers:?}");
-    assert!(markers.first_difference.starts_with("step 4:"), "{markers:?}");
+    assert!(
+        markers.first_difference.starts_with("step 4:"),
+        "{markers:?}"
+    );
     let (code, out) = replay_cli(&tampered);
     assert_eq!(code, Some(1), "{out}");
 
@@ -407,7 +436,14 @@ fn an_output_missing_from_the_bag_is_a_difference_and_exits_1() {
         Some(m.data.clone())
     });
     let r = replay(&last, &ReplayOptions::default()).unwrap();
-    let markers = r.topics.iter().find(|t| t.topic == "/ribbon/markers").unwrap();
+    let markers = r
+        .topics
+        .iter()
+        .find(|t| t.topic == "/ribbon/markers")
+        .unwrap();
     assert_eq!(markers.missing, 1, "{markers:?}");
-    assert!(markers.first_difference.starts_with("step 10:"), "{markers:?}");
+    assert!(
+        markers.first_difference.starts_with("step 10:"),
+        "{markers:?}"
+    );
 }

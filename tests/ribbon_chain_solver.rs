@@ -45,8 +45,8 @@ fn step_distance(name: &str, n: usize, warm: usize) -> (f64, bool, u32, u32) {
         .expect("a ribbon")
         .strip();
     let samples = strip_samples(strip.length, strip.width, 101, 3);
-    let rms = rms_distance(dense.world.mesh(0), chain.world.mesh(0), &samples)
-        .expect("samples inside");
+    let rms =
+        rms_distance(dense.world.mesh(0), chain.world.mesh(0), &samples).expect("samples inside");
     (
         rms,
         rd.objects[0].converged && rc.objects[0].converged,
@@ -72,7 +72,9 @@ fn chain_and_dense_reach_the_same_step_minimizer_on_every_open_ribbon_scene() {
     for n in [50, 100] {
         for name in OPEN_RIBBON_SCENES {
             let (rms, converged, dense_it, chain_it) = step_distance(name, n, 3);
-            eprintln!("{name} n={n}: RMS {rms:.3e} m, iterations dense {dense_it} chain {chain_it}");
+            eprintln!(
+                "{name} n={n}: RMS {rms:.3e} m, iterations dense {dense_it} chain {chain_it}"
+            );
             assert!(converged, "{name} n={n}: a solver did not converge");
             // the same Newton iterates up to round-off (the factorizations differ)
             assert!(rms < 1e-6, "{name} n={n}: RMS {rms} m");

@@ -5,8 +5,8 @@
 
 use std::path::PathBuf;
 
-use developable_sim::scene;
 use developable_sim::geometry::{Point2, Pose, SurfaceMesh};
+use developable_sim::scene;
 use developable_sim::sim::{Energies, ObjectSim, ObjectStepReport, SingularPoint, StepContext};
 use developable_sim::stress::{self, Allowance, CaseResult, Expectation, RunTweaks, StressCase};
 
@@ -442,7 +442,10 @@ fn injected_energy_fails_the_suite_at_the_stated_bound() {
         .unwrap()
     };
     let above = inject(headroom + 1e-3 * allowance);
-    assert!(!above.pass && above.reason.contains("energy rose"), "{above:#?}");
+    assert!(
+        !above.pass && above.reason.contains("energy rose"),
+        "{above:#?}"
+    );
     assert!(above.energy_ratio_max > 1.0, "{above:#?}");
     let below = inject(headroom - 1e-3 * allowance);
     assert!(below.pass, "{below:#?}");
@@ -452,7 +455,11 @@ fn injected_energy_fails_the_suite_at_the_stated_bound() {
 fn a_translated_case_gives_the_same_verdict_and_margins() {
     // gravity (its potential) and a point force (its potential) both depend on where
     // the scene sits; the bound does not
-    for (name, dt) in [("bending_x1e-4", 0.01), ("extreme_drag", 0.1), ("handle_jump", 0.1)] {
+    for (name, dt) in [
+        ("bending_x1e-4", 0.01),
+        ("extreme_drag", 0.1),
+        ("handle_jump", 0.1),
+    ] {
         let c = case(name);
         let here = stress::run_case(&c, dt, true, None, &config()).unwrap();
         let moved = stress::run_case_with(
@@ -494,6 +501,10 @@ fn a_translated_case_gives_the_same_verdict_and_margins() {
         };
         close(here.energy_rise_max, moved.energy_rise_max, "energy rise");
         close(here.work_bound, moved.work_bound, "work bound");
-        close(here.energy_initial_stored, moved.energy_initial_stored, "S(0)");
+        close(
+            here.energy_initial_stored,
+            moved.energy_initial_stored,
+            "S(0)",
+        );
     }
 }

@@ -96,8 +96,6 @@ mod tests {
             bag_folder(Some(PathBuf::from("mine"))),
             PathBuf::from("mine")
         );
-        assert!(bag_folder(None)
-            .to_string_lossy()
-            .starts_with("rosbag2_20"));
+        assert!(bag_folder(None).to_string_lossy().starts_with("rosbag2_20"));
     }
 }

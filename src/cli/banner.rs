@@ -59,7 +59,10 @@ pub fn banner(config: &NodeConfig) -> Vec<String> {
         names.reset, names.step, names.set_paused
     ));
     if let Some((r, _)) = &config.record {
-        lines.push(format!("[developable_sim]   recording into {}", r.display()));
+        lines.push(format!(
+            "[developable_sim]   recording into {}",
+            r.display()
+        ));
     }
     lines
 }

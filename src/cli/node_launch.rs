@@ -145,7 +145,9 @@ pub fn duration(args: &NodeArgs, p: &Params) -> Result<f64, LaunchError> {
         None => {
             let d = p.double("duration").unwrap_or(0.0);
             if d < 0.0 {
-                return Err(p.invalid("duration", format!("must be >= 0, got {d}")).into());
+                return Err(p
+                    .invalid("duration", format!("must be >= 0, got {d}"))
+                    .into());
             }
             Ok(d)
         }
@@ -174,13 +176,22 @@ pub fn pacing(args: &NodeArgs, p: &Params) -> Result<Pacing, LaunchError> {
 }
 
 /// What drives steps (`--lockstep` > `lockstep` > off) and the spec as given.
-pub fn lockstep(args: &NodeArgs, p: &Params, scene: &Scene) -> Result<(Lockstep, String), LaunchError> {
+pub fn lockstep(
+    args: &NodeArgs,
+    p: &Params,
+    scene: &Scene,
+) -> Result<(Lockstep, String), LaunchError> {
     let spec = args
         .lockstep
         .clone()
         .or_else(|| p.string("lockstep").map(String::from))
         .unwrap_or_default();
-    let handles: Vec<&str> = scene.world.handles().iter().map(|h| h.name.as_str()).collect();
+    let handles: Vec<&str> = scene
+        .world
+        .handles()
+        .iter()
+        .map(|h| h.name.as_str())
+        .collect();
     let lockstep = match spec.as_str() {
         "" => Lockstep::Off,
         "service" => Lockstep::Service,
@@ -315,7 +326,10 @@ pub fn resolve(
         non_negative(&p, "markers_rate", 0.0)?;
     }
     let foxglove = foxglove(args, &mut p)?;
-    p.set_effective("scene", ParamValue::String(scene_path.display().to_string()));
+    p.set_effective(
+        "scene",
+        ParamValue::String(scene_path.display().to_string()),
+    );
     p.set_effective("duration", ParamValue::Double(duration));
     p.set_effective("lockstep", ParamValue::String(lockstep_spec));
     if let Some((r, _)) = &record {

@@ -54,7 +54,11 @@ fn flag_beats_dash_p_beats_params_files_beats_default() {
     let mut ros = RosArgs::default();
     assert_eq!(factor(&resolve_quiet(&a, &ros).unwrap()), 1.0, "default");
     a.params = vec![first.clone()];
-    assert_eq!(factor(&resolve_quiet(&a, &ros).unwrap()), 2.0, "params file");
+    assert_eq!(
+        factor(&resolve_quiet(&a, &ros).unwrap()),
+        2.0,
+        "params file"
+    );
     // --params files first, then --ros-args --params-file: the later one wins
     ros.params_files = vec![second];
     assert_eq!(factor(&resolve_quiet(&a, &ros).unwrap()), 2.5, "later file");
@@ -112,7 +116,10 @@ fn names_flags_beat_remaps_beat_defaults() {
     assert_eq!(identity(&a, &ros).unwrap().2, "/robot1/sim");
     a.namespace = Some("/robot2".into());
     a.node_name = Some("other".into());
-    assert_eq!(identity(&a, &ros).unwrap(), ("other".into(), "/robot2".into(), "/robot2/other".into()));
+    assert_eq!(
+        identity(&a, &ros).unwrap(),
+        ("other".into(), "/robot2".into(), "/robot2/other".into())
+    );
     a.namespace = Some("/bad ns".into());
     assert!(identity(&a, &ros).is_err());
 }
@@ -131,7 +138,10 @@ fn domain_flag_beats_the_environment_beats_zero() {
     );
     // the parse error stays in the chain (main prints it after a colon)
     assert!(std::error::Error::source(&e).is_some());
-    assert!(matches!(domain_id(Some(233), None), Err(LaunchError::DomainRange(233))));
+    assert!(matches!(
+        domain_id(Some(233), None),
+        Err(LaunchError::DomainRange(233))
+    ));
 }
 
 #[test]
@@ -146,12 +156,18 @@ fn bad_values_name_their_source() {
         ..args()
     };
     let e = error(resolve_quiet(&a, &RosArgs::default())).to_string();
-    assert!(e.contains("max_stamp_lead") && e.contains("must be > 0, got -2"), "{e}");
+    assert!(
+        e.contains("max_stamp_lead") && e.contains("must be > 0, got -2"),
+        "{e}"
+    );
     assert!(e.contains(&file.display().to_string()), "{e}");
     let mut a = args();
     a.lockstep = Some("nope".into());
     let e = error(resolve_quiet(&a, &RosArgs::default())).to_string();
-    assert!(e.starts_with("--lockstep `nope` is neither `service` nor a handle of scene"), "{e}");
+    assert!(
+        e.starts_with("--lockstep `nope` is neither `service` nor a handle of scene"),
+        "{e}"
+    );
     assert!(e.contains("(handles: twist_end"), "{e}");
 }
 
@@ -159,7 +175,10 @@ fn bad_values_name_their_source() {
 fn lockstep_on_a_handle_and_pacing_flags() {
     let mut a = args();
     let ros = RosArgs {
-        params: vec!["lockstep:=twist_end".into(), "as_fast_as_possible:=true".into()],
+        params: vec![
+            "lockstep:=twist_end".into(),
+            "as_fast_as_possible:=true".into(),
+        ],
         ..RosArgs::default()
     };
     let c = resolve_quiet(&a, &ros).unwrap();
@@ -184,6 +203,17 @@ fn warnings_and_ignored_arguments_are_logged() {
     };
     let mut log = Vec::new();
     resolve(&a, &ros, None, &mut |l| log.push(l)).unwrap();
-    assert!(log.iter().any(|l| l.starts_with("[developable_sim] warning: ") && l.contains("no_such_parameter")), "{log:?}");
-    assert!(log.contains(&"[developable_sim] note: ROS argument `--log-level` is accepted and ignored".to_string()), "{log:?}");
+    assert!(
+        log.iter().any(
+            |l| l.starts_with("[developable_sim] warning: ") && l.contains("no_such_parameter")
+        ),
+        "{log:?}"
+    );
+    assert!(
+        log.contains(
+            &"[developable_sim] note: ROS argument `--log-level` is accepted and ignored"
+                .to_string()
+        ),
+        "{log:?}"
+    );
 }

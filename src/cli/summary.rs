@@ -103,7 +103,9 @@ pub fn replay_summary(r: &ReplayReport) -> Vec<String> {
         ));
     }
     if let Some(t) = &r.truncated {
-        lines.push(format!("  note: the bag ends early ({t}); compared up to there"));
+        lines.push(format!(
+            "  note: the bag ends early ({t}); compared up to there"
+        ));
     }
     lines.push(if r.identical {
         "identical: every recorded output reproduced bit for bit".to_string()
@@ -207,7 +209,11 @@ mod tests {
         };
         let lines = run_summary(&s);
         assert_eq!(lines.len(), 1);
-        assert!(lines[0].starts_with("torsion: 10 steps of 0.01 s,"), "{}", lines[0]);
+        assert!(
+            lines[0].starts_with("torsion: 10 steps of 0.01 s,"),
+            "{}",
+            lines[0]
+        );
         assert!(lines[0].ends_with("finite: true"));
         s.compression_mean_pct = Some(0.5);
         s.compressed_edges_pct = Some(2.0);
@@ -248,7 +254,10 @@ mod tests {
         };
         let lines = replay_summary(&r);
         assert_eq!(lines.len(), 3);
-        assert_eq!(lines[2], "identical: every recorded output reproduced bit for bit");
+        assert_eq!(
+            lines[2],
+            "identical: every recorded output reproduced bit for bit"
+        );
         r.identical = false;
         r.max_abs_difference = 0.25;
         r.topics[0].differing = 1;
@@ -256,7 +265,10 @@ mod tests {
         r.truncated = Some("no footer".into());
         let lines = replay_summary(&r);
         assert!(lines[1].ends_with(" at step 2: clock.sec"), "{}", lines[1]);
-        assert_eq!(lines[2], "  note: the bag ends early (no footer); compared up to there");
+        assert_eq!(
+            lines[2],
+            "  note: the bag ends early (no footer); compared up to there"
+        );
         assert_eq!(lines[3], "DIFFERENT: largest difference 2.500e-1");
     }
 }

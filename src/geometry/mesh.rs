@@ -133,9 +133,16 @@ mod tests {
     /// the other by 0.5 % gives those strains (the hypotenuse follows).
     #[test]
     fn edge_strain_measures_stretch_and_compression() {
-        let material = vec![Point2::new(0.0, 0.0), Point2::new(1.0, 0.0), Point2::new(0.0, 1.0)];
+        let material = vec![
+            Point2::new(0.0, 0.0),
+            Point2::new(1.0, 0.0),
+            Point2::new(0.0, 1.0),
+        ];
         let mut mesh = SurfaceMesh {
-            vertices: material.iter().map(|m| Point3::new(m.x, m.y, 0.0)).collect(),
+            vertices: material
+                .iter()
+                .map(|m| Point3::new(m.x, m.y, 0.0))
+                .collect(),
             triangles: vec![[0, 1, 2]],
             regions: vec![VertexRegion::Flat; 3],
             material,

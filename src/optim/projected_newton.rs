@@ -631,12 +631,7 @@ mod tests {
         fn dimension(&self) -> usize {
             2
         }
-        fn evaluate(
-            &mut self,
-            x: &[f64],
-            g: Option<&mut [f64]>,
-            h: Option<&mut Dense>,
-        ) -> f64 {
+        fn evaluate(&mut self, x: &[f64], g: Option<&mut [f64]>, h: Option<&mut Dense>) -> f64 {
             let r = [10.0 * (x[1] - x[0] * x[0]), 1.0 - x[0]];
             let j = [[-20.0 * x[0], 10.0], [-1.0, 0.0]];
             if let Some(g) = g {
@@ -661,7 +656,13 @@ mod tests {
             pgtol_relative_to_start: None,
             reuse_factorization: false,
         };
-        let r = ProjectedNewton::<Dense>::new().minimize(&mut Rosen, &mut x, &[-10.0; 2], &[10.0; 2], &opts);
+        let r = ProjectedNewton::<Dense>::new().minimize(
+            &mut Rosen,
+            &mut x,
+            &[-10.0; 2],
+            &[10.0; 2],
+            &opts,
+        );
         assert!(r.converged, "{r:?}");
         assert!(
             (x[0] - 1.0).abs() < 1e-8 && (x[1] - 1.0).abs() < 1e-8,
@@ -702,12 +703,7 @@ mod tests {
         fn dimension(&self) -> usize {
             2
         }
-        fn evaluate(
-            &mut self,
-            x: &[f64],
-            g: Option<&mut [f64]>,
-            h: Option<&mut Dense>,
-        ) -> f64 {
+        fn evaluate(&mut self, x: &[f64], g: Option<&mut [f64]>, h: Option<&mut Dense>) -> f64 {
             let hx = [
                 self.h[0][0] * x[0] + self.h[0][1] * x[1],
                 self.h[1][0] * x[0] + self.h[1][1] * x[1],

@@ -123,8 +123,7 @@ fn count_missing(
         let entry = topic_entry(per_topic, topic, out.type_name());
         entry.missing += 1;
         if entry.first_difference.is_empty() {
-            entry.first_difference =
-                format!("step {step}: produced by the replay, not in the bag");
+            entry.first_difference = format!("step {step}: produced by the replay, not in the bag");
         }
     }
 }
@@ -366,7 +365,8 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                                     if !d.is_zero() {
                                         entry.differing += 1;
                                         if entry.first_difference.is_empty() {
-                                            let at = d.structural.as_deref().unwrap_or(&d.first_path);
+                                            let at =
+                                                d.structural.as_deref().unwrap_or(&d.first_path);
                                             entry.first_difference = format!("step {step}: {at}");
                                         }
                                     }

@@ -248,15 +248,39 @@ pub fn exact_plan(
     if problem.is_static() {
         for clamp in CLAMPS {
             for n in SEGMENTS {
-                out.push(spec(Method::GaussNewton, Sweep::Resolution, dt, n, tolerance, clamp));
+                out.push(spec(
+                    Method::GaussNewton,
+                    Sweep::Resolution,
+                    dt,
+                    n,
+                    tolerance,
+                    clamp,
+                ));
             }
         }
-        for n in SEGMENTS.into_iter().filter(|n| *n <= if quick { 20 } else { 50 }) {
-            out.push(spec(Method::Lbfgsb, Sweep::Resolution, dt, n, tolerance, clamp));
+        for n in SEGMENTS
+            .into_iter()
+            .filter(|n| *n <= if quick { 20 } else { 50 })
+        {
+            out.push(spec(
+                Method::Lbfgsb,
+                Sweep::Resolution,
+                dt,
+                n,
+                tolerance,
+                clamp,
+            ));
         }
         if !quick {
             for tol in [1e-4, 1e-6] {
-                out.push(spec(Method::GaussNewton, Sweep::Tolerance, dt, 50, tol, clamp));
+                out.push(spec(
+                    Method::GaussNewton,
+                    Sweep::Tolerance,
+                    dt,
+                    50,
+                    tol,
+                    clamp,
+                ));
             }
         }
         return out;
@@ -265,7 +289,12 @@ pub fn exact_plan(
     let (main, lbfgsb, lumped, fem): (&[u32], &[u32], &[u32], &[u32]) = if quick {
         (&[8, 16, 32, 64], &[16], &[16, 32], &[8])
     } else {
-        (&[4, 8, 16, 32, 64, 128], &[8, 16, 32], &[8, 16, 32, 64], &[8, 16])
+        (
+            &[4, 8, 16, 32, 64, 128],
+            &[8, 16, 32],
+            &[8, 16, 32, 64],
+            &[8, 16],
+        )
     };
     for (method, ks) in [
         (Method::GaussNewton, main),
@@ -273,14 +302,32 @@ pub fn exact_plan(
         (Method::Lumped, lumped),
         (Method::ConformingFem, fem),
     ] {
-        let tol = if method == Method::ConformingFem { 1e-9 } else { tolerance };
+        let tol = if method == Method::ConformingFem {
+            1e-9
+        } else {
+            tolerance
+        };
         for k in ks {
-            out.push(spec(method, Sweep::TimeStep, interval / *k as f64, n, tol, clamp));
+            out.push(spec(
+                method,
+                Sweep::TimeStep,
+                interval / *k as f64,
+                n,
+                tol,
+                clamp,
+            ));
         }
     }
     if !quick {
         for tol in [1e-4, 1e-7] {
-            out.push(spec(Method::GaussNewton, Sweep::Tolerance, interval / 32.0, n, tol, clamp));
+            out.push(spec(
+                Method::GaussNewton,
+                Sweep::Tolerance,
+                interval / 32.0,
+                n,
+                tol,
+                clamp,
+            ));
         }
     }
     out
@@ -337,7 +384,9 @@ pub fn checks(
     theory: &[(f64, f64)],
 ) -> Vec<Check> {
     let ours = |r: &&(ExactSpec, Option<ExactError>)| {
-        r.0.run.method == Method::GaussNewton && r.0.clamp == clamp && r.0.run.sweep != Sweep::Tolerance
+        r.0.run.method == Method::GaussNewton
+            && r.0.clamp == clamp
+            && r.0.run.sweep != Sweep::Tolerance
     };
     let selected: Vec<&(ExactSpec, Option<ExactError>)> = rows.iter().filter(ours).collect();
     let all_finite = selected.iter().all(|r| r.1.is_some());
@@ -441,12 +490,17 @@ mod tests {
                     let e = scale * (n as f64).powf(-power);
                     (
                         spec(Method::GaussNewton, Sweep::Resolution, 0.01, n as f64),
-                        Some(ExactError { rms: e, relative: e }),
+                        Some(ExactError {
+                            rms: e,
+                            relative: e,
+                        }),
                     )
                 })
                 .collect()
         };
-        assert!(checks("c", &p, CLAMPS[0], &rows(2.0, 1.0), &[]).iter().all(|c| c.pass));
+        assert!(checks("c", &p, CLAMPS[0], &rows(2.0, 1.0), &[])
+            .iter()
+            .all(|c| c.pass));
         let first = checks("c", &p, CLAMPS[0], &rows(1.0, 0.01), &[]);
         assert!(!first[0].pass && first[1].pass, "{first:?}");
         assert!((first[0].measured.unwrap() - 1.0).abs() < 1e-9);
@@ -489,8 +543,14 @@ mod tests {
         let off: Vec<_> = dts
             .iter()
             .map(|&dt| {
-                let e = ExactError { rms: 1.2 * dt, relative: 0.0 };
-                (spec(Method::GaussNewton, Sweep::TimeStep, dt, 50.0), Some(e))
+                let e = ExactError {
+                    rms: 1.2 * dt,
+                    relative: 0.0,
+                };
+                (
+                    spec(Method::GaussNewton, Sweep::TimeStep, dt, 50.0),
+                    Some(e),
+                )
             })
             .collect();
         let c = checks("v", &p, CLAMPS[0], &off, &theory);
@@ -505,10 +565,17 @@ mod tests {
         let times: Vec<f64> = (1..=5).map(|k| 0.1 * k as f64).collect();
         let e1 = implicit_euler_mode_error(omega, 1e-4, &times);
         let e2 = implicit_euler_mode_error(omega, 0.5e-4, &times);
-        assert!(((e1 / e2).log2() - 1.0).abs() < 0.01, "{}", (e1 / e2).log2());
+        assert!(
+            ((e1 / e2).log2() - 1.0).abs() < 0.01,
+            "{}",
+            (e1 / e2).log2()
+        );
         // exact at dt -> 0; one step of dt: x = 1 / (1 + omega^2 dt^2)
         let x1 = 1.0 / (1.0 + 0.01);
-        assert!((implicit_euler_mode_error(omega, 0.01, &[0.01]) - (x1 - 0.1f64.cos()).abs()).abs() < 1e-12);
+        assert!(
+            (implicit_euler_mode_error(omega, 0.01, &[0.01]) - (x1 - 0.1f64.cos()).abs()).abs()
+                < 1e-12
+        );
     }
 
     /// The mode curve is the linear mode shape to second order in its amplitude, and

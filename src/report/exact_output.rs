@@ -22,7 +22,9 @@ pub fn write_exact_csv(path: &Path, scenes: &[ExactSceneReport]) -> anyhow::Resu
     out.push('\n');
     for s in scenes {
         for r in &s.rows {
-            let (e, rel) = r.error.map_or((f64::NAN, f64::NAN), |e| (e.rms, e.relative));
+            let (e, rel) = r
+                .error
+                .map_or((f64::NAN, f64::NAN), |e| (e.rms, e.relative));
             let x = &r.run;
             writeln!(
                 out,
@@ -57,10 +59,17 @@ fn clamp_of(r: &ExactRow) -> &'static str {
 }
 
 /// A series of one scene: its method, clamp and sweep.
-fn series<'a>(s: &'a ExactSceneReport, method: Method, clamp: &str, sweep: Sweep) -> Vec<&'a ExactRow> {
+fn series<'a>(
+    s: &'a ExactSceneReport,
+    method: Method,
+    clamp: &str,
+    sweep: Sweep,
+) -> Vec<&'a ExactRow> {
     s.rows
         .iter()
-        .filter(|r| r.spec.run.method == method && r.spec.clamp == clamp && r.spec.run.sweep == sweep)
+        .filter(|r| {
+            r.spec.run.method == method && r.spec.clamp == clamp && r.spec.run.sweep == sweep
+        })
         .collect()
 }
 
@@ -68,7 +77,11 @@ fn series<'a>(s: &'a ExactSceneReport, method: Method, clamp: &str, sweep: Sweep
 fn xy(rows: &[&ExactRow], by_n: bool) -> Vec<(f64, f64)> {
     rows.iter()
         .filter_map(|r| {
-            let x = if by_n { r.spec.run.resolution } else { r.spec.run.dt };
+            let x = if by_n {
+                r.spec.run.resolution
+            } else {
+                r.spec.run.dt
+            };
             r.error.map(|e| (x, e.rms))
         })
         .collect()
@@ -77,8 +90,17 @@ fn xy(rows: &[&ExactRow], by_n: bool) -> Vec<(f64, f64)> {
 /// The series a scene's plots and order lines show: (label, method, clamp, sweep).
 fn lines(s: &ExactSceneReport) -> Vec<(String, Method, &'static str, Sweep)> {
     let mut out = Vec::new();
-    let sweep = if s.problem.is_static() { Sweep::Resolution } else { Sweep::TimeStep };
-    for method in [Method::GaussNewton, Method::Lbfgsb, Method::Lumped, Method::ConformingFem] {
+    let sweep = if s.problem.is_static() {
+        Sweep::Resolution
+    } else {
+        Sweep::TimeStep
+    };
+    for method in [
+        Method::GaussNewton,
+        Method::Lbfgsb,
+        Method::Lumped,
+        Method::ConformingFem,
+    ] {
         for clamp in CLAMPS {
             if !series(s, method, clamp, sweep).is_empty() {
                 let label = if method == Method::ConformingFem {
@@ -118,7 +140,11 @@ pub fn exact_summary(scenes: &[ExactSceneReport]) -> anyhow::Result<String> {
     )?;
     for s in scenes {
         writeln!(md, "### {}\n", s.name)?;
-        writeln!(md, "{:?}, sample times {:?} s.\n", s.problem, s.sample_times)?;
+        writeln!(
+            md,
+            "{:?}, sample times {:?} s.\n",
+            s.problem, s.sample_times
+        )?;
         writeln!(md, "| method | clamp | sweep | n | dt (s) | tolerance | error (m) | relative | CPU (s) | iterations (median) | unconverged |")?;
         writeln!(md, "|---|---|---|---|---|---|---|---|---|---|---|")?;
         for r in &s.rows {
@@ -139,10 +165,21 @@ pub fn exact_summary(scenes: &[ExactSceneReport]) -> anyhow::Result<String> {
                 r.run.unconverged_steps
             )?;
         }
-        let what = if s.problem.is_static() { "in n" } else { "in dt" };
-        writeln!(md, "\nMeasured orders {what} (least-squares slope of ln error):\n")?;
+        let what = if s.problem.is_static() {
+            "in n"
+        } else {
+            "in dt"
+        };
+        writeln!(
+            md,
+            "\nMeasured orders {what} (least-squares slope of ln error):\n"
+        )?;
         for (label, o) in orders(s) {
-            writeln!(md, "- {label}: {}", o.map_or("n/a".into(), |p| format!("{p:.2}")))?;
+            writeln!(
+                md,
+                "- {label}: {}",
+                o.map_or("n/a".into(), |p| format!("{p:.2}"))
+            )?;
         }
         if !s.theory.is_empty() {
             let theory = order(&s.theory);
@@ -159,7 +196,10 @@ pub fn exact_summary(scenes: &[ExactSceneReport]) -> anyhow::Result<String> {
             .iter()
             .map(|r| (r.run.cpu_s, r.error.map_or(f64::NAN, |e| e.rms)))
             .collect();
-        writeln!(md, "\nPareto front (error against CPU time, no run both cheaper and more accurate):\n")?;
+        writeln!(
+            md,
+            "\nPareto front (error against CPU time, no run both cheaper and more accurate):\n"
+        )?;
         for i in pareto_front(&pts) {
             let r = &s.rows[i];
             writeln!(
@@ -209,11 +249,16 @@ pub fn readme_table(scenes: &[ExactSceneReport]) -> String {
                     .iter()
                     .find(|r| r.spec.run.resolution == n as f64)
                     .and_then(|r| r.error)
-                    .map_or("-".into(), |e| format!("{:.2e} m ({:.3} %)", e.rms, 100.0 * e.relative));
+                    .map_or("-".into(), |e| {
+                        format!("{:.2e} m ({:.3} %)", e.rms, 100.0 * e.relative)
+                    });
                 md.push_str(&format!(" {cell} |"));
             }
             let o = order(&xy(&rows, true)).map(|p| -p);
-            md.push_str(&format!(" {} |\n", o.map_or("n/a".into(), |p| format!("{p:.2}"))));
+            md.push_str(&format!(
+                " {} |\n",
+                o.map_or("n/a".into(), |p| format!("{p:.2}"))
+            ));
         }
     }
     for s in scenes.iter().filter(|s| !s.problem.is_static()) {
@@ -224,8 +269,14 @@ pub fn readme_table(scenes: &[ExactSceneReport]) -> String {
             "\n{} (n = {}): error {} at dt {} s; order in dt {} (implicit Euler's theory: {})\n",
             s.name,
             gn.first().map_or(0.0, |r| r.spec.run.resolution),
-            pts.iter().map(|p| format!("{:.2e} m", p.1)).collect::<Vec<_>>().join(", "),
-            pts.iter().map(|p| format!("{:.2e}", p.0)).collect::<Vec<_>>().join(", "),
+            pts.iter()
+                .map(|p| format!("{:.2e} m", p.1))
+                .collect::<Vec<_>>()
+                .join(", "),
+            pts.iter()
+                .map(|p| format!("{:.2e}", p.0))
+                .collect::<Vec<_>>()
+                .join(", "),
             o.map_or("n/a".into(), |p| format!("{p:.2}")),
             order(&s.theory).map_or("n/a".into(), |p| format!("{p:.2}"))
         ));
@@ -251,8 +302,14 @@ fn log_log_png(
     let fold = |f: fn(f64, f64) -> f64, init: f64, pick: fn(&(f64, f64)) -> f64| {
         all.iter().map(pick).fold(init, f)
     };
-    let (x0, x1) = (fold(f64::min, f64::MAX, |p| p.0) / 1.5, fold(f64::max, f64::MIN, |p| p.0) * 1.5);
-    let (y0, y1) = (fold(f64::min, f64::MAX, |p| p.1) / 1.5, fold(f64::max, f64::MIN, |p| p.1) * 1.5);
+    let (x0, x1) = (
+        fold(f64::min, f64::MAX, |p| p.0) / 1.5,
+        fold(f64::max, f64::MIN, |p| p.0) * 1.5,
+    );
+    let (y0, y1) = (
+        fold(f64::min, f64::MAX, |p| p.1) / 1.5,
+        fold(f64::max, f64::MIN, |p| p.1) * 1.5,
+    );
     let y1 = y1 * (y1 / y0).powf(0.43);
     let err = |e: DrawingAreaErrorKind<_>| anyhow::anyhow!("{e:?}");
     let mut buf = vec![255u8; (w * h * 3) as usize];
@@ -276,14 +333,19 @@ fn log_log_png(
             .map_err(err)?;
         for (label, c, pts) in data {
             let c = *c;
-            let mut line: Vec<(f64, f64)> =
-                pts.iter().copied().filter(|(x, y)| *x > 0.0 && *y > 0.0).collect();
+            let mut line: Vec<(f64, f64)> = pts
+                .iter()
+                .copied()
+                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
+                .collect();
             line.sort_by(|a, b| a.0.total_cmp(&b.0));
             chart
                 .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
                 .map_err(err)?
                 .label(label.as_str())
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                });
             chart
                 .draw_series(line.iter().map(|p| Circle::new(*p, 4, c.filled())))
                 .map_err(err)?;
@@ -297,7 +359,8 @@ fn log_log_png(
             .map_err(err)?;
         root.present().map_err(err)?;
     }
-    let file = std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
+    let file =
+        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
     let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
@@ -330,12 +393,18 @@ pub fn write_exact_plots(dir: &Path, s: &ExactSceneReport) -> anyhow::Result<()>
         cost.push((
             label.clone(),
             col,
-            rows.iter().filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms))).collect(),
+            rows.iter()
+                .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms)))
+                .collect(),
         ));
         conv.push((label, col, xy(&rows, by_n)));
     }
     if !s.theory.is_empty() {
-        conv.push(("implicit Euler theory (first mode)".into(), RGBColor(120, 120, 120), s.theory.clone()));
+        conv.push((
+            "implicit Euler theory (first mode)".into(),
+            RGBColor(120, 120, 120),
+            s.theory.clone(),
+        ));
     }
     log_log_png(
         &dir.join(format!("{}.png", s.name)),
@@ -346,7 +415,11 @@ pub fn write_exact_plots(dir: &Path, s: &ExactSceneReport) -> anyhow::Result<()>
     log_log_png(
         &dir.join(format!("{}_order.png", s.name)),
         &format!("{}: error vs {}", s.name, if by_n { "n" } else { "dt" }),
-        if by_n { "ribbon elements n" } else { "time step dt, s" },
+        if by_n {
+            "ribbon elements n"
+        } else {
+            "time step dt, s"
+        },
         &conv,
     )
 }

@@ -102,7 +102,13 @@ pub fn clamp_name(rule: ClampRule) -> &'static str {
 /// The material points compared: 41 x 5 on the strip, inset by a micrometre.
 fn points(problem: &ExactProblem, width: f64) -> Vec<Point2> {
     let l = problem.length();
-    grid_samples(Point2::new(0.0, -0.5 * width), Point2::new(l, 0.5 * width), 41, 5, 1e-6)
+    grid_samples(
+        Point2::new(0.0, -0.5 * width),
+        Point2::new(l, 0.5 * width),
+        41,
+        5,
+        1e-6,
+    )
 }
 
 /// A run's error against the exact solution over its samples (None if a sample is
@@ -139,7 +145,10 @@ pub fn run_exact_scene(
     on_run: &mut dyn FnMut(String),
 ) -> anyhow::Result<ExactSceneReport> {
     let scene = crate::scene::load(file, &[])?;
-    let ribbon = scene.world.object_as::<RibbonSim>(0).context("one ribbon")?;
+    let ribbon = scene
+        .world
+        .object_as::<RibbonSim>(0)
+        .context("one ribbon")?;
     let (dt, tolerance, width) = (
         scene.world.dt(),
         ribbon.params.solver.tolerance,
@@ -150,7 +159,12 @@ pub fn run_exact_scene(
         Some(omega) => {
             let period = 2.0 * std::f64::consts::PI / omega;
             let k = if quick { 5 } else { 10 };
-            (period, (1..=k).map(|i| period * i as f64 / k as f64).collect::<Vec<_>>())
+            (
+                period,
+                (1..=k)
+                    .map(|i| period * i as f64 / k as f64)
+                    .collect::<Vec<_>>(),
+            )
         }
         None => (scene.duration, vec![scene.duration]),
     };
@@ -175,7 +189,9 @@ pub fn run_exact_scene(
             extra.push(format!("ribbon.initial_shape.bending_angles={angles:?}"));
         }
         let mut run = execute_with(file, SceneKind::Ribbon, duration, r, &sample_times, &extra)
-            .with_context(|| format!("{name}: {} n={} dt={}", r.method.name(), r.resolution, r.dt))?;
+            .with_context(|| {
+                format!("{name}: {} n={} dt={}", r.method.name(), r.resolution, r.dt)
+            })?;
         let error = error_of(&problem, &sample_times, &run.samples, &pts).filter(|_| run.finite);
         run.samples = Vec::new();
         rows.push(ExactRow { spec, run, error });

@@ -318,7 +318,10 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> anyhow::Res
         ));
     }
     // every run plus the reference and its 2 dt and 4 dt checks, and the exact runs
-    let total: usize = plans.iter().map(|(_, _, p)| p.runs.len() + 3).sum::<usize>()
+    let total: usize = plans
+        .iter()
+        .map(|(_, _, p)| p.runs.len() + 3)
+        .sum::<usize>()
         + exact_files
             .iter()
             .map(|(_, p)| exact::exact_plan(p, opts.quick, 0.0, 0.0, 1.0, "").len())

@@ -16,11 +16,11 @@
 
 use nalgebra::DMatrix;
 
+use super::objective::chain::ChainMatrix;
 use super::objective::{GradientMode, Layout, Objective, RimHistory, StepTerms, Workspace};
 use super::params::{SolverKind, SolverSettings};
 use super::reconstruct::Strip;
 use crate::geometry::Pose;
-use super::objective::chain::ChainMatrix;
 use crate::optim::{BoxProblem, Dense, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton};
 
 /// Relative objective decrease that ends an inner solve, (f_k - f_k+1)/max(|f|, 1):
@@ -243,13 +243,17 @@ impl BoxProblem for ZChain<'_, '_, '_> {
         self.0.second_order = saved;
         if let Some(h) = hessian {
             let problem = &mut *self.0;
-            problem.objective.chain_model(problem.workspace, &mut h.model);
+            problem
+                .objective
+                .chain_model(problem.workspace, &mut h.model);
         }
         f
     }
     fn hessian(&mut self, _z: &[f64], h: &mut ChainMatrix) {
         let problem = &mut *self.0;
-        problem.objective.chain_model(problem.workspace, &mut h.model);
+        problem
+            .objective
+            .chain_model(problem.workspace, &mut h.model);
     }
 }
 

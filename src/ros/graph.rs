@@ -12,8 +12,8 @@ use std::time::Duration;
 use ros2_client::dds::rustdds::mio1::{Interest, Poll, Token};
 use ros2_client::{Name, Node, Subscription};
 
-use super::msgs::{Clock, PoseStamped, TFMessage, Time};
 use super::dds::{dds, qos, topic_type, NodeError};
+use super::msgs::{Clock, PoseStamped, TFMessage, Time};
 use super::tf::{frame_name, LookupError, TfBuffer};
 use crate::record::metadata::Qos;
 

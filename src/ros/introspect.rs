@@ -453,7 +453,10 @@ mod tests {
         let big = 1u64 << 60;
         let d = compare(&Value::UInt(big, "uint64"), &Value::UInt(big + 1, "uint64"));
         assert_eq!((d.leaves, d.max_abs), (1, 1.0));
-        let d = compare(&Value::Int(i64::MIN, "int64"), &Value::Int(i64::MAX, "int64"));
+        let d = compare(
+            &Value::Int(i64::MIN, "int64"),
+            &Value::Int(i64::MAX, "int64"),
+        );
         assert!(!d.is_zero() && d.max_abs > 1e19);
         // the first differing leaf is named even when the magnitude is 0
         let mut a = SingularPoints::default();

@@ -123,7 +123,10 @@ mod tests {
         assert!(log.first("/ribbon/markers", 0));
         assert!(!log.first("/ribbon/markers", 0));
         assert!(log.first("/ribbon/status", 0));
-        assert!(log.first("/ribbon/markers", 1), "a reset starts a new episode");
+        assert!(
+            log.first("/ribbon/markers", 1),
+            "a reset starts a new episode"
+        );
         assert!(!log.first("/ribbon/markers", 1));
     }
 }

@@ -17,9 +17,9 @@ use ros2_client::{
     ServiceTypeName,
 };
 
+use super::dds::{dds, NodeError};
 use super::msgs::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
 use super::names::NodeNames;
-use super::dds::{dds, NodeError};
 use super::param_msgs::*;
 use super::reply::{ClientReaders, Flushed, HeldReplies};
 

@@ -141,8 +141,6 @@ impl Default for SolverFile {
     }
 }
 
-
-
 #[derive(Clone, Copy, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct OutputsFile {
@@ -179,11 +177,6 @@ impl Default for OutputsFile {
         }
     }
 }
-
-
-
-
-
 
 impl SceneFile {
     /// Validate and build the world.
@@ -339,13 +332,12 @@ impl SceneFile {
             ));
         }
         let mut world = World::new(objects, handles, dt);
-        if let Some(stage) = build_stage(&self.colliders, self.contact.as_ref(), &ck, file, &world)? {
+        if let Some(stage) = build_stage(&self.colliders, self.contact.as_ref(), &ck, file, &world)?
+        {
             world = world.with_contact(stage);
         }
         Ok(self.into_scene(file, duration, world, topics))
     }
-
-
 
     fn solver_settings(&self, ck: &Check) -> Result<SolverSettings, SceneError> {
         let s = &self.solver;

@@ -204,208 +204,208 @@ pub(super) struct PaperScene<'a> {
 /// Validate the `paper:` section and its handles and build the world; returns it with
 /// the handles' topics.
 pub(super) fn build_paper(
-        scene: PaperScene,
-        ck: &Check,
-        dt: f64,
-        gravity: Vector3,
-    ) -> Result<(World, Vec<String>), SceneError> {
-        let Some(paper) = scene.paper else {
-            return Err(ck.fail("paper", "missing"));
-        };
-        // The contact stage (Pan et al. sec. 5) acts on ribbons; a sheet collides
-        // through its own FEM collision energy (Schreck et al. step 1).
-        if scene.has_colliders {
-            return Err(ck.fail(
+    scene: PaperScene,
+    ck: &Check,
+    dt: f64,
+    gravity: Vector3,
+) -> Result<(World, Vec<String>), SceneError> {
+    let Some(paper) = scene.paper else {
+        return Err(ck.fail("paper", "missing"));
+    };
+    // The contact stage (Pan et al. sec. 5) acts on ribbons; a sheet collides
+    // through its own FEM collision energy (Schreck et al. step 1).
+    if scene.has_colliders {
+        return Err(ck.fail(
                 "colliders",
                 "top-level colliders feed the ribbon contact stage; a paper sheet takes `paper.colliders` (plane, sphere)",
             ));
-        }
-        if scene.has_contact {
-            return Err(ck.fail(
-                "contact",
-                "the contact stage acts on ribbons; a paper sheet collides through `paper.colliders`",
-            ));
-        }
-        let pk = "paper";
-        let key = |k: &str| format!("{pk}.{k}");
-        let width = ck.positive(&key("size.0"), paper.size[0])?;
-        let height = ck.positive(&key("size.1"), paper.size[1])?;
-        let placement = match &paper.placement {
-            Some(p) => pose_from(
-                ck.vec3(&key("placement.position"), p.position)?,
-                ck.vec3(&key("placement.rotation"), p.rotation)?,
-            ),
-            None => Pose::identity(),
-        };
-        let defaults = PaperParams::default();
-        let theta0 = ck.positive(&key("flat_angle"), paper.flat_angle)?;
-        let low = match paper.junction_low_angle {
-            Some(v) => ck.non_negative(&key("junction_low_angle"), v)?,
-            None => theta0 / 10.0,
-        };
-        let high = match paper.junction_high_angle {
-            Some(v) => ck.non_negative(&key("junction_high_angle"), v)?,
-            None => theta0,
-        };
-        if low > high {
-            return Err(ck.fail(
-                &key("junction_low_angle"),
-                format!("theta_low = {low} must not exceed theta_high = {high} (hysteresis)"),
-            ));
-        }
-        let poisson = ck.finite(&key("poisson_ratio"), paper.poisson_ratio)?;
-        if !(poisson > -1.0 && poisson < 0.5) {
-            return Err(ck.fail(
-                &key("poisson_ratio"),
-                format!("must be in (-1, 0.5), got {poisson}"),
-            ));
-        }
-        let eps_c = ck.positive(&key("compression_threshold"), paper.compression_threshold)?;
-        if eps_c >= 1.0 {
-            return Err(ck.fail(
-                &key("compression_threshold"),
-                format!("is a fraction (0.001 = 0.1 %), got {eps_c}"),
-            ));
-        }
-        if paper.newton_max_iterations == 0 {
-            return Err(ck.fail(&key("newton_max_iterations"), "must be at least 1"));
-        }
-        let mut colliders = Vec::new();
-        for (i, c) in paper.colliders.iter().enumerate() {
-            let ckey = format!("{pk}.colliders.{i}");
-            colliders.push(
-                match ck.choice(&format!("{ckey}.kind"), &c.kind, &["plane", "sphere"])? {
-                    "plane" => {
-                        let n = ck.vec3(&format!("{ckey}.normal"), c.normal)?;
-                        if n.norm() < 1e-12 {
-                            return Err(ck.fail(&format!("{ckey}.normal"), "must be non-zero"));
-                        }
-                        Collider::Plane {
-                            point: ck.vec3(&format!("{ckey}.point"), c.point)?,
-                            normal: n.normalize(),
-                        }
+    }
+    if scene.has_contact {
+        return Err(ck.fail(
+            "contact",
+            "the contact stage acts on ribbons; a paper sheet collides through `paper.colliders`",
+        ));
+    }
+    let pk = "paper";
+    let key = |k: &str| format!("{pk}.{k}");
+    let width = ck.positive(&key("size.0"), paper.size[0])?;
+    let height = ck.positive(&key("size.1"), paper.size[1])?;
+    let placement = match &paper.placement {
+        Some(p) => pose_from(
+            ck.vec3(&key("placement.position"), p.position)?,
+            ck.vec3(&key("placement.rotation"), p.rotation)?,
+        ),
+        None => Pose::identity(),
+    };
+    let defaults = PaperParams::default();
+    let theta0 = ck.positive(&key("flat_angle"), paper.flat_angle)?;
+    let low = match paper.junction_low_angle {
+        Some(v) => ck.non_negative(&key("junction_low_angle"), v)?,
+        None => theta0 / 10.0,
+    };
+    let high = match paper.junction_high_angle {
+        Some(v) => ck.non_negative(&key("junction_high_angle"), v)?,
+        None => theta0,
+    };
+    if low > high {
+        return Err(ck.fail(
+            &key("junction_low_angle"),
+            format!("theta_low = {low} must not exceed theta_high = {high} (hysteresis)"),
+        ));
+    }
+    let poisson = ck.finite(&key("poisson_ratio"), paper.poisson_ratio)?;
+    if !(poisson > -1.0 && poisson < 0.5) {
+        return Err(ck.fail(
+            &key("poisson_ratio"),
+            format!("must be in (-1, 0.5), got {poisson}"),
+        ));
+    }
+    let eps_c = ck.positive(&key("compression_threshold"), paper.compression_threshold)?;
+    if eps_c >= 1.0 {
+        return Err(ck.fail(
+            &key("compression_threshold"),
+            format!("is a fraction (0.001 = 0.1 %), got {eps_c}"),
+        ));
+    }
+    if paper.newton_max_iterations == 0 {
+        return Err(ck.fail(&key("newton_max_iterations"), "must be at least 1"));
+    }
+    let mut colliders = Vec::new();
+    for (i, c) in paper.colliders.iter().enumerate() {
+        let ckey = format!("{pk}.colliders.{i}");
+        colliders.push(
+            match ck.choice(&format!("{ckey}.kind"), &c.kind, &["plane", "sphere"])? {
+                "plane" => {
+                    let n = ck.vec3(&format!("{ckey}.normal"), c.normal)?;
+                    if n.norm() < 1e-12 {
+                        return Err(ck.fail(&format!("{ckey}.normal"), "must be non-zero"));
                     }
-                    _ => Collider::Sphere {
-                        center: ck.vec3(&format!("{ckey}.center"), c.center)?,
-                        radius: ck.positive(&format!("{ckey}.radius"), c.radius)?,
-                    },
+                    Collider::Plane {
+                        point: ck.vec3(&format!("{ckey}.point"), c.point)?,
+                        normal: n.normalize(),
+                    }
+                }
+                _ => Collider::Sphere {
+                    center: ck.vec3(&format!("{ckey}.center"), c.center)?,
+                    radius: ck.positive(&format!("{ckey}.radius"), c.radius)?,
                 },
-            );
-        }
-        let on_boundary = |p: &Point2| {
-            let inside =
-                p.x >= -1e-12 && p.x <= width + 1e-12 && p.y >= -1e-12 && p.y <= height + 1e-12;
-            let edge = p.x.abs() < 1e-9
-                || (p.x - width).abs() < 1e-9
-                || p.y.abs() < 1e-9
-                || (p.y - height).abs() < 1e-9;
-            inside && edge
-        };
-        let mut preset_creases = Vec::new();
-        for (i, c) in paper.creases.iter().enumerate() {
-            let ckey = format!("{pk}.creases.{i}");
-            let from = Point2::new(
-                ck.finite(&format!("{ckey}.from.0"), c.from[0])?,
-                ck.finite(&format!("{ckey}.from.1"), c.from[1])?,
-            );
-            let to = Point2::new(
-                ck.finite(&format!("{ckey}.to.0"), c.to[0])?,
-                ck.finite(&format!("{ckey}.to.1"), c.to[1])?,
-            );
-            for (k, p) in [("from", from), ("to", to)] {
-                if !on_boundary(&p) {
-                    return Err(ck.fail(
-                        &format!("{ckey}.{k}"),
-                        format!("[{}, {}] is not on the sheet's boundary [0, {width}] x [0, {height}] (m)", p.x, p.y),
-                    ));
-                }
-            }
-            preset_creases.push(PresetCrease {
-                from,
-                to,
-                rest_angle: ck.finite(&format!("{ckey}.rest_angle"), c.rest_angle)?,
-            });
-        }
-
-        // handles: the only object is `paper`
-        let mut names = std::collections::BTreeSet::new();
-        let mut handles = Vec::new();
-        let mut topics = Vec::new();
-        let mut releases = Vec::new();
-        for (i, h) in scene.handles.iter().enumerate() {
-            let hkey = format!("handles.{i}");
-            if let Some(o) = &h.object {
-                if o != "paper" {
-                    return Err(ck.fail(
-                        &format!("{hkey}.object"),
-                        format!("no object named `{o}` (objects: paper)"),
-                    ));
-                }
-            }
-            let (mut spec, initial, topic) = parse_handle(ck, &hkey, h, 0, &mut names)?;
-            let p = spec.material_point;
+            },
+        );
+    }
+    let on_boundary = |p: &Point2| {
+        let inside =
+            p.x >= -1e-12 && p.x <= width + 1e-12 && p.y >= -1e-12 && p.y <= height + 1e-12;
+        let edge = p.x.abs() < 1e-9
+            || (p.x - width).abs() < 1e-9
+            || p.y.abs() < 1e-9
+            || (p.y - height).abs() < 1e-9;
+        inside && edge
+    };
+    let mut preset_creases = Vec::new();
+    for (i, c) in paper.creases.iter().enumerate() {
+        let ckey = format!("{pk}.creases.{i}");
+        let from = Point2::new(
+            ck.finite(&format!("{ckey}.from.0"), c.from[0])?,
+            ck.finite(&format!("{ckey}.from.1"), c.from[1])?,
+        );
+        let to = Point2::new(
+            ck.finite(&format!("{ckey}.to.0"), c.to[0])?,
+            ck.finite(&format!("{ckey}.to.1"), c.to[1])?,
+        );
+        for (k, p) in [("from", from), ("to", to)] {
             if !on_boundary(&p) {
                 return Err(ck.fail(
+                    &format!("{ckey}.{k}"),
+                    format!(
+                        "[{}, {}] is not on the sheet's boundary [0, {width}] x [0, {height}] (m)",
+                        p.x, p.y
+                    ),
+                ));
+            }
+        }
+        preset_creases.push(PresetCrease {
+            from,
+            to,
+            rest_angle: ck.finite(&format!("{ckey}.rest_angle"), c.rest_angle)?,
+        });
+    }
+
+    // handles: the only object is `paper`
+    let mut names = std::collections::BTreeSet::new();
+    let mut handles = Vec::new();
+    let mut topics = Vec::new();
+    let mut releases = Vec::new();
+    for (i, h) in scene.handles.iter().enumerate() {
+        let hkey = format!("handles.{i}");
+        if let Some(o) = &h.object {
+            if o != "paper" {
+                return Err(ck.fail(
+                    &format!("{hkey}.object"),
+                    format!("no object named `{o}` (objects: paper)"),
+                ));
+            }
+        }
+        let (mut spec, initial, topic) = parse_handle(ck, &hkey, h, 0, &mut names)?;
+        let p = spec.material_point;
+        if !on_boundary(&p) {
+            return Err(ck.fail(
                     &format!("{hkey}.point"),
                     format!(
                         "[{}, {}] is not on the sheet's boundary [0, {width}] x [0, {height}] (m): the paper's handles hold the boundary (sec. 3.3)",
                         p.x, p.y
                     ),
                 ));
-            }
-            if let Some(t) = h.release_at {
-                releases.push((i, ck.non_negative(&format!("{hkey}.release_at"), t)?));
-            }
-            spec.trajectory.initial =
-                initial.unwrap_or_else(|| placement * Pose::translation(p.x, p.y, 0.0));
-            topics.push(topic);
-            handles.push(spec);
         }
-        if scene.has_forces {
-            return Err(ck.fail("forces", "point forces are not supported on paper objects"));
+        if let Some(t) = h.release_at {
+            releases.push((i, ck.non_negative(&format!("{hkey}.release_at"), t)?));
         }
+        spec.trajectory.initial =
+            initial.unwrap_or_else(|| placement * Pose::translation(p.x, p.y, 0.0));
+        topics.push(topic);
+        handles.push(spec);
+    }
+    if scene.has_forces {
+        return Err(ck.fail("forces", "point forces are not supported on paper objects"));
+    }
 
-        let params = PaperParams {
-            width,
-            height,
-            placement,
-            density: ck.positive(&key("density"), paper.density)?,
-            stretch_stiffness: ck.positive(&key("stretch_stiffness"), paper.stretch_stiffness)?,
-            poisson_ratio: poisson,
-            bending_stiffness: ck
-                .non_negative(&key("bending_stiffness"), paper.bending_stiffness)?,
-            damping: ck.non_negative(&key("damping"), paper.damping)?,
-            gravity,
-            boundary_density: ck.positive(&key("boundary_density"), paper.boundary_density)?,
-            interior_density: match paper.interior_density {
-                Some(v) => ck.positive(&key("interior_density"), v)?,
-                None => defaults.interior_density,
-            },
-            flat_angle: theta0,
-            split_flat_regions_at_folds: paper.split_flat_regions_at_folds,
-            conflict_angle: ck.non_negative(&key("conflict_angle"), paper.conflict_angle)?,
-            junction_low_angle: low,
-            junction_high_angle: high,
-            compression_threshold: eps_c,
-            singularity_sigma: ck.positive(&key("singularity_sigma"), paper.singularity_sigma)?,
-            blaschke_tolerance: ck
-                .positive(&key("blaschke_tolerance"), paper.blaschke_tolerance)?,
-            plastic_angle: ck.non_negative(&key("plastic_angle"), paper.plastic_angle)?,
-            newton_max_iterations: paper.newton_max_iterations,
-            newton_tolerance: ck.positive(&key("newton_tolerance"), paper.newton_tolerance)?,
-            isometry_max_iterations: paper.isometry_max_iterations,
-            collision_stiffness: ck
-                .non_negative(&key("collision_stiffness"), paper.collision_stiffness)?,
-            collision_thickness: ck
-                .positive(&key("collision_thickness"), paper.collision_thickness)?,
-            colliders,
-            preset_creases,
-            imperfection: ck.non_negative(&key("imperfection"), paper.imperfection)?,
-            seed: scene.seed,
-            handle_releases: releases,
-            initial_shape: crate::paper::PaperInitialShape::Flat,
-        };
-        let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(pk, e.to_string()))?;
-        let world = World::new(vec![("paper".to_string(), Box::new(sim) as _)], handles, dt);
-        Ok((world, topics))
+    let params = PaperParams {
+        width,
+        height,
+        placement,
+        density: ck.positive(&key("density"), paper.density)?,
+        stretch_stiffness: ck.positive(&key("stretch_stiffness"), paper.stretch_stiffness)?,
+        poisson_ratio: poisson,
+        bending_stiffness: ck.non_negative(&key("bending_stiffness"), paper.bending_stiffness)?,
+        damping: ck.non_negative(&key("damping"), paper.damping)?,
+        gravity,
+        boundary_density: ck.positive(&key("boundary_density"), paper.boundary_density)?,
+        interior_density: match paper.interior_density {
+            Some(v) => ck.positive(&key("interior_density"), v)?,
+            None => defaults.interior_density,
+        },
+        flat_angle: theta0,
+        split_flat_regions_at_folds: paper.split_flat_regions_at_folds,
+        conflict_angle: ck.non_negative(&key("conflict_angle"), paper.conflict_angle)?,
+        junction_low_angle: low,
+        junction_high_angle: high,
+        compression_threshold: eps_c,
+        singularity_sigma: ck.positive(&key("singularity_sigma"), paper.singularity_sigma)?,
+        blaschke_tolerance: ck.positive(&key("blaschke_tolerance"), paper.blaschke_tolerance)?,
+        plastic_angle: ck.non_negative(&key("plastic_angle"), paper.plastic_angle)?,
+        newton_max_iterations: paper.newton_max_iterations,
+        newton_tolerance: ck.positive(&key("newton_tolerance"), paper.newton_tolerance)?,
+        isometry_max_iterations: paper.isometry_max_iterations,
+        collision_stiffness: ck
+            .non_negative(&key("collision_stiffness"), paper.collision_stiffness)?,
+        collision_thickness: ck.positive(&key("collision_thickness"), paper.collision_thickness)?,
+        colliders,
+        preset_creases,
+        imperfection: ck.non_negative(&key("imperfection"), paper.imperfection)?,
+        seed: scene.seed,
+        handle_releases: releases,
+        initial_shape: crate::paper::PaperInitialShape::Flat,
+    };
+    let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(pk, e.to_string()))?;
+    let world = World::new(vec![("paper".to_string(), Box::new(sim) as _)], handles, dt);
+    Ok((world, topics))
 }

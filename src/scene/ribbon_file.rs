@@ -7,8 +7,7 @@ use super::check::{pose_from, Check};
 use super::SceneError;
 use crate::geometry::{Pose, Vector3};
 use crate::ribbon::{
-    BaseMode, ClampRule, KineticModel, LoopKind, RibbonInitialShape, RibbonParams,
-    SolverSettings,
+    BaseMode, ClampRule, KineticModel, LoopKind, RibbonInitialShape, RibbonParams, SolverSettings,
 };
 use crate::sim::HandleSpec;
 
@@ -173,7 +172,6 @@ pub struct VelocityFile {
     pub center: [f64; 3],
 }
 
-
 fn initial_kind_is_not_explicit(ribbon: &RibbonFile) -> bool {
     ribbon.initial_shape.kind.as_deref() != Some("explicit")
 }
@@ -210,13 +208,9 @@ pub(super) fn ribbon_entries<'a>(
             for (i, r) in ribbons.iter().enumerate() {
                 let key = format!("ribbons.{i}");
                 let Some(name) = &r.name else {
-                    return Err(
-                        ck.fail(&format!("{key}.name"), "every listed ribbon needs a name")
-                    );
+                    return Err(ck.fail(&format!("{key}.name"), "every listed ribbon needs a name"));
                 };
-                if name.is_empty()
-                    || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
-                {
+                if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
                     return Err(ck.fail(
                         &format!("{key}.name"),
                         format!("`{name}` must be non-empty [A-Za-z0-9_]"),
@@ -263,8 +257,7 @@ pub(super) fn ribbon_params(
         ));
     }
     let density = ck.positive(&format!("{rk}.density"), ribbon.density)?;
-    let alpha =
-        ck.non_negative(&format!("{rk}.bending_stiffness"), ribbon.bending_stiffness)?;
+    let alpha = ck.non_negative(&format!("{rk}.bending_stiffness"), ribbon.bending_stiffness)?;
     let beta = ck.non_negative(
         &format!("{rk}.crease_regularizer"),
         ribbon.crease_regularizer,
@@ -367,9 +360,9 @@ pub(super) fn ribbon_params(
             let n = ribbon.segments;
             let list = |name: &str, v: &Option<Vec<f64>>| -> Result<Vec<f64>, SceneError> {
                 let key = format!("{rk}.initial_shape.{name}");
-                let v = v.as_ref().ok_or_else(|| {
-                    ck.fail(&key, "required for kind `explicit` (n - 1 values)")
-                })?;
+                let v = v
+                    .as_ref()
+                    .ok_or_else(|| ck.fail(&key, "required for kind `explicit` (n - 1 values)"))?;
                 if v.len() + 1 != n {
                     return Err(ck.fail(
                         &key,
@@ -396,9 +389,7 @@ pub(super) fn ribbon_params(
         other => {
             return Err(ck.fail(
                 &format!("{rk}.initial_shape.kind"),
-                format!(
-                    "unknown value `{other}`, expected one of: flat, helix, ring, explicit"
-                ),
+                format!("unknown value `{other}`, expected one of: flat, helix, ring, explicit"),
             ))
         }
     };
@@ -453,4 +444,3 @@ pub(super) fn ribbon_params(
     }
     Ok((params, initial))
 }
-

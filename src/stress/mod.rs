@@ -367,12 +367,7 @@ struct EnergyWatch<'a> {
 }
 
 impl StepObserver for EnergyWatch<'_> {
-    fn after_step(
-        &mut self,
-        _: &Scene,
-        report: &StepReport,
-        _: f64,
-    ) -> Result<(), ObserverError> {
+    fn after_step(&mut self, _: &Scene, report: &StepReport, _: f64) -> Result<(), ObserverError> {
         let tampered;
         let report = match self.hook.as_mut() {
             Some(hook) => {

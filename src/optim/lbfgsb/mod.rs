@@ -326,13 +326,11 @@ impl Lbfgsb {
             norm.max(gi.abs())
         })
     }
-
 }
 
-
 mod cauchy;
-mod line_search;
 mod linalg;
+mod line_search;
 mod memory;
 
 use linalg::{all_finite, dot, dot_on, dot_on_dense, factor_k, solve_k};

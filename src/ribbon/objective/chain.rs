@@ -108,11 +108,8 @@ impl Objective<'_> {
             let (_, f, m) = &ws.scratch_psuf[k];
             let arm = m - a_k.cross(f);
             let (oc, op) = (ws.twists[ic].angular, ws.twists[ip].angular);
-            let mut local = self.bending_block(
-                ws.coords.crease_direction[k],
-                ws.coords.bending_angle[k],
-                k,
-            );
+            let mut local =
+                self.bending_block(ws.coords.crease_direction[k], ws.coords.bending_angle[k], k);
             local[(0, 0)] += 2.0 * t.crease_regularizer + oc.dot(&wc) + domega_world.dot(&arm);
             let cross = op.dot(&wc) + dd_world.dot(&arm);
             local[(0, 1)] += cross;
@@ -158,8 +155,8 @@ impl Objective<'_> {
             for j in 0..3 {
                 for i in 0..3 {
                     let (wi, wj) = (geometric(i, 0), geometric(j, 0));
-                    model.base_local[(i, j)] = 0.5
-                        * (ws.twists[i].angular.dot(&wj) + ws.twists[j].angular.dot(&wi));
+                    model.base_local[(i, j)] =
+                        0.5 * (ws.twists[i].angular.dot(&wj) + ws.twists[j].angular.dot(&wi));
                 }
             }
         }
@@ -373,10 +370,7 @@ impl ChainModel {
             let pv = p.fixed_rows::<6>(0);
             let along_c = xc.dot(&pv) + p[6];
             // q_x = M_x^T p, q_u = M_u^T p - rhs_u
-            let mut qu = nalgebra::Vector2::new(
-                along_c - rhs[ic],
-                xp.dot(&pv) - rhs[ip],
-            );
+            let mut qu = nalgebra::Vector2::new(along_c - rhs[ic], xp.dot(&pv) - rhs[ip]);
             if !self.free[ic] {
                 qu[0] = 0.0;
             }
@@ -451,7 +445,10 @@ impl crate::optim::NewtonMatrix for ChainMatrix {
         let bad = |x: f64| !(x.abs() < 1e150);
         m.blocks.iter().any(|b| b.iter().any(|&x| bad(x)))
             || m.local.iter().any(|b| b.iter().any(|&x| bad(x)))
-            || m.w_c.iter().chain(&m.w_psi).any(|w| w.iter().any(|&x| bad(x)))
+            || m.w_c
+                .iter()
+                .chain(&m.w_psi)
+                .any(|w| w.iter().any(|&x| bad(x)))
     }
 
     fn factor(&mut self, free: &[usize], damping: f64) -> bool {

@@ -420,11 +420,18 @@ fn the_clamped_bending_block_is_the_psd_projection() {
     );
     let eig = exact.symmetric_eigen();
     assert!(eig.eigenvalues.min() < 0.0, "indefinite at c^2 > 1/3");
-    let i = if eig.eigenvalues[0] > eig.eigenvalues[1] { 0 } else { 1 };
+    let i = if eig.eigenvalues[0] > eig.eigenvalues[1] {
+        0
+    } else {
+        1
+    };
     let v = eig.eigenvectors.column(i);
     let expected = v * v.transpose() * eig.eigenvalues[i];
     let clamped = obj.bending_block(c, psi, k);
-    assert!((clamped - expected).amax() < 1e-12 * exact.amax(), "{clamped} vs {expected}");
+    assert!(
+        (clamped - expected).amax() < 1e-12 * exact.amax(),
+        "{clamped} vs {expected}"
+    );
     // and unclamped below c^2 = 1/3
     let c = 0.5;
     let exact = nalgebra::Matrix2::new(
@@ -481,7 +488,11 @@ fn chain_solve_is_the_dense_solve() {
         }
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let rhs: Vec<f64> = (0..nq).map(|_| rng.random_range(-1.0..1.0)).collect();
-        for (held, damping) in [(vec![], 1e-3), (vec![obj.layout.c(3), obj.layout.c(5)], 1e-1), (vec![obj.layout.psi(2)], 0.0)] {
+        for (held, damping) in [
+            (vec![], 1e-3),
+            (vec![obj.layout.c(3), obj.layout.c(5)], 1e-1),
+            (vec![obj.layout.psi(2)], 0.0),
+        ] {
             let free: Vec<bool> = (0..nq).map(|j| !held.contains(&j)).collect();
             let shift: Vec<f64> = (0..nq).map(|j| damping * hz[(j, j)].abs() + 1e-9).collect();
             let idx: Vec<usize> = (0..nq).filter(|&j| free[j]).collect();
@@ -491,7 +502,11 @@ fn chain_solve_is_the_dense_solve() {
             });
             let dense = reduced.clone().cholesky();
             let chain_ok = model.factor(&free, &shift);
-            assert_eq!(chain_ok, dense.is_some(), "positive definite: chain {chain_ok} (held {held:?}, damping {damping})");
+            assert_eq!(
+                chain_ok,
+                dense.is_some(),
+                "positive definite: chain {chain_ok} (held {held:?}, damping {damping})"
+            );
             let Some(dense) = dense else { continue };
             let r = nalgebra::DVector::from_fn(m, |r, _| rhs[idx[r]]);
             let expected = dense.solve(&r);

@@ -1,7 +1,6 @@
 //! The node's services: reset, step and set_paused (std_srvs), the rcl_interfaces
 //! parameter services with the run-time parameters taking effect, and the held replies.
 
-
 use std::time::{Duration, Instant};
 
 use super::{Lockstep, Pacing, SimNode};
@@ -138,7 +137,8 @@ impl SimNode {
                     },
                 })
                 .collect();
-            self.io.services
+            self.io
+                .services
                 .set_parameters
                 .reply(id, SetParametersResponse { results });
         }

@@ -6,8 +6,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use ros2_client::dds::rustdds::mio1::{Interest, Poll, Token, Waker};
-use ros2_client::{Context, ContextOptions, Name, Node, NodeName, NodeOptions, Publisher};
 use ros2_client::Subscription;
+use ros2_client::{Context, ContextOptions, Name, Node, NodeName, NodeOptions, Publisher};
 
 use crate::record::metadata::Qos;
 use crate::ros::dds::{bounded_publisher, dds, qos, topic_type, NodeError};
@@ -154,7 +154,14 @@ impl Endpoints {
         let tf_in = (!names.handles.is_empty())
             .then(|| {
                 let lag = Duration::from_secs_f64(tf_max_lag);
-                TfIn::new(&mut node, &names.tf, &names.tf_static, &poll, GRAPH_TOKEN_BASE, lag)
+                TfIn::new(
+                    &mut node,
+                    &names.tf,
+                    &names.tf_static,
+                    &poll,
+                    GRAPH_TOKEN_BASE,
+                    lag,
+                )
             })
             .transpose()?;
         let clock_in = use_sim_time

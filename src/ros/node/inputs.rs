@@ -2,7 +2,6 @@
 //! through TF when they are stamped in another frame), TF-driven handles' targets, and
 //! the external clock under use_sim_time.
 
-
 use std::time::Instant;
 
 use super::{Lockstep, SimNode, CATCH_UP_BATCH};
