@@ -435,7 +435,6 @@ impl StepSolver {
                     .end_crease_multipliers
                     .iter()
                     .any(|&l| l < 0.0);
-            drop(objective);
             objective_terms.multipliers = updates;
             objective_terms.end_crease_multipliers = end;
             outcome.constraint_violation = max_pos;

@@ -375,8 +375,8 @@ fn newton_hessian_matches_finite_differences_in_torsion() {
     check_hessian(&terms, &history, strip, base, &q, true, &all);
 }
 
-/// The check has teeth: where the bending block is clamped to PSD (c_{n-1} ~ 3.4, c^2
-/// > 1/3, the one documented departure from the exact Hessian) it sees the difference,
+/// The check has teeth: where the bending block is clamped to PSD (c_{n-1} ~ 3.4,
+/// c^2 > 1/3, the one documented departure from the exact Hessian) it sees the difference,
 /// a few 1e-5 of the largest entry.
 #[test]
 #[should_panic(expected = "vs fd")]
