@@ -143,9 +143,18 @@ def start_node(tmp_path):
 class Ros:
     """A Cyclone DDS participant speaking ROS 2 names."""
 
+    # Entity lifetimes follow one rule, because of a use-after-free in cyclonedds-python
+    # 11.0.1 (docs/ros2_interop.md "The Cyclone DDS Python client"): a type's Topic lives
+    # as long as the participant (one Topic per name, never one per call), and close()
+    # deletes readers, then writers, then the participant, instead of leaving the order
+    # to the garbage collector.
+
     def __init__(self, domain: int):
         self.dp = DomainParticipant(domain)
         self._topics: dict[str, Topic] = {}
+        self._readers: list[DataReader] = []
+        self._writers: list[DataWriter] = []
+        self._clients: dict[str, tuple[DataWriter, DataReader]] = {}
         self._seq = 0
         self.guid = random.getrandbits(63)
 
@@ -155,11 +164,28 @@ class Ros:
             self._topics[key] = Topic(self.dp, key, typ)
         return self._topics[key]
 
-    def reader(self, name: str, typ, qos: Qos | None = None) -> DataReader:
-        return DataReader(self.dp, self.topic(name, typ), qos=qos or reliable_qos())
+    def reader(self, name: str, typ, qos: Qos | None = None, prefix: str = "rt") -> DataReader:
+        r = DataReader(self.dp, self.topic(name, typ, prefix), qos=qos or reliable_qos())
+        self._readers.append(r)
+        return r
 
-    def writer(self, name: str, typ, qos: Qos | None = None) -> DataWriter:
-        return DataWriter(self.dp, self.topic(name, typ), qos=qos or SENSOR_QOS)
+    def writer(self, name: str, typ, qos: Qos | None = None, prefix: str = "rt") -> DataWriter:
+        w = DataWriter(self.dp, self.topic(name, typ, prefix), qos=qos or SENSOR_QOS)
+        self._writers.append(w)
+        return w
+
+    def close(self) -> None:
+        """Delete readers, then writers, then the participant (and its topics with it).
+
+        cyclonedds-python deletes an entity in its __del__ (dds_delete, once: a second
+        call finds it gone), so calling that fixes the order."""
+        for e in [*self._readers, *self._writers]:
+            e.__del__()
+        self._readers.clear()
+        self._writers.clear()
+        self._clients.clear()
+        self.dp.__del__()
+        self._topics.clear()
 
     @staticmethod
     def wait_matched(endpoint, timeout: float = DISCOVERY_TIMEOUT) -> None:
@@ -194,24 +220,26 @@ class Ros:
             raise AssertionError(f"condition not met within {timeout} s ({len(out)} samples)")
         return out
 
-    def service(self, name: str, req_type, resp_type):
-        w = DataWriter(
-            self.dp,
-            Topic(self.dp, f"rq{name}Request", req_type),
-            qos=reliable_qos(),
-        )
-        r = DataReader(
-            self.dp,
-            Topic(self.dp, f"rr{name}Reply", resp_type),
-            qos=reliable_qos(),
-        )
+    def service(self, name: str, req_type, resp_type, fresh: bool = False):
+        """The request writer and reply reader of service `name`, matched to the node.
+
+        A client keeps its endpoints (as an rclpy client does): they are created and
+        matched once per participant, on one Topic per name, and reused by every call.
+        `fresh=True` makes a new pair on the same topics, as a short-lived client does."""
+        if not fresh and name in self._clients:
+            return self._clients[name]
+        w = self.writer(f"{name}Request", req_type, reliable_qos(), prefix="rq")
+        r = self.reader(f"{name}Reply", resp_type, reliable_qos(), prefix="rr")
         self.wait_matched(w)
         self.wait_matched(r)
+        if not fresh:
+            self._clients[name] = (w, r)
         return w, r
 
-    def call(self, name: str, req_type, resp_type, timeout: float = 10.0, **fields):
+    def call(self, name: str, req_type, resp_type, timeout: float = 10.0, fresh: bool = False,
+             **fields):
         """Call a ROS 2 service the way rmw_cyclonedds does."""
-        w, r = self.service(name, req_type, resp_type)
+        w, r = self.service(name, req_type, resp_type, fresh=fresh)
         self._seq += 1
         seq = self._seq
         w.write(req_type(client_guid=self.guid, sequence_number=seq, **fields))
@@ -220,6 +248,10 @@ class Ros:
             timeout,
             until=lambda s: s.client_guid == self.guid and s.sequence_number == seq,
         )
+        if fresh:  # a short-lived client: its endpoints go (its topics stay, see above)
+            for e, owner in ((r, self._readers), (w, self._writers)):
+                owner.remove(e)
+                e.__del__()
         return replies[-1]
 
 
@@ -227,6 +259,7 @@ class Ros:
 def ros(domain_id):
     r = Ros(domain_id)
     yield r
+    r.close()
 
 
 def pose_msg(x, y, z, q=(0.0, 0.0, 0.0, 1.0), frame="world", sec=0, nanosec=0):

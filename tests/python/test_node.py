@@ -230,12 +230,14 @@ def test_every_service_call_from_a_fresh_client_is_answered(start_node, ros, dom
             rt.SetBoolRequest,
             rt.SetBoolResponse,
             timeout=5.0,
+            fresh=True,
             data=True,
         )
         assert r.success and "paused" in r.message, f"call {i}: {r.message}"
     # a second participant (another process's client) is answered too
     other = Ros(domain_id)
     r = other.call("/developable_sim/step", rt.TriggerRequest, rt.TriggerResponse, timeout=5.0)
+    other.close()
     assert r.success and "stepped" in r.message, r.message
 
 

@@ -201,5 +201,6 @@ def test_use_sim_time_follows_an_external_clock(ros, domain_id, start_node):
     assert msg == "paused at t = 2.000000 s" and st.step == 200, (msg, st.step)
     assert (st.header.stamp.sec, st.header.stamp.nanosec) == (2, 0)
     heard_values = {(c.clock.sec, c.clock.nanosec) for c in other.take(heard, 0.5)}
+    other.close()
     assert heard_values <= sent, heard_values - sent
     assert node.stop() == 0
