@@ -933,6 +933,21 @@ impl Node {
     }
   }
 
+  /// The remote readers matched to the local writer `writer`, as the participant's
+  /// match events (seen by the [`Spinner`]) report them; empty while none is known.
+  /// A sample written once a reader is listed here reaches it: the event is sent only
+  /// after the writer has added the reader. (developable_sim patch: a service holds a
+  /// reply until the client's reply reader is matched, as rmw_cyclonedds does.)
+  pub fn matched_remote_readers(&self, writer: GUID) -> Vec<GUID> {
+    self
+      .writers_to_remote_readers
+      .lock()
+      .unwrap()
+      .get(&writer)
+      .map(|readers| readers.iter().copied().collect())
+      .unwrap_or_default()
+  }
+
   pub(crate) fn get_publisher_count(&self, subscription_guid: GUID) -> usize {
     self
       .readers_to_remote_writers

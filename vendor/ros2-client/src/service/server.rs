@@ -68,6 +68,12 @@ where
     })
   }
 
+  /// GUID of the writer that sends the responses (developable_sim patch: with
+  /// [`Node::matched_remote_readers`] it tells whether a client's reply reader is matched).
+  pub fn response_writer_guid(&self) -> GUID {
+    self.response_sender.guid()
+  }
+
   /// Receive a request from Client.
   /// Returns `Ok(None)` if no new requests have arrived.
   pub fn receive_request(&self) -> ReadResult<Option<(RmwRequestId, Req)>> {
