@@ -23,6 +23,7 @@ pub mod isometry;
 pub mod params;
 pub mod pattern;
 pub mod physical;
+pub mod projection;
 mod sim;
 pub(crate) mod sparse;
 pub mod tracking;

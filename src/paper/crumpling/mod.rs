@@ -14,191 +14,18 @@ use rand::Rng;
 
 use super::compression::TriangleStrain;
 use super::geometric::{
-    edge_key, Crease, CreaseKind, EdgeKind, Endpoint, FaceKind, GVertexKind, GeometricLayer,
-    GeometricMesh, Ruling,
+    Crease, CreaseKind, EdgeKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
+    Ruling,
 };
 use super::params::PaperParams;
-use super::pattern::{orient, point_segment, segments_cross, Pattern};
+use super::pattern::{point_segment, segments_cross, Pattern};
 use crate::geometry::{Point2, Point3};
 
-/// Where a propagated strip of imaginary rulings ends (fig. 6, fig. 23).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Border {
-    /// Fig. 6(b): an edge of ∂S̄, free to bend.
-    Boundary,
-    /// Fig. 6(c): an edge shared with another flat region (dihedral > theta_0) or a
-    /// crease, given by its ends.
-    FlatFold { a: Endpoint, b: Endpoint },
-    /// Fig. 6(d): ruling `ruling` of the curved region with id `region`.
-    CurvedRuling { region: u64, ruling: usize },
-    /// Fig. 23 (bottom): a singular vertex of T_comp opposite the crossed edge.
-    Singular { id: u64 },
-}
+mod propagation;
+mod singular;
 
-/// The triangle strip of appendix A.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Strip {
-    /// T_comp first, then the collected triangles of F.
-    pub faces: Vec<usize>,
-    /// Borders in the +v_perp and -v_perp directions.
-    pub borders: [Border; 2],
-    /// The last face of F on each side (the side of F a border is seen from).
-    pub last_faces: [usize; 2],
-}
-
-/// Outward normal (pattern) of edge k of face f (vertices k -> k+1, counter-clockwise).
-fn edge_outward(gmesh: &GeometricMesh, f: usize, k: usize) -> (u32, u32, Vector2<f64>) {
-    let vs = &gmesh.faces[f].vertices;
-    let (a, b) = (vs[k], vs[(k + 1) % vs.len()]);
-    let d = gmesh.vertices[b as usize].material - gmesh.vertices[a as usize].material;
-    (a, b, Vector2::new(d.y, -d.x))
-}
-
-/// |sin| of the angle between edge (a, b) and `dir`.
-fn edge_angle(gmesh: &GeometricMesh, a: u32, b: u32, dir: &Vector2<f64>) -> f64 {
-    let d = (gmesh.vertices[b as usize].material - gmesh.vertices[a as usize].material).normalize();
-    (d.x * dir.y - d.y * dir.x).abs()
-}
-
-/// Appendix A: propagate the imaginary rulings of `t_comp` (a flat triangle of the
-/// region `labels[t_comp]`) along `v_perp` in both directions.
-pub fn propagate(
-    gmesh: &GeometricMesh,
-    labels: &[usize],
-    t_comp: usize,
-    v_perp: &Vector2<f64>,
-) -> Option<Strip> {
-    let face = &gmesh.faces[t_comp];
-    if face.vertices.len() != 3 || face.kind != FaceKind::Flat {
-        return None;
-    }
-    // the two edges most crossed by the rulings (largest angle with v_perp), one
-    // facing +v_perp and one facing -v_perp
-    let edges: Vec<(usize, f64, f64)> = (0..3)
-        .map(|k| {
-            let (a, b, n) = edge_outward(gmesh, t_comp, k);
-            (k, edge_angle(gmesh, a, b, v_perp), n.dot(v_perp))
-        })
-        .collect();
-    let first = edges.iter().copied().max_by(|x, y| x.1.total_cmp(&y.1))?;
-    let second = edges
-        .iter()
-        .copied()
-        .filter(|e| e.0 != first.0 && e.2 * first.2 < 0.0)
-        .max_by(|x, y| x.1.total_cmp(&y.1))?;
-    let mut strip = Strip {
-        faces: vec![t_comp],
-        borders: [Border::Boundary, Border::Boundary],
-        last_faces: [t_comp, t_comp],
-    };
-    for (k, _, facing) in [first, second] {
-        let side = if facing > 0.0 { 0 } else { 1 };
-        let dir = if facing > 0.0 { *v_perp } else { -v_perp };
-        // fig. 23 bottom: the singular vertex opposite the largest-angle edge is the
-        // border on the other side
-        if k == first.0 {
-            let opposite = face.vertices[(k + 2) % 3];
-            if let GVertexKind::Singular { id } = gmesh.vertices[opposite as usize].kind {
-                strip.borders[1 - side] = Border::Singular { id };
-                strip.borders[side] = walk(
-                    gmesh,
-                    labels,
-                    t_comp,
-                    k,
-                    &dir,
-                    &mut strip.faces,
-                    &mut strip.last_faces[side],
-                )?;
-                return Some(strip);
-            }
-        }
-        strip.borders[side] = walk(
-            gmesh,
-            labels,
-            t_comp,
-            k,
-            &dir,
-            &mut strip.faces,
-            &mut strip.last_faces[side],
-        )?;
-    }
-    Some(strip)
-}
-
-/// Walk from face `f` through its edge `k` in direction `dir` (appendix A).
-fn walk(
-    gmesh: &GeometricMesh,
-    labels: &[usize],
-    f: usize,
-    k: usize,
-    dir: &Vector2<f64>,
-    faces: &mut Vec<usize>,
-    last: &mut usize,
-) -> Option<Border> {
-    let (mut cur, mut a, mut b) = {
-        let (a, b, _) = edge_outward(gmesh, f, k);
-        (f, a, b)
-    };
-    for _ in 0..10_000 {
-        *last = cur;
-        let e = gmesh.edges.get(&edge_key(a, b))?;
-        let other = e.faces.iter().flatten().copied().find(|&g| g != cur);
-        let Some(g) = other else {
-            return Some(Border::Boundary); // fig. 6(b)
-        };
-        match (gmesh.faces[g].kind, e.kind) {
-            (FaceKind::Curved { .. }, EdgeKind::Ruling { region, index })
-            | (FaceKind::Flat, EdgeKind::Ruling { region, index }) => {
-                return Some(Border::CurvedRuling {
-                    region: region as u64, // region index, mapped to an id by the caller
-                    ruling: index,
-                }); // fig. 6(d)
-            }
-            (FaceKind::Curved { .. }, _) => return None,
-            (FaceKind::Flat, EdgeKind::Crease { .. }) => {
-                return Some(Border::FlatFold {
-                    a: gmesh.endpoint_of(a),
-                    b: gmesh.endpoint_of(b),
-                });
-            }
-            (FaceKind::Flat, _) if labels[g] != labels[cur] => {
-                return Some(Border::FlatFold {
-                    a: gmesh.endpoint_of(a),
-                    b: gmesh.endpoint_of(b),
-                }); // fig. 6(c)
-            }
-            _ => {}
-        }
-        // fig. 6(a): same flat region, continue through the edge of g (other than e)
-        // forming the greatest angle with dir, ahead of us
-        if faces.contains(&g) {
-            return None;
-        }
-        faces.push(g);
-        let n = gmesh.faces[g].vertices.len();
-        let mut best: Option<(bool, f64, u32, u32)> = None;
-        for kk in 0..n {
-            let (p, q, out) = edge_outward(gmesh, g, kk);
-            if edge_key(p, q) == edge_key(a, b) {
-                continue;
-            }
-            let ahead = out.dot(dir) > 0.0;
-            let angle = edge_angle(gmesh, p, q, dir);
-            let better = match best {
-                None => true,
-                Some((bahead, bangle, _, _)) => (ahead, angle) > (bahead, bangle),
-            };
-            if better {
-                best = Some((ahead, angle, p, q));
-            }
-        }
-        let (_, _, p, q) = best?;
-        cur = g;
-        a = p;
-        b = q;
-    }
-    None
-}
+pub use propagation::{propagate, Border, Strip};
+use singular::{insert_in_curved, split_fold};
 
 /// What step 2 did to one flat region.
 #[derive(Clone, Debug, PartialEq)]
@@ -304,6 +131,7 @@ pub fn crumple_flat_region(
     Vec::new()
 }
 
+#[allow(clippy::too_many_arguments)]
 fn crumple_inner(
     ctx: &CrumpleContext,
     layer: &mut GeometricLayer,
@@ -315,9 +143,7 @@ fn crumple_inner(
     rng: &mut impl Rng,
 ) -> Option<Vec<CrumpleEvent>> {
     let params = ctx.params;
-    let Some(mut strip) = propagate(gmesh, labels, strain.face, &strain.ruling_direction) else {
-        return None;
-    };
+    let mut strip = propagate(gmesh, labels, strain.face, &strain.ruling_direction)?;
     // region indices -> stable ids
     for b in strip.borders.iter_mut() {
         if let Border::CurvedRuling { region, ruling } = *b {
@@ -382,9 +208,7 @@ fn crumple_inner(
             Border::Boundary => None,
             Border::Singular { id } => Some(id),
             Border::FlatFold { a, b } => {
-                let Some((id, new)) = split_fold(ctx, layer, &current, &band, a, b, rng) else {
-                    return None;
-                };
+                let (id, new) = split_fold(ctx, layer, &current, &band, a, b, rng)?;
                 if new {
                     events.push(CrumpleEvent::NewSingular {
                         id,
@@ -400,7 +224,7 @@ fn crumple_inner(
                     .iter()
                     .find(|r| r.id == region)
                     .and_then(|r| r.singular_apex());
-                let Some((id, new)) = insert_in_curved(
+                let (id, new) = insert_in_curved(
                     ctx,
                     layer,
                     &current,
@@ -411,9 +235,7 @@ fn crumple_inner(
                     &dir,
                     attract,
                     rng,
-                ) else {
-                    return None;
-                };
+                )?;
                 *attracted |= attract && !new && Some(id) == cone_apex;
                 if new {
                     events.push(CrumpleEvent::NewSingular {
@@ -638,272 +460,6 @@ pub(crate) fn segment_is_free(
         }
     }
     true
-}
-
-/// The existing singular vertex nearest to `s` (pattern, m) closer than the S_G
-/// resolution 1/rho_bound, if any. Fibers already broken there: a conflict this close
-/// to a d-cone is absorbed by its apex instead of breaking the sheet again (sec. 5.2
-/// places a new point within sigma of e_sing; two apices closer than one boundary
-/// sample cannot be told apart by the coarse S_G).
-fn nearby_singular(layer: &GeometricLayer, params: &PaperParams, s: &Point2) -> Option<u64> {
-    layer
-        .singular
-        .iter()
-        .map(|x| ((x.material - s).norm(), x.id))
-        .filter(|(d, _)| *d < params.boundary_spacing())
-        .min_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, id)| id)
-}
-
-/// Fig. 6(c), sec. 5.2: a singular vertex on the fold (a, b) between two flat regions,
-/// at a uniformly random position where the band meets it. The fold becomes a
-/// degenerate curved region of one ruling: two plastic creases.
-fn split_fold(
-    ctx: &CrumpleContext,
-    layer: &mut GeometricLayer,
-    gmesh: &GeometricMesh,
-    band: &Band,
-    a: Endpoint,
-    b: Endpoint,
-    rng: &mut impl Rng,
-) -> Option<(u64, bool)> {
-    let p = layer.endpoint_material(ctx.pattern, &a);
-    let q = layer.endpoint_material(ctx.pattern, &b);
-    let len = (q - p).norm();
-    let gap = ctx.params.min_gap();
-    if len < 3.0 * gap {
-        return None;
-    }
-    let (u0, u1) = band.clip_segment(&p, &q).unwrap_or((0.0, 1.0));
-    let (u0, u1) = (u0.max(gap / len), u1.min(1.0 - gap / len));
-    let (u0, u1) = if u1 > u0 {
-        (u0, u1)
-    } else {
-        (gap / len, 1.0 - gap / len)
-    };
-    let u = rng.random_range(u0..=u1);
-    let s = p + (q - p) * u;
-    if let Some(old) = nearby_singular(layer, ctx.params, &s) {
-        // an end of the fold that is already singular is the border; a singular vertex
-        // off the fold cannot be one
-        return [a, b]
-            .contains(&Endpoint::Singular(old))
-            .then_some((old, false));
-    }
-    if ctx.pattern.signed_inside_distance(&s) < gap
-        || gmesh.vertices.iter().any(|v| (v.material - s).norm() < gap)
-    {
-        return None;
-    }
-    let id = layer.add_singular(s);
-    let kind = match layer
-        .creases
-        .iter()
-        .position(|c| (c.a == a && c.b == b) || (c.a == b && c.b == a))
-    {
-        Some(ci) => layer.creases.remove(ci).kind,
-        None => CreaseKind::Plastic,
-    };
-    layer.creases.push(Crease {
-        a,
-        b: Endpoint::Singular(id),
-        kind,
-    });
-    layer.creases.push(Crease {
-        a: Endpoint::Singular(id),
-        b,
-        kind,
-    });
-    Some((id, true))
-}
-
-/// Fig. 6(d), sec. 5.2 and fig. 11: the imaginary rulings meet ruling `ruling` of
-/// curved region `region_id`. Continue along d_prop to e_sing, the first ruling with a
-/// dihedral angle above theta_0; place the singular vertex s around e_sing by
-/// chi(s) = exp(-d^2 / sigma^2); remove the rulings between e_lim and e_sup (the next
-/// ruling sharper than theta_0) and replace them by cones of apex s, leaving the flat
-/// transition triangle (s, e_sup). When `attract` and C is already a cone of interior
-/// apex a, a is the border instead (appendix B, fig. 24b, c). Returns s and whether it
-/// is new.
-#[allow(clippy::too_many_arguments)]
-fn insert_in_curved(
-    ctx: &CrumpleContext,
-    layer: &mut GeometricLayer,
-    gmesh: &GeometricMesh,
-    band: &Band,
-    region_id: u64,
-    ruling: usize,
-    f_ref: &Point2,
-    dprop: &Vector2<f64>,
-    attract: bool,
-    rng: &mut impl Rng,
-) -> Option<(u64, bool)> {
-    let ri = layer.regions.iter().position(|r| r.id == region_id)?;
-    let apex = layer.regions[ri].singular_apex();
-    if let Some(a) = apex.filter(|_| attract) {
-        return Some((a, false));
-    }
-    insert_new_singular(ctx, layer, gmesh, band, ri, ruling, f_ref, dprop, rng)
-}
-
-/// [`insert_in_curved`]'s new singular point inside region `ri` near the ruling in
-/// conflict; `None` (structure untouched) when none fits.
-#[allow(clippy::too_many_arguments)]
-fn insert_new_singular(
-    ctx: &CrumpleContext,
-    layer: &mut GeometricLayer,
-    gmesh: &GeometricMesh,
-    band: &Band,
-    ri: usize,
-    ruling: usize,
-    f_ref: &Point2,
-    dprop: &Vector2<f64>,
-    rng: &mut impl Rng,
-) -> Option<(u64, bool)> {
-    let params = ctx.params;
-    let rv = gmesh.ruling_vertices.get(ri)?.clone();
-    let m = rv.len();
-    if ruling >= m || m < 2 {
-        return None;
-    }
-    let mat = |v: u32| gmesh.vertices[v as usize].material;
-    // walk direction through C: away from F
-    let step: i64 = if ruling == 0 {
-        1
-    } else if ruling == m - 1 {
-        -1
-    } else {
-        let next = (ruling + 1).min(m - 1);
-        let mid = Point2::from((mat(rv[next][0]).coords + mat(rv[next][1]).coords) * 0.5);
-        let here = Point2::from((mat(rv[ruling][0]).coords + mat(rv[ruling][1]).coords) * 0.5);
-        if (mid - here).dot(dprop) >= 0.0 {
-            1
-        } else {
-            -1
-        }
-    };
-    let order: Vec<usize> = {
-        let mut o = Vec::new();
-        let mut k = ruling as i64;
-        while k >= 0 && (k as usize) < m {
-            o.push(k as usize);
-            k += step;
-        }
-        o
-    };
-    let dihedral = |k: usize| gmesh.dihedral(rv[k][0], rv[k][1]).unwrap_or(0.0);
-    // the imaginary rulings must really cross C's rulings: nearly parallel ones are
-    // compatible (C can grow instead, sec. 6.1)
-    let e_dir = (mat(rv[ruling][1]) - mat(rv[ruling][0])).normalize();
-    let cross = (e_dir.x * dprop.y - e_dir.y * dprop.x).abs();
-    if cross < params.conflict_angle.sin() {
-        return None;
-    }
-    // sec. 5.2: singular points appear where the rulings meet a region of higher
-    // curvature; a curved region flatter than theta_0 all along does not resist
-    let e_sing = order
-        .iter()
-        .copied()
-        .find(|&k| dihedral(k) > params.flat_angle)?;
-
-    // chi(s) = exp(-d^2/sigma^2): uniform along e_sing (where the band meets it),
-    // normal across with standard deviation sigma / sqrt(2)
-    let (pa, pb) = (mat(rv[e_sing][0]), mat(rv[e_sing][1]));
-    let len = (pb - pa).norm();
-    if len < 1e-9 {
-        return None;
-    }
-    let across = Vector2::new(-(pb - pa).y, (pb - pa).x) / len;
-    let (u0, u1) = band.clip_segment(&pa, &pb).unwrap_or((0.0, 1.0));
-    let gap = params.min_gap();
-    let mut s = None;
-    for _ in 0..32 {
-        let u = rng.random_range(u0..=u1);
-        let d = normal(rng) * params.singularity_sigma / std::f64::consts::SQRT_2;
-        let cand = pa + (pb - pa) * u + across * d;
-        if ctx.pattern.signed_inside_distance(&cand) < gap {
-            continue;
-        }
-        if gmesh
-            .vertices
-            .iter()
-            .any(|v| (v.material - cand).norm() < gap)
-        {
-            continue;
-        }
-        // not on another ruling of C
-        if rv
-            .iter()
-            .any(|&[a, b]| point_segment(&cand, &mat(a), &mat(b)).0 < 1e-6)
-        {
-            continue;
-        }
-        s = Some(cand);
-        break;
-    }
-    let s = s?;
-    if let Some(old) = nearby_singular(layer, params, &s) {
-        return Some((old, false));
-    }
-    // which rulings separate s from F
-    let side = |k: usize, p: &Point2| orient(&mat(rv[k][0]), &mat(rv[k][1]), p).signum();
-    let mut removed = Vec::new();
-    let mut e_sup = None;
-    let mut past_sing = false;
-    for &k in &order {
-        let separates = side(k, &s) != side(k, f_ref);
-        if separates || !past_sing {
-            // between F and s, or between s and e_sing (all flatter than theta_0)
-            removed.push(k);
-            past_sing |= k == e_sing;
-            continue;
-        }
-        if dihedral(k) <= params.flat_angle {
-            removed.push(k);
-            continue;
-        }
-        e_sup = Some(k);
-        break;
-    }
-    if removed.is_empty() {
-        return None;
-    }
-    let old = layer.regions[ri].rulings.clone();
-    let kept: Vec<Ruling> = match e_sup {
-        Some(k) if step > 0 => old[k..].to_vec(),
-        Some(k) => old[..=k].to_vec(),
-        None => Vec::new(),
-    };
-    let id = layer.add_singular(s);
-    // the cones of apex s towards both sides of C
-    let mut fan_a = Vec::new();
-    let mut fan_b = Vec::new();
-    let ends: Vec<usize> = removed.iter().copied().chain(e_sup).collect();
-    for k in ends {
-        if let e @ Endpoint::Boundary(_) = old[k].a {
-            fan_a.push(Ruling {
-                a: Endpoint::Singular(id),
-                b: e,
-            });
-        }
-        if let e @ Endpoint::Boundary(_) = old[k].b {
-            fan_b.push(Ruling {
-                a: Endpoint::Singular(id),
-                b: e,
-            });
-        }
-    }
-    if kept.len() >= 2 {
-        layer.regions[ri].rulings = kept;
-    } else {
-        layer.regions.remove(ri);
-    }
-    for fan in [fan_a, fan_b] {
-        if fan.len() >= 2 {
-            layer.add_region(fan);
-        }
-    }
-    Some((id, true))
 }
 
 #[cfg(test)]
