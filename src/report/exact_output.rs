@@ -284,13 +284,11 @@ pub fn readme_table(scenes: &[ExactSceneReport]) -> String {
     md
 }
 
+/// A plotted line: its label, colour and points.
+type Line = (String, RGBColor, Vec<(f64, f64)>);
+
 /// A log-log plot of lines (label, colour, points) with markers, into a PNG.
-fn log_log_png(
-    path: &Path,
-    title: &str,
-    x_desc: &str,
-    data: &[(String, RGBColor, Vec<(f64, f64)>)],
-) -> anyhow::Result<()> {
+fn log_log_png(path: &Path, title: &str, x_desc: &str, data: &[Line]) -> anyhow::Result<()> {
     register_font();
     let (w, h) = (900u32, 600u32);
     let all: Vec<(f64, f64)> = data
