@@ -199,7 +199,7 @@ fn graph(src: &Path) -> BTreeMap<PathBuf, BTreeSet<PathBuf>> {
             };
             let Some(k) = (0..=abs.len())
                 .rev()
-                .find(|&k| files.contains_key(&abs[..k].to_vec()))
+                .find(|&k| files.contains_key(&abs[..k]))
             else {
                 continue;
             };

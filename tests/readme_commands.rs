@@ -363,8 +363,7 @@ fn ci_runs_exactly_the_readmes_test_command() {
     let test_command = block
         .lines()
         .map(str::trim)
-        .filter(|l| !l.is_empty() && !l.starts_with('#'))
-        .next_back()
+        .rfind(|l| !l.is_empty() && !l.starts_with('#'))
         .expect("a command in the block");
     let ci = std::fs::read_to_string(root.join(".ci/run")).unwrap();
     let runs_it = ci

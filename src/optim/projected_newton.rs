@@ -97,6 +97,9 @@ pub struct NewtonResult {
     pub iterations: u32,
     pub evaluations: u32,
     pub projected_gradient_inf: f64,
+    /// Factorizations of the Newton matrix, rejected (not positive definite) ones
+    /// included: the cost of an iteration beyond its evaluations.
+    pub factorizations: u32,
     /// Projected gradient (infinity norm) at the clamped start.
     pub initial_projected_gradient_inf: f64,
     pub converged: bool,
@@ -119,8 +122,14 @@ pub struct ProjectedNewton<M: NewtonMatrix = Dense> {
     damping: f64,
     /// The damping the first iteration of the last solve needed.
     first_damping: f64,
-    /// The free set of the Cholesky factor in `system`, when it is valid.
-    factor_free: Option<Vec<usize>>,
+    /// The largest damping at which a factorization of this solve failed (not positive
+    /// definite), divided by 10 after every full step that needed no escalation.
+    indefinite_at: f64,
+    /// The free set of the factorization in `h`, when `factor_valid`.
+    factor_free: Vec<usize>,
+    factor_valid: bool,
+    /// Factorizations in this solve.
+    factorizations: u32,
 }
 
 /// Relative tolerance of "on a bound": x_i <= lower_i + eps (1 + |lower_i|).
@@ -185,6 +194,8 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         let n = problem.dimension();
         self.g.resize(n, 0.0);
         self.g_trial.resize(n, 0.0);
+        self.factorizations = 0;
+        self.indefinite_at = 0.0;
         self.trial.resize(n, 0.0);
         for i in 0..n {
             x[i] = x[i].clamp(lower[i], upper[i]);
@@ -203,16 +214,17 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
             Some(factor) => factor * state.pg.max(1e-300),
             None => options.pgtol,
         };
-        let result = |state: &IterationState, converged: bool| NewtonResult {
+        let result = |state: &IterationState, converged: bool, factorizations: u32| NewtonResult {
             f: state.f,
             iterations: state.iterations,
             evaluations: state.evaluations,
             projected_gradient_inf: state.pg,
+            factorizations,
             initial_projected_gradient_inf: initial_pg,
             converged,
         };
         if !state.f.is_finite() || !state.pg.is_finite() {
-            return result(&state, false);
+            return result(&state, false, 0);
         }
         let mut converged = state.pg <= pgtol;
         // Start from a tenth of the damping the last solve's first iteration needed:
@@ -223,9 +235,9 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         // Chord steps (the stored factorization, no new Hessian) while they contract
         // the projected gradient at least 4x per step: each saves an assembly and a
         // factorization (about half an iteration's cost at 100 unknowns).
-        state.chord = options.reuse_factorization && self.factor_free.is_some();
+        state.chord = options.reuse_factorization && self.factor_valid;
         if !state.chord {
-            self.factor_free = None;
+            self.factor_valid = false;
         }
         while !converged && state.iterations < options.max_iterations {
             state.iterations += 1;
@@ -304,7 +316,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
                 converged = true;
             }
         }
-        result(&state, converged)
+        result(&state, converged, self.factorizations)
     }
 
     /// The free set at x: every variable except those at a bound with the gradient
@@ -345,7 +357,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         };
         for binding in 0..4 {
             let m = self.free.len();
-            state.chord &= self.factor_free.as_deref() == Some(&self.free[..]);
+            state.chord &= self.factor_valid && self.factor_free == self.free;
             direction.ok = if state.chord {
                 self.reduced.clear();
                 self.reduced.extend(self.free.iter().map(|&i| -self.g[i]));
@@ -378,11 +390,17 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
     fn damped_newton_step(&mut self, m: usize, direction: &mut Direction) -> bool {
         let mut ok = self.solve_reduced(m);
         while !ok && self.damping < 1e2 {
+            self.indefinite_at = self.indefinite_at.max(self.damping);
             self.damping = (self.damping * 10.0).max(1e-8);
             direction.escalated = true;
             ok = self.solve_reduced(m);
         }
-        self.factor_free = if ok { Some(self.free.clone()) } else { None };
+        self.factor_valid = ok;
+        if ok {
+            // (copied into a kept buffer: no allocation per iteration once warm)
+            self.factor_free.clear();
+            self.factor_free.extend_from_slice(&self.free);
+        }
         if !ok {
             // Not positive definite even at 100x its diagonal: a projected gradient
             // step scaled by the diagonal instead, a descent direction the line search
@@ -458,8 +476,20 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
             // the damping to make the model positive definite: then the next Hessian,
             // a step away, is likely indefinite at a lower damping too, and every
             // rejected factorization costs as much as an accepted one
+            //
+            // Nor below the damping at which this solve last found the model
+            // indefinite (times 10, the level that worked): on the twisted ribbons of
+            // ribbon_extreme_torsion the exact Hessian stays indefinite below ~1e-2 of
+            // its diagonal for many iterations, and dividing by 1000 after each full
+            // step made every other iteration escalate back through three rejected
+            // factorizations (994 factorizations for 438 iterations at n = 400,
+            // 2026-12-02). That bound decays 10x per such step, so the damping still
+            // falls where the model turns positive definite.
             if !escalated {
-                self.damping = (self.damping / 1000.0).max(1e-12);
+                self.damping = (self.damping / 1000.0)
+                    .max(10.0 * self.indefinite_at)
+                    .max(1e-12);
+                self.indefinite_at *= 0.1;
             }
         } else {
             self.damping = (self.damping * 10.0).min(1e6);
@@ -489,6 +519,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
 
     /// Solve (H_FF + damping * diag(H_FF) + tiny I) d = -g_F into `self.reduced`.
     fn solve_reduced(&mut self, _m: usize) -> bool {
+        self.factorizations += 1;
         if !self.h.factor(&self.free, self.damping) {
             return false;
         }
@@ -537,8 +568,12 @@ impl NewtonMatrix for Dense {
     fn out_of_range(&self, free: &[usize]) -> bool {
         let n = self.matrix.nrows();
         let h = self.matrix.as_slice();
-        free.iter()
-            .any(|&j| free.iter().any(|&i| !(h[j * n + i].abs() < 1e150)))
+        free.iter().any(|&j| {
+            free.iter().any(|&i| {
+                let x = h[j * n + i];
+                !x.is_finite() || x.abs() >= 1e150
+            })
+        })
     }
 
     fn factor(&mut self, free: &[usize], damping: f64) -> bool {
@@ -815,5 +850,34 @@ mod tests {
         assert!(r.iterations >= 1, "{r:?}");
         assert!(r.f < f0 - 1.0, "no descent from the start: {r:?} at {x:?}");
         assert!(x.iter().all(|v| v.abs() <= 1.0));
+    }
+
+    #[test]
+    fn a_clone_is_a_fresh_workspace() {
+        // A solve whose model needs heavy damping leaves `first_damping` high; the next
+        // solve of the used workspace starts from a tenth of it. A clone must not: it
+        // behaves exactly like `new()` (issue 18), while the used original does not.
+        let mut used = ProjectedNewton::<Dense>::new();
+        let mut x = [0.2, -0.1];
+        let indefinite = || Quadratic {
+            h: [[1.0, 3.0], [3.0, 1.0]],
+            b: [1.0, 0.5],
+        };
+        used.minimize(&mut indefinite(), &mut x, &[-1.0; 2], &[1.0; 2], &tight());
+        assert!(used.first_damping > 1e-3, "{}", used.first_damping);
+        let convex = || Quadratic {
+            h: [[2.0, 0.5], [0.5, 1.0]],
+            b: [1.0, -1.0],
+        };
+        let solve = |newton: &mut ProjectedNewton<Dense>| {
+            let mut x = [0.3, -0.2];
+            let r = newton.minimize(&mut convex(), &mut x, &[-10.0; 2], &[10.0; 2], &tight());
+            (r, x)
+        };
+        let fresh = solve(&mut ProjectedNewton::new());
+        let cloned = solve(&mut used.clone());
+        assert_eq!(cloned, fresh);
+        let original = solve(&mut used);
+        assert_ne!(original, fresh, "the check cannot see a kept first_damping");
     }
 }

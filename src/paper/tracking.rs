@@ -312,7 +312,8 @@ pub fn segment_cones(
     tolerance: f64,
 ) -> Vec<(std::ops::Range<usize>, ConeFit)> {
     let mut out = Vec::new();
-    let mut stack = vec![0..planes.len()];
+    let mut stack = Vec::new();
+    stack.push(0..planes.len());
     while let Some(range) = stack.pop() {
         if range.is_empty() {
             continue;

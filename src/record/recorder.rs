@@ -383,11 +383,11 @@ impl StepObserver for RunRecorder {
         report: &StepReport,
         step_ms: f64,
     ) -> Result<(), ObserverError> {
-        // the session mirrors the runner's world (same steps, scripted targets)
-        self.session.scene.world.clone_from(&scene.world);
+        // the runner's scene, not a copy: cloning the world each step cost a deep copy
+        // of every object (meshes, histories, the contact stage)
         let frame = self
             .session
-            .frame(Some(report), step_ms * 1e-3, self.content);
+            .frame_of(scene, Some(report), step_ms * 1e-3, self.content);
         if let Some(r) = self.recorder.as_mut() {
             r.record_frame(&frame)?;
         }

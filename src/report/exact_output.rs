@@ -5,19 +5,20 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::Context;
 use plotters::prelude::*;
 
 use super::errors::pareto_front;
 use super::exact::{order, CLAMPS, SEGMENTS};
 use super::exact_run::{ExactRow, ExactSceneReport};
-use super::output::{color, register_font};
+use super::output::color;
 use super::plan::{Method, Sweep};
+use super::plot::{write_log_log, LogLogPlot, Series};
+use super::report_error::{io, ReportError};
 
 pub const EXACT_CSV_HEADER: &str = "scene,method,clamp,sweep,dt_s,segments,tolerance,steps,error_rms_m,error_relative,cpu_s,wall_s,iterations_median,unconverged_steps,stuck_steps,finite";
 
 /// `exact.csv`: one row per run.
-pub fn write_exact_csv(path: &Path, scenes: &[ExactSceneReport]) -> anyhow::Result<()> {
+pub fn write_exact_csv(path: &Path, scenes: &[ExactSceneReport]) -> Result<(), ReportError> {
     let mut out = String::from(EXACT_CSV_HEADER);
     out.push('\n');
     for s in scenes {
@@ -46,7 +47,7 @@ pub fn write_exact_csv(path: &Path, scenes: &[ExactSceneReport]) -> anyhow::Resu
             )?;
         }
     }
-    std::fs::write(path, out).with_context(|| format!("cannot write {}", path.display()))
+    std::fs::write(path, out).map_err(io("cannot write", path))
 }
 
 /// The clamp column: the FEM has no clamp rule (its clamp is its eliminated nodes).
@@ -128,7 +129,7 @@ pub fn orders(s: &ExactSceneReport) -> Vec<(String, Option<f64>)> {
 }
 
 /// The summary.md section of the exact-solution scenes.
-pub fn exact_summary(scenes: &[ExactSceneReport]) -> anyhow::Result<String> {
+pub fn exact_summary(scenes: &[ExactSceneReport]) -> Result<String, ReportError> {
     let mut md = String::new();
     writeln!(md, "## Exact solutions\n")?;
     writeln!(
@@ -284,90 +285,30 @@ pub fn readme_table(scenes: &[ExactSceneReport]) -> String {
     md
 }
 
+/// A plotted line: its label, colour and points.
+type Line = (String, RGBColor, Vec<(f64, f64)>);
+
 /// A log-log plot of lines (label, colour, points) with markers, into a PNG.
-fn log_log_png(
-    path: &Path,
-    title: &str,
-    x_desc: &str,
-    data: &[(String, RGBColor, Vec<(f64, f64)>)],
-) -> anyhow::Result<()> {
-    register_font();
-    let (w, h) = (900u32, 600u32);
-    let all: Vec<(f64, f64)> = data
-        .iter()
-        .flat_map(|d| d.2.iter().copied())
-        .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
+fn log_log_png(path: &Path, title: &str, x_desc: &str, data: Vec<Line>) -> Result<(), ReportError> {
+    let series = data
+        .into_iter()
+        .map(|(label, color, points)| Series {
+            label: Some(label),
+            color,
+            points,
+            line: true,
+        })
         .collect();
-    anyhow::ensure!(!all.is_empty(), "{title}: no run to plot");
-    let fold = |f: fn(f64, f64) -> f64, init: f64, pick: fn(&(f64, f64)) -> f64| {
-        all.iter().map(pick).fold(init, f)
-    };
-    let (x0, x1) = (
-        fold(f64::min, f64::MAX, |p| p.0) / 1.5,
-        fold(f64::max, f64::MIN, |p| p.0) * 1.5,
-    );
-    let (y0, y1) = (
-        fold(f64::min, f64::MAX, |p| p.1) / 1.5,
-        fold(f64::max, f64::MIN, |p| p.1) * 1.5,
-    );
-    let y1 = y1 * (y1 / y0).powf(0.43);
-    let err = |e: DrawingAreaErrorKind<_>| anyhow::anyhow!("{e:?}");
-    let mut buf = vec![255u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(err)?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc("RMS error against the exact solution, m")
-            .x_label_formatter(&|v| format!("{v:.2e}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .draw()
-            .map_err(err)?;
-        for (label, c, pts) in data {
-            let c = *c;
-            let mut line: Vec<(f64, f64)> = pts
-                .iter()
-                .copied()
-                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-                .collect();
-            line.sort_by(|a, b| a.0.total_cmp(&b.0));
-            chart
-                .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
-                .map_err(err)?
-                .label(label.as_str())
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                });
-            chart
-                .draw_series(line.iter().map(|p| Circle::new(*p, 4, c.filled())))
-                .map_err(err)?;
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(err)?;
-        root.present().map_err(err)?;
-    }
-    let file =
-        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header()?;
-    writer.write_image_data(&buf)?;
-    writer.finish()?;
-    Ok(())
+    write_log_log(
+        path,
+        &LogLogPlot {
+            title,
+            x_desc,
+            y_desc: "RMS error against the exact solution, m",
+            series,
+            level: None,
+        },
+    )
 }
 
 /// A series' colour: the method's, darker for the dual-length clamp, lighter for the
@@ -383,7 +324,7 @@ fn shade(method: Method, clamp: &str) -> RGBColor {
 }
 
 /// `<scene>.png` (error against CPU time) and `<scene>_order.png` (against n or dt).
-pub fn write_exact_plots(dir: &Path, s: &ExactSceneReport) -> anyhow::Result<()> {
+pub fn write_exact_plots(dir: &Path, s: &ExactSceneReport) -> Result<(), ReportError> {
     let by_n = s.problem.is_static();
     let mut cost = Vec::new();
     let mut conv = Vec::new();
@@ -410,7 +351,7 @@ pub fn write_exact_plots(dir: &Path, s: &ExactSceneReport) -> anyhow::Result<()>
         &dir.join(format!("{}.png", s.name)),
         &format!("{}: error vs run time", s.name),
         "run time (process CPU time), s",
-        &cost,
+        cost,
     )?;
     log_log_png(
         &dir.join(format!("{}_order.png", s.name)),
@@ -420,6 +361,6 @@ pub fn write_exact_plots(dir: &Path, s: &ExactSceneReport) -> anyhow::Result<()>
         } else {
             "time step dt, s"
         },
-        &conv,
+        conv,
     )
 }

@@ -3,14 +3,13 @@
 
 use std::path::Path;
 
-use anyhow::Context;
-
 use super::exact::{
     self, checks, exact_plan, Check, ExactError, ExactProblem, ExactSpec, VIBRATION_SEGMENTS,
     VIBRATION_TIP,
 };
 use super::exec::{execute_with, RunOutput};
 use super::plan::{Method, SceneKind};
+use super::report_error::ReportError;
 use crate::geometry::{Point2, SurfaceMesh};
 use crate::metrics::{grid_samples, world_at_material};
 use crate::ribbon::{ClampRule, RibbonSim};
@@ -42,15 +41,17 @@ pub struct ExactSceneReport {
 /// The exact problem scene `file` is built for, from its `name` and parameters (B =
 /// 2 alpha w, q = rho w |g|, mu = rho w, D the far clamp's target x); None for scenes
 /// without one.
-pub fn problem_of(file: &Path) -> anyhow::Result<Option<ExactProblem>> {
+pub fn problem_of(file: &Path) -> Result<Option<ExactProblem>, ReportError> {
     let scene = crate::scene::load(file, &[])?;
     if !exact::EXACT_SCENES.contains(&scene.name.as_str()) {
         return Ok(None);
     }
-    let r = scene
-        .world
-        .object_as::<RibbonSim>(0)
-        .with_context(|| format!("{}: an exact-solution scene is one ribbon", file.display()))?;
+    let r = scene.world.object_as::<RibbonSim>(0).ok_or_else(|| {
+        ReportError::Invalid(format!(
+            "{}: an exact-solution scene is one ribbon",
+            file.display()
+        ))
+    })?;
     let p = &r.params;
     let bending = 2.0 * p.bending_stiffness * p.width;
     let mu = p.density * p.width;
@@ -62,11 +63,9 @@ pub fn problem_of(file: &Path) -> anyhow::Result<Option<ExactProblem>> {
             weight_per_length: mu * (g[0] * g[0] + g[1] * g[1] + g[2] * g[2]).sqrt(),
         },
         "exact_buckled_strip" => {
-            let h = scene
-                .world
-                .handles()
-                .first()
-                .with_context(|| format!("{}: no far clamp handle", file.display()))?;
+            let h = scene.world.handles().first().ok_or_else(|| {
+                ReportError::Invalid(format!("{}: no far clamp handle", file.display()))
+            })?;
             let end = h.trajectory.pose_at(scene.duration).translation.vector;
             ExactProblem::BuckledStrip {
                 length: p.length,
@@ -75,11 +74,12 @@ pub fn problem_of(file: &Path) -> anyhow::Result<Option<ExactProblem>> {
             }
         }
         _ => {
-            anyhow::ensure!(
-                p.segments == VIBRATION_SEGMENTS,
-                "{}: the vibrating cantilever is swept at its {VIBRATION_SEGMENTS} segments",
-                file.display()
-            );
+            if p.segments != VIBRATION_SEGMENTS {
+                return Err(ReportError::Invalid(format!(
+                    "{}: the vibrating cantilever is swept at its {VIBRATION_SEGMENTS} segments",
+                    file.display()
+                )));
+            }
             ExactProblem::VibratingCantilever {
                 length: p.length,
                 bending,
@@ -143,12 +143,12 @@ pub fn run_exact_scene(
     problem: ExactProblem,
     quick: bool,
     on_run: &mut dyn FnMut(String),
-) -> anyhow::Result<ExactSceneReport> {
+) -> Result<ExactSceneReport, ReportError> {
     let scene = crate::scene::load(file, &[])?;
     let ribbon = scene
         .world
         .object_as::<RibbonSim>(0)
-        .context("one ribbon")?;
+        .ok_or_else(|| ReportError::Invalid(format!("{}: one ribbon", file.display())))?;
     let (dt, tolerance, width) = (
         scene.world.dt(),
         ribbon.params.solver.tolerance,
@@ -189,8 +189,9 @@ pub fn run_exact_scene(
             extra.push(format!("ribbon.initial_shape.bending_angles={angles:?}"));
         }
         let mut run = execute_with(file, SceneKind::Ribbon, duration, r, &sample_times, &extra)
-            .with_context(|| {
-                format!("{name}: {} n={} dt={}", r.method.name(), r.resolution, r.dt)
+            .map_err(|e| {
+                let what = format!("{name}: {} n={} dt={}", r.method.name(), r.resolution, r.dt);
+                ReportError::in_run(what, e)
             })?;
         let error = error_of(&problem, &sample_times, &run.samples, &pts).filter(|_| run.finite);
         run.samples = Vec::new();

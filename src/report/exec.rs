@@ -4,9 +4,8 @@
 use std::path::Path;
 use std::time::Instant;
 
-use anyhow::Context;
-
 use super::plan::{overrides, Method, RunSpec, SceneDefaults, SceneKind};
+use super::report_error::ReportError;
 use crate::baseline::{ConformingFem, ConformingFemParams};
 use crate::geometry::SurfaceMesh;
 use crate::ribbon::RibbonSim;
@@ -51,14 +50,15 @@ pub struct RunOutput {
 
 /// The scene's kind and the defaults the sweeps start from (`duration` replaces the
 /// scene's when given).
-pub fn scene_defaults(file: &Path, duration: Option<f64>) -> anyhow::Result<SceneDefaults> {
+pub fn scene_defaults(file: &Path, duration: Option<f64>) -> Result<SceneDefaults, ReportError> {
     let scene = scene::load(file, &[])?;
     let objects = scene.world.objects();
-    anyhow::ensure!(
-        objects.len() == 1 && scene.world.contact_stage().is_none(),
-        "{}: the report runs scenes with one object and no contact",
-        file.display()
-    );
+    if !(objects.len() == 1 && scene.world.contact_stage().is_none()) {
+        return Err(ReportError::Invalid(format!(
+            "{}: the report runs scenes with one object and no contact",
+            file.display()
+        )));
+    }
     let (kind, resolution, tolerance) = match scene.world.object_as::<RibbonSim>(0) {
         Some(r) => (
             SceneKind::Ribbon,
@@ -66,11 +66,11 @@ pub fn scene_defaults(file: &Path, duration: Option<f64>) -> anyhow::Result<Scen
             r.params.solver.tolerance,
         ),
         None => {
-            let p = scene.source.paper.as_ref().with_context(|| {
-                format!(
+            let p = scene.source.paper.as_ref().ok_or_else(|| {
+                ReportError::Invalid(format!(
                     "a {} object: the report runs ribbons and paper",
                     objects[0].kind()
-                )
+                ))
             })?;
             (SceneKind::Paper, p.boundary_density, p.newton_tolerance)
         }
@@ -92,7 +92,7 @@ pub fn same_shape_overrides(
     file: &Path,
     kind: SceneKind,
     spec: &RunSpec,
-) -> anyhow::Result<Vec<String>> {
+) -> Result<Vec<String>, ReportError> {
     if kind != SceneKind::Ribbon || spec.method == Method::ConformingFem {
         return Ok(Vec::new());
     }
@@ -235,7 +235,7 @@ pub fn execute(
     duration: f64,
     spec: &RunSpec,
     times: &[f64],
-) -> anyhow::Result<RunOutput> {
+) -> Result<RunOutput, ReportError> {
     execute_with(file, kind, duration, spec, times, &[])
 }
 
@@ -247,7 +247,7 @@ pub fn execute_with(
     spec: &RunSpec,
     times: &[f64],
     extra: &[String],
-) -> anyhow::Result<RunOutput> {
+) -> Result<RunOutput, ReportError> {
     let mut set = overrides(kind, duration, spec);
     set.extend(same_shape_overrides(file, kind, spec)?);
     set.extend(extra.iter().cloned());
@@ -281,14 +281,16 @@ fn execute_fem(
     spec: &RunSpec,
     duration: f64,
     mut sampler: Sampler<'_>,
-) -> anyhow::Result<RunOutput> {
+) -> Result<RunOutput, ReportError> {
     let params = ConformingFemParams {
         along: spec.resolution.round() as usize,
         newton_tolerance: spec.tolerance,
         ..ConformingFemParams::default()
     };
-    let mut fem = ConformingFem::from_world(&scene.world, params)
-        .with_context(|| format!("{}: conforming FEM baseline", scene.file.display()))?;
+    let mut fem = ConformingFem::from_world(&scene.world, params).map_err(|e| {
+        let what = format!("{}: conforming FEM baseline", scene.file.display());
+        ReportError::in_run(what, e.into())
+    })?;
     // a pre-bent start (helix) is first relaxed to the FEM's own near-isometric state
     // (untimed: the ribbon's equivalent is its exact reconstruction)
     fem.relax_initial_stretch(1e-6, 200);

@@ -22,11 +22,13 @@ pub mod exact_run;
 pub mod exec;
 pub mod output;
 pub mod plan;
+mod plot;
+pub mod report_error;
+
+pub use report_error::ReportError;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-use anyhow::Context;
 
 use crate::geometry::Point2;
 use crate::metrics::grid_samples;
@@ -181,7 +183,7 @@ pub fn glob_match(pattern: &str, name: &str) -> bool {
     rec(pattern.as_bytes(), name.as_bytes())
 }
 
-fn select_scenes(opts: &ReportOptions) -> anyhow::Result<Vec<PathBuf>> {
+fn select_scenes(opts: &ReportOptions) -> Result<Vec<PathBuf>, ReportError> {
     let Some(pattern) = &opts.scenes else {
         return Ok(DEFAULT_SCENES
             .iter()
@@ -191,7 +193,7 @@ fn select_scenes(opts: &ReportOptions) -> anyhow::Result<Vec<PathBuf>> {
             .collect());
     };
     let mut files: Vec<PathBuf> = std::fs::read_dir(&opts.scene_dir)
-        .with_context(|| format!("cannot list {}", opts.scene_dir.display()))?
+        .map_err(report_error::io("cannot list", &opts.scene_dir))?
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
             p.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
@@ -200,16 +202,17 @@ fn select_scenes(opts: &ReportOptions) -> anyhow::Result<Vec<PathBuf>> {
         })
         .collect();
     files.sort();
-    anyhow::ensure!(
-        !files.is_empty(),
-        "--scenes {pattern}: no scene in {} matches",
-        opts.scene_dir.display()
-    );
+    if files.is_empty() {
+        return Err(ReportError::Invalid(format!(
+            "--scenes {pattern}: no scene in {} matches",
+            opts.scene_dir.display()
+        )));
+    }
     Ok(files)
 }
 
 /// The material points compared: a grid on the ribbon's strip or inside the sheet.
-fn material_points(file: &Path) -> anyhow::Result<Vec<Point2>> {
+fn material_points(file: &Path) -> Result<Vec<Point2>, ReportError> {
     let scene = crate::scene::load(file, &[])?;
     Ok(match scene.world.object_as::<RibbonSim>(0) {
         Some(r) => {
@@ -259,12 +262,12 @@ impl Report {
 /// exact-solution scenes, `exact.csv`, `<scene>.png` and `<scene>_order.png`) into
 /// `opts.out`. `command` is quoted in summary.md. Every simulation runs on one thread
 /// (a one-thread rayon pool; faer's global parallelism is sequential meanwhile).
-pub fn run_report(opts: &ReportOptions, command: &str) -> anyhow::Result<Report> {
+pub fn run_report(opts: &ReportOptions, command: &str) -> Result<Report, ReportError> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .thread_name(|_| "report".into())
         .build()
-        .context("cannot start the report's thread")?;
+        .map_err(ReportError::Thread)?;
     let faer_par = faer::get_global_parallelism();
     faer::set_global_parallelism(faer::Par::Seq);
     let result = pool.install(|| run_report_on_this_thread(opts, command));
@@ -272,11 +275,10 @@ pub fn run_report(opts: &ReportOptions, command: &str) -> anyhow::Result<Report>
     result
 }
 
-fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> anyhow::Result<Report> {
+fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> Result<Report, ReportError> {
     let started = Instant::now();
     let cpu_started = exec::process_cpu_s();
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("cannot create {}", opts.out.display()))?;
+    std::fs::create_dir_all(&opts.out).map_err(report_error::io("cannot create", &opts.out))?;
     let mut files = Vec::new();
     let mut exact_files = Vec::new();
     for file in select_scenes(opts)? {
@@ -352,17 +354,18 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> anyhow::Res
         bar.set_message(describe(&plan.reference));
         let reference = exec::execute(&file, kind, duration, &plan.reference, &plan.sample_times)?;
         bar.inc(1);
-        anyhow::ensure!(
-            reference.samples.len() == plan.sample_times.len() && reference.finite,
-            "{name}: the reference run did not produce every sample"
-        );
+        if !(reference.samples.len() == plan.sample_times.len() && reference.finite) {
+            return Err(ReportError::Invalid(format!(
+                "{name}: the reference run did not produce every sample"
+            )));
+        }
         // the reference at 2 dt and 4 dt: each against the reference, and the 4 dt run
         // against the 2 dt one (the reference's own successive halvings)
         let mut checks = Vec::new();
         for spec in [&plan.reference_check, &plan.reference_check_coarse] {
             bar.set_message(describe(spec));
             let run = exec::execute(&file, kind, duration, spec, &plan.sample_times)
-                .with_context(|| describe(spec))?;
+                .map_err(|e| ReportError::in_run(describe(spec), e))?;
             bar.inc(1);
             let error = error_against(&run.samples, &reference.samples, &points);
             checks.push(Row { run, error });
@@ -380,7 +383,7 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> anyhow::Res
         for spec in &plan.runs {
             bar.set_message(describe(spec));
             let run = exec::execute(&file, kind, duration, spec, &plan.sample_times)
-                .with_context(|| describe(spec))?;
+                .map_err(|e| ReportError::in_run(describe(spec), e))?;
             let error = error_against(&run.samples, &reference.samples, &points);
             rows.push(Row { run, error });
             bar.inc(1);
@@ -476,12 +479,11 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> anyhow::Res
         exec::process_cpu_s() - cpu_started,
     )?;
     if !exact_reports.is_empty() {
-        let mut md = std::fs::read_to_string(&summary)
-            .with_context(|| format!("cannot read {}", summary.display()))?;
+        let mut md =
+            std::fs::read_to_string(&summary).map_err(report_error::io("cannot read", &summary))?;
         md.push('\n');
         md.push_str(&exact_output::exact_summary(&exact_reports)?);
-        std::fs::write(&summary, md)
-            .with_context(|| format!("cannot write {}", summary.display()))?;
+        std::fs::write(&summary, md).map_err(report_error::io("cannot write", &summary))?;
     }
     Ok(Report {
         scenes: reports,

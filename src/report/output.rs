@@ -2,10 +2,8 @@
 //! An edge (writes files); the numbers come from [`super::errors`].
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::Path;
 
-use anyhow::Context;
 use plotters::prelude::*;
 
 use super::errors::{
@@ -13,6 +11,8 @@ use super::errors::{
 };
 use super::exec::RunOutput;
 use super::plan::{Method, SceneKind, ScenePlan, Sweep};
+use super::plot::{write_log_log, LogLogPlot, Series};
+use super::report_error::{io, ReportError};
 
 /// One row of the CSV: a run and its error against the reference (None for the
 /// reference itself, or when it could not be compared).
@@ -117,7 +117,7 @@ impl SceneReport {
 
 pub const CSV_HEADER: &str = "scene,method,sweep,dt_s,resolution,tolerance,steps,error_rms_m,error_end_m,points_compared,isometry_error_max,constraint_violation_max_m,wall_s,wall_per_simulated_s,cpu_s,cpu_per_simulated_s,step_ms_median,step_cpu_ms_median,iterations_median,unconverged_steps,stuck_steps,finite";
 
-pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
+pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> Result<(), ReportError> {
     let mut out = String::from(CSV_HEADER);
     out.push('\n');
     for s in scenes {
@@ -159,7 +159,7 @@ pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> anyhow::Result<()> {
             )?;
         }
     }
-    std::fs::write(path, out).with_context(|| format!("cannot write {}", path.display()))
+    std::fs::write(path, out).map_err(io("cannot write", path))
 }
 
 pub(super) fn color(method: Method) -> RGBColor {
@@ -172,39 +172,11 @@ pub(super) fn color(method: Method) -> RGBColor {
     }
 }
 
-static FONT: std::sync::Once = std::sync::Once::new();
-
-/// Plot labels use DejaVu Sans Mono embedded in the binary (assets/fonts): no
-/// fontconfig or system fonts needed.
-pub(super) fn register_font() {
-    FONT.call_once(|| {
-        let bytes: &'static [u8] = include_bytes!("../../assets/fonts/DejaVuSansMono.ttf");
-        // a font that does not parse leaves text undrawn; the plot itself still renders
-        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, bytes);
-    });
-}
-
 /// Log-log error (RMS over time) against run time (process CPU time), one line per
 /// method (its dt sweep), the other sweeps as hollow markers; a dashed line at the
 /// reference's estimated own error ([`SceneReport::reference_error_bound`], or its 2 dt
 /// distance as a lower bound when its halvings do not converge).
-pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
-    register_font();
-    let (w, h) = (900u32, 600u32);
-    let pts: Vec<(f64, f64)> = s
-        .rows
-        .iter()
-        .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms_over_time)))
-        .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
-        .collect();
-    anyhow::ensure!(!pts.is_empty(), "{}: no run to plot", s.name);
-    let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for (x, y) in &pts {
-        x0 = x0.min(*x);
-        x1 = x1.max(*x);
-        y0 = y0.min(*y);
-        y1 = y1.max(*y);
-    }
+pub fn write_plot(path: &Path, s: &SceneReport) -> Result<(), ReportError> {
     let (reference_error, reference_label) = match s.reference_error_bound() {
         Some(b) if s.reference_order().is_some_and(|p| p < 0.8) => (
             Some(b),
@@ -216,99 +188,44 @@ pub fn write_plot(path: &Path, s: &SceneReport) -> anyhow::Result<()> {
             "reference's own error: lower bound (not converged)",
         ),
     };
-    let reference_error = reference_error.filter(|e| *e > 0.0 && e.is_finite());
-    if let Some(e) = reference_error {
-        y0 = y0.min(e);
-        y1 = y1.max(e);
+    let points = |method: Method, dt_sweep: bool| -> Vec<(f64, f64)> {
+        s.rows
+            .iter()
+            .filter(|r| {
+                r.run.spec.method == method && (r.run.spec.sweep == Sweep::TimeStep) == dt_sweep
+            })
+            .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms_over_time)))
+            .collect()
+    };
+    let mut series = Vec::new();
+    for method in s.methods() {
+        let color = color(method);
+        series.push(Series {
+            label: Some(format!("{} (dt sweep)", method.name())),
+            color,
+            points: points(method, true),
+            line: true,
+        });
+        series.push(Series {
+            label: None,
+            color,
+            points: points(method, false),
+            line: false,
+        });
     }
-    let (x0, x1, y0, y1) = (x0 / 1.5, x1 * 1.5, y0 / 1.5, y1 * 1.5);
-    // headroom for the legend (upper right, up to six entries of ~20 px on a 540 px
-    // plot): the data keep the lower 70 % of the log y range, so the expensive,
-    // inaccurate runs (conforming FEM, top right) stay visible below it
-    let y1 = y1 * (y1 / y0).powf(0.43);
-    let mut buf = vec![255u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        let mut chart = ChartBuilder::on(&root)
-            .caption(format!("{}: error vs run time", s.name), ("sans-serif", 20))
-            .margin(12)
-            .x_label_area_size(45)
-            .y_label_area_size(80)
-            .build_cartesian_2d((x0..x1).log_scale(), (y0..y1).log_scale())
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        chart
-            .configure_mesh()
-            .x_desc("run time (process CPU time), s")
-            .y_desc("RMS error over time, m")
-            .x_label_formatter(&|v| format!("{v:.2e}"))
-            .y_label_formatter(&|v| format!("{v:.0e}"))
-            .draw()
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        for method in s.methods() {
-            let c = color(method);
-            let mut line: Vec<(f64, f64)> = s
-                .rows
-                .iter()
-                .filter(|r| r.run.spec.method == method && r.run.spec.sweep == Sweep::TimeStep)
-                .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms_over_time)))
-                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-                .collect();
-            line.sort_by(|a, b| a.0.total_cmp(&b.0));
-            chart
-                .draw_series(LineSeries::new(line.clone(), c.stroke_width(2)))
-                .map_err(|e| anyhow::anyhow!("{e:?}"))?
-                .label(format!("{} (dt sweep)", method.name()))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                });
-            chart
-                .draw_series(line.iter().map(|p| Circle::new(*p, 4, c.filled())))
-                .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-            let others: Vec<(f64, f64)> = s
-                .rows
-                .iter()
-                .filter(|r| r.run.spec.method == method && r.run.spec.sweep != Sweep::TimeStep)
-                .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms_over_time)))
-                .filter(|(x, y)| *x > 0.0 && *y > 0.0)
-                .collect();
-            chart
-                .draw_series(others.iter().map(|p| Circle::new(*p, 6, c.stroke_width(2))))
-                .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        }
-        if let Some(e) = reference_error {
-            let grey = RGBColor(120, 120, 120);
-            // dashed: segments over every other twentieth of the log x range
-            let (lx0, lx1) = (x0.ln(), x1.ln());
-            let dashes = (0..20).step_by(2).map(move |k| {
-                let a = (lx0 + (lx1 - lx0) * k as f64 / 20.0).exp();
-                let b = (lx0 + (lx1 - lx0) * (k + 1) as f64 / 20.0).exp();
-                PathElement::new(vec![(a, e), (b, e)], grey.stroke_width(1))
-            });
-            chart
-                .draw_series(dashes)
-                .map_err(|e| anyhow::anyhow!("{e:?}"))?
-                .label(reference_label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], grey));
-        }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        root.present().map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    }
-    let file =
-        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
-    let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    let mut writer = encoder.write_header()?;
-    writer.write_image_data(&buf)?;
-    writer.finish()?;
-    Ok(())
+    let title = format!("{}: error vs run time", s.name);
+    write_log_log(
+        path,
+        &LogLogPlot {
+            title: &title,
+            x_desc: "run time (process CPU time), s",
+            y_desc: "RMS error over time, m",
+            series,
+            level: reference_error
+                .filter(|e| *e > 0.0 && e.is_finite())
+                .map(|e| (e, reference_label)),
+        },
+    )
 }
 
 fn sci(v: f64) -> String {
@@ -354,7 +271,7 @@ pub fn write_summary(
     command: &str,
     wall_s: f64,
     cpu_s: f64,
-) -> anyhow::Result<()> {
+) -> Result<(), ReportError> {
     let mut md = String::new();
     writeln!(md, "# Error against run time\n")?;
     writeln!(
@@ -682,10 +599,7 @@ pub fn write_summary(
             }
         }
     }
-    let mut f =
-        std::fs::File::create(path).with_context(|| format!("cannot write {}", path.display()))?;
-    f.write_all(md.as_bytes())?;
-    Ok(())
+    std::fs::write(path, md).map_err(io("cannot write", path))
 }
 
 /// The run-time budget of the equal-time comparison: the CPU time of the middle run of

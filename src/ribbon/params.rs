@@ -25,8 +25,8 @@ pub enum SolverKind {
     Lbfgsb,
     /// Ours: the same projected Newton method (line search, held variables, damping,
     /// adaptive penalty) with the Newton system solved along the chain in O(n)
-    /// (`ribbon::objective::chain`, docs/ribbon_chain_solver.md). A loop closure's
-    /// coupling of the two ends is not in the chain sweep yet: loops are solved densely.
+    /// (`ribbon::objective::chain`, docs/ribbon_chain_solver.md); a loop closure's
+    /// coupling of the two ends by a Woodbury step on top of the sweep.
     Chain,
 }
 

@@ -119,10 +119,8 @@ impl RibbonSim {
                 crease_direction,
                 bending_angle,
             } => {
-                for k in 1..n {
-                    coords.crease_direction[k] = crease_direction[k - 1];
-                    coords.bending_angle[k] = bending_angle[k - 1];
-                }
+                coords.crease_direction[1..n].copy_from_slice(&crease_direction[..n - 1]);
+                coords.bending_angle[1..n].copy_from_slice(&bending_angle[..n - 1]);
             }
         }
         if imperfection.amplitude > 0.0 {

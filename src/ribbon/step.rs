@@ -131,19 +131,19 @@ impl ZProblem<'_, '_> {
 }
 
 impl ZProblem<'_, '_> {
-    fn dimension(&self) -> usize {
-        self.q.len()
-    }
-    fn evaluate(
+    /// f(q(z)) and, if asked, its z-gradient, recording the second-order data a Newton
+    /// matrix is built from when `hessian` (or `second_order` with a gradient): the
+    /// dense and the chain matrix read it from the workspace.
+    fn evaluate_second_order(
         &mut self,
         z: &[f64],
         gradient: Option<&mut [f64]>,
-        hessian: Option<&mut DMatrix<f64>>,
+        hessian: bool,
     ) -> f64 {
         let lay = self.objective.layout;
         z_to_q(&lay, z, &mut self.q);
         let want_g = gradient.is_some();
-        let second_order = hessian.is_some() || (want_g && self.second_order);
+        let second_order = hessian || (want_g && self.second_order);
         let f = if want_g {
             self.objective.evaluate_recording(
                 &self.q,
@@ -155,13 +155,18 @@ impl ZProblem<'_, '_> {
             self.objective
                 .evaluate_recording(&self.q, self.workspace, None, second_order)
         };
-        if let Some(h) = hessian {
-            self.objective.assemble_newton_hessian(self.workspace, h);
-        }
         if let Some(g) = gradient {
             self.gradient_to_z(g);
         }
         f
+    }
+
+    fn dimension(&self) -> usize {
+        self.q.len()
+    }
+    /// f(q(z)) and, if asked, its z-gradient (second-order data as `second_order`).
+    fn evaluate(&mut self, z: &[f64], gradient: Option<&mut [f64]>) -> f64 {
+        self.evaluate_second_order(z, gradient, false)
     }
 }
 
@@ -203,15 +208,11 @@ impl BoxProblem for ZNewton<'_, '_, '_> {
         gradient: Option<&mut [f64]>,
         hessian: Option<&mut Dense>,
     ) -> f64 {
-        let lay = self.0.objective.layout;
-        match hessian {
-            Some(h) => {
-                let f = self.0.evaluate(z, gradient, Some(&mut h.matrix));
-                hessian_to_z(&lay, &mut h.matrix);
-                f
-            }
-            None => self.0.evaluate(z, gradient, None),
+        let f = self.0.evaluate_second_order(z, gradient, hessian.is_some());
+        if let Some(h) = hessian {
+            self.hessian(z, h);
         }
+        f
     }
     fn hessian(&mut self, _z: &[f64], h: &mut Dense) {
         // the workspace holds the second-order data of the evaluation at z
@@ -236,16 +237,9 @@ impl BoxProblem for ZChain<'_, '_, '_> {
         gradient: Option<&mut [f64]>,
         hessian: Option<&mut ChainMatrix>,
     ) -> f64 {
-        let want = hessian.is_some();
-        let saved = self.0.second_order;
-        self.0.second_order |= want;
-        let f = self.0.evaluate(z, gradient, None);
-        self.0.second_order = saved;
+        let f = self.0.evaluate_second_order(z, gradient, hessian.is_some());
         if let Some(h) = hessian {
-            let problem = &mut *self.0;
-            problem
-                .objective
-                .chain_model(problem.workspace, &mut h.model);
+            self.hessian(z, h);
         }
         f
     }
@@ -281,12 +275,7 @@ impl StepSolver {
         // Adaptive penalty (ours; the paper's solver keeps the scene's fixed mu): mu
         // carries over from the last step, relaxed at its end (below).
         let adaptive = matches!(settings.kind, SolverKind::GaussNewton | SolverKind::Chain);
-        // the chain sweep has no loop-closure coupling yet: loops are solved densely
-        let chain = settings.kind == SolverKind::Chain
-            && !objective_terms
-                .equalities
-                .iter()
-                .any(|e| matches!(e, super::objective::Equality::Loop(_)));
+        let chain = settings.kind == SolverKind::Chain;
         if !adaptive {
             objective_terms.penalty = settings.penalty;
         }
@@ -363,7 +352,7 @@ impl StepSolver {
                     // relative gradient tolerance against the first round's start
                     let scale = *pg0.get_or_insert_with(|| {
                         let mut g = vec![0.0; nq];
-                        problem.evaluate(&self.z, Some(&mut g), None);
+                        problem.evaluate(&self.z, Some(&mut g));
                         crate::optim::projected_gradient_inf(&self.z, &g, &self.lower, &self.upper)
                             .max(1e-300)
                     });
@@ -380,7 +369,7 @@ impl StepSolver {
                     let (_, solver) = self.lbfgsb.as_mut().expect("created above");
                     *solver.options_mut() = options;
                     let r = solver.minimize(&mut self.z, &self.lower, &self.upper, |z, g| {
-                        problem.evaluate(z, Some(g), None)
+                        problem.evaluate(z, Some(g))
                     });
                     (r.iterations as u32, r.converged(), r.f)
                 }
@@ -435,7 +424,6 @@ impl StepSolver {
                     .end_crease_multipliers
                     .iter()
                     .any(|&l| l < 0.0);
-            drop(objective);
             objective_terms.multipliers = updates;
             objective_terms.end_crease_multipliers = end;
             outcome.constraint_violation = max_pos;

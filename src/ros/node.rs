@@ -320,9 +320,9 @@ impl SimNode {
             } else {
                 Duration::from_millis(200)
             };
-            // held service replies are re-checked every SETTLE
+            // held service replies are re-checked every RECHECK
             let timeout = if self.replies_waiting() {
-                timeout.min(super::reply::SETTLE)
+                timeout.min(super::reply::RECHECK)
             } else {
                 timeout
             };
@@ -494,7 +494,7 @@ impl SimNode {
         // replies still held for clients not yet discovered get a short grace
         let grace = Instant::now() + Duration::from_millis(250);
         while self.replies_waiting() && Instant::now() < grace {
-            std::thread::sleep(super::reply::SETTLE);
+            std::thread::sleep(super::reply::RECHECK);
             self.flush_replies();
         }
         let mut stats = std::mem::take(&mut self.stats);

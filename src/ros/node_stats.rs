@@ -55,10 +55,10 @@ pub struct NodeStats {
     pub overrun_ticks: u64,
     /// Publications that failed or were dropped (full reliable window).
     pub dropped_publications: u64,
-    /// Service replies sent (after the client's reply reader was discovered).
+    /// Service replies sent (after the client's reply reader was matched).
     pub service_replies: u64,
-    /// Service replies sent after `reply::GIVE_UP` without the client's reply reader in
-    /// discovery (the client may never see them), or that failed to send.
+    /// Service replies sent after `reply::GIVE_UP` without the client's reply reader
+    /// matched (the client may never see them), or that failed to send.
     pub service_replies_unseen: u64,
     /// Simulator step only.
     pub step: LatencyStats,

@@ -4,60 +4,47 @@
 //! request writer and its reply reader together and may send a request as soon as its
 //! writer has matched our request reader. Our reply writer delivers only to readers it
 //! has already matched, and with volatile durability a reader matched later never
-//! receives earlier samples: a reply written before the node has discovered the
-//! client's reply reader is lost and the client waits forever. rmw_cyclonedds holds
-//! such a reply until the client's reader is matched; so do we.
+//! receives earlier samples: a reply written before the node has matched the client's
+//! reply reader is lost and the client waits forever. rmw_cyclonedds holds such a reply
+//! until the client's reader is matched; so do we.
 //!
-//! ros2-client does not expose the reply writer's matched readers, so the test is the
-//! participant's discovery database. The request id carries the client writer's GUID,
-//! whose first 8 bytes (host and application id of the GUID prefix) the client's reply
-//! reader shares. A client creates its request writer and reply reader as a pair, so
-//! the reply waits until that participant has at least as many reply readers on the
-//! reply topic as request writers on the request topic (a client that just replaced
-//! its endpoints is then not mistaken for its predecessor). A reader that has just
-//! entered the database may not be matched to the writer yet (RustDDS's event loop
-//! does that a moment later), so a reader counts once it has been known for
-//! [`SETTLE`]; with one such reader but fewer readers than writers (a predecessor's
-//! disposed writer still in the database) the reply goes after [`PAIR_WAIT`]; with none,
-//! after [`GIVE_UP`] it is sent anyway and counted.
+//! The test is the reply writer's own matches (the patched ros2-client's
+//! `Node::matched_remote_readers`, from RustDDS's match events, sent once the writer has
+//! added the reader). The request id carries the client writer's GUID, whose first 8
+//! bytes (host and application id of the GUID prefix) the client's reply reader shares.
+//! A client creates its request writer and reply reader as a pair, so the reply waits
+//! until that participant has at least as many matched reply readers as request writers
+//! in the discovery database (a client that just replaced its endpoints is then not
+//! mistaken for its predecessor); with one matched reader but fewer readers than writers
+//! (a predecessor's disposed writer still in the database) the reply goes after
+//! [`PAIR_WAIT`]; with none, after [`GIVE_UP`] it is sent anyway and counted.
 
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
-use ros2_client::dds::rustdds::DomainParticipant;
-use ros2_client::{Message, RmwRequestId, Server};
+use ros2_client::dds::rustdds::{DomainParticipant, GUID};
+use ros2_client::{Message, Node, RmwRequestId, Server};
 
-/// How long a client's reply reader must have been known before a reply is sent to it.
-pub const SETTLE: Duration = Duration::from_millis(5);
+/// How often the node re-checks held replies while any is waiting.
+pub const RECHECK: Duration = Duration::from_millis(5);
 /// How long a reply waits for the reader count to catch up with the writer count once
-/// the client's participant has at least one settled reply reader: the discovery
+/// the client's participant has at least one matched reply reader: the discovery
 /// database may keep a predecessor's disposed endpoint for a while, so the counts alone
 /// could hold a reply until [`GIVE_UP`].
 pub const PAIR_WAIT: Duration = Duration::from_millis(200);
 /// How long a reply waits for the client's reader before it is sent regardless.
 pub const GIVE_UP: Duration = Duration::from_secs(5);
 
-/// The endpoints of remote participants that service clients use.
+/// The request writers of remote participants (service clients).
 #[derive(Default)]
-pub struct ClientReaders {
-    /// Reader GUID -> (DDS topic, host and app id, first seen).
-    readers: HashMap<[u8; 16], (String, [u8; 8], Instant)>,
+pub struct ClientWriters {
     /// (DDS topic, host and app id) -> number of writers.
     writers: HashMap<(String, [u8; 8]), usize>,
 }
 
-impl ClientReaders {
-    /// Re-read the discovery database; endpoints that left are forgotten.
-    pub fn refresh(&mut self, participant: &DomainParticipant, now: Instant) {
-        let mut readers = HashMap::with_capacity(self.readers.len());
-        for r in participant.discovered_readers() {
-            let guid = r.reader_proxy.remote_reader_guid;
-            let key = guid.to_bytes();
-            let since = self.readers.get(&key).map_or(now, |e| e.2);
-            let topic = r.subscription_topic_data.topic_name().clone();
-            readers.insert(key, (topic, host_app(guid.prefix.as_ref()), since));
-        }
-        self.readers = readers;
+impl ClientWriters {
+    /// Re-read the discovery database; writers that left are forgotten.
+    pub fn refresh(&mut self, participant: &DomainParticipant) {
         self.writers.clear();
         for w in participant.discovered_writers() {
             let guid = w.writer_proxy.remote_writer_guid;
@@ -70,24 +57,21 @@ impl ClientReaders {
     }
 
     /// Whether the client that sent `id` on `request_topic` at `received` can receive
-    /// its reply on `reply_topic`: its participant has as many reply readers known for at
-    /// least [`SETTLE`] as request writers, or at least one and the reply has waited
+    /// its reply, given the readers `matched` to the reply writer: its participant has
+    /// as many of them as request writers, or at least one and the reply has waited
     /// [`PAIR_WAIT`] (see the module doc).
     pub fn settled(
         &self,
         request_topic: &str,
-        reply_topic: &str,
+        matched: &[GUID],
         id: &RmwRequestId,
         received: Instant,
         now: Instant,
     ) -> bool {
         let client = host_app(&id.writer_gid.to_bytes16());
-        let readers = self
-            .readers
-            .values()
-            .filter(|(topic, host, since)| {
-                topic == reply_topic && *host == client && now.duration_since(*since) >= SETTLE
-            })
+        let readers = matched
+            .iter()
+            .filter(|g| host_app(g.prefix.as_ref()) == client)
             .count();
         let writers = self
             .writers
@@ -106,10 +90,8 @@ fn host_app(guid_bytes: &[u8]) -> [u8; 8] {
 
 /// The replies of one server that wait for their client's reader.
 pub struct HeldReplies<Resp> {
-    /// DDS names of the request and reply topics (`rq/.../<service>Request`,
-    /// `rr/.../<service>Reply`).
+    /// DDS name of the request topic (`rq/.../<service>Request`).
     request_topic: String,
-    reply_topic: String,
     waiting: Vec<(RmwRequestId, Resp, Instant)>,
 }
 
@@ -123,10 +105,9 @@ pub struct Flushed {
 }
 
 impl<Resp: Message + 'static> HeldReplies<Resp> {
-    pub fn new(request_topic: String, reply_topic: String) -> Self {
+    pub fn new(request_topic: String) -> Self {
         HeldReplies {
             request_topic,
-            reply_topic,
             waiting: Vec::new(),
         }
     }
@@ -143,13 +124,15 @@ impl<Resp: Message + 'static> HeldReplies<Resp> {
     pub fn flush<Req: Message + 'static>(
         &mut self,
         server: &Server<Req, Resp>,
-        readers: &ClientReaders,
+        node: &Node,
+        writers: &ClientWriters,
         now: Instant,
     ) -> Flushed {
         let mut done = Flushed::default();
         let mut keep = Vec::new();
+        let matched = node.matched_remote_readers(server.response_writer_guid());
         for (id, response, received) in self.waiting.drain(..) {
-            let ready = readers.settled(&self.request_topic, &self.reply_topic, &id, received, now);
+            let ready = writers.settled(&self.request_topic, &matched, &id, received, now);
             let expired = now.duration_since(received) >= GIVE_UP;
             if !(ready || expired) {
                 keep.push((id, response, received));

@@ -2,7 +2,7 @@
 //! calls them): `~/reset`, `~/set_paused`, `~/step` (std_srvs) and the parameter
 //! services `~/list_parameters`, `~/get_parameters`, `~/set_parameters`,
 //! `~/describe_parameters`, `~/get_parameter_types` (rcl_interfaces). Every reply is
-//! held until the client's reply reader is discovered ([`super::reply`]).
+//! held until the client's reply reader is matched ([`super::reply`]).
 //!
 //! ros2-client's own parameter services are hard-wired to the Enhanced (Fast DDS)
 //! mapping, which Cyclone clients cannot call; the node turns them off
@@ -21,7 +21,7 @@ use super::dds::{dds, NodeError};
 use super::msgs::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
 use super::names::NodeNames;
 use super::param_msgs::*;
-use super::reply::{ClientReaders, Flushed, HeldReplies};
+use super::reply::{ClientWriters, Flushed, HeldReplies};
 
 /// One server and the replies it holds.
 pub struct Service<Req: Message + 'static, Resp: Message + 'static> {
@@ -55,10 +55,7 @@ impl<Req: Message + Clone + 'static, Resp: Message + 'static> Service<Req, Resp>
             .registry()
             .register(&mut server, Token(ctx.token), Interest::READABLE)?;
         ctx.token += 1;
-        let replies = HeldReplies::new(
-            n.to_dds_name("rq", ctx.node_name, "Request"),
-            n.to_dds_name("rr", ctx.node_name, "Reply"),
-        );
+        let replies = HeldReplies::new(n.to_dds_name("rq", ctx.node_name, "Request"));
         Ok(Service { server, replies })
     }
 
@@ -72,8 +69,8 @@ impl<Req: Message + Clone + 'static, Resp: Message + 'static> Service<Req, Resp>
         self.replies.hold(id, response);
     }
 
-    fn flush(&mut self, readers: &ClientReaders, now: Instant) -> Flushed {
-        self.replies.flush(&self.server, readers, now)
+    fn flush(&mut self, node: &Node, writers: &ClientWriters, now: Instant) -> Flushed {
+        self.replies.flush(&self.server, node, writers, now)
     }
 }
 
@@ -94,7 +91,7 @@ pub struct Services {
     pub set_parameters: Service<SetParametersRequest, SetParametersResponse>,
     pub describe_parameters: Service<NamesRequest, DescribeParametersResponse>,
     pub get_parameter_types: Service<NamesRequest, GetParameterTypesResponse>,
-    client_readers: ClientReaders,
+    client_writers: ClientWriters,
 }
 
 impl Services {
@@ -144,7 +141,7 @@ impl Services {
                 rcl("GetParameterTypes"),
                 "get_parameter_types",
             )?,
-            client_readers: ClientReaders::default(),
+            client_writers: ClientWriters::default(),
         })
     }
 
@@ -163,23 +160,24 @@ impl Services {
     /// Send the held replies whose clients can receive them; what was sent, summed.
     pub fn flush(
         &mut self,
+        node: &Node,
         participant: &ros2_client::dds::rustdds::DomainParticipant,
         now: Instant,
     ) -> Flushed {
         if !self.waiting() {
             return Flushed::default();
         }
-        self.client_readers.refresh(participant, now);
-        let r = &self.client_readers;
+        self.client_writers.refresh(participant);
+        let w = &self.client_writers;
         let all = [
-            self.reset.flush(r, now),
-            self.set_paused.flush(r, now),
-            self.step.flush(r, now),
-            self.list_parameters.flush(r, now),
-            self.get_parameters.flush(r, now),
-            self.set_parameters.flush(r, now),
-            self.describe_parameters.flush(r, now),
-            self.get_parameter_types.flush(r, now),
+            self.reset.flush(node, w, now),
+            self.set_paused.flush(node, w, now),
+            self.step.flush(node, w, now),
+            self.list_parameters.flush(node, w, now),
+            self.get_parameters.flush(node, w, now),
+            self.set_parameters.flush(node, w, now),
+            self.describe_parameters.flush(node, w, now),
+            self.get_parameter_types.flush(node, w, now),
         ];
         all.iter().fold(Flushed::default(), |a, d| Flushed {
             sent: a.sent + d.sent,

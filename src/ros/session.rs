@@ -179,11 +179,24 @@ impl Session {
         step_duration: f64,
         content: FrameContent,
     ) -> Frame {
-        let world = &self.scene.world;
+        self.frame_of(&self.scene, report, step_duration, content)
+    }
+
+    /// [`Session::frame`] of another copy of this session's scene (`run --record`
+    /// reads the runner's scene instead of cloning its world into the session each
+    /// step): the world's state from `scene`, the inputs and counters from `self`.
+    pub fn frame_of(
+        &self,
+        scene: &Scene,
+        report: Option<&StepReport>,
+        step_duration: f64,
+        content: FrameContent,
+    ) -> Frame {
+        let world = &scene.world;
         let stamp = Time::from_secs(world.time());
         let header = Header {
             stamp,
-            frame_id: self.scene.frame_id.clone(),
+            frame_id: scene.frame_id.clone(),
         };
         let objects = world
             .object_names()
@@ -213,7 +226,7 @@ impl Session {
                 });
                 let status = content
                     .status
-                    .then(|| self.status(i, name, &header, report, step_duration));
+                    .then(|| self.status(scene, i, name, &header, report, step_duration));
                 ObjectFrame {
                     markers,
                     singular_points,
@@ -222,7 +235,7 @@ impl Session {
             })
             .collect();
         let colliders = if content.markers {
-            self.collider_markers(&header)
+            self.collider_markers(scene, &header)
         } else {
             None
         };
@@ -236,17 +249,18 @@ impl Session {
 
     fn status(
         &self,
+        scene: &Scene,
         object: usize,
         name: &str,
         header: &Header,
         report: Option<&StepReport>,
         step_duration: f64,
     ) -> SimStatus {
-        let world = &self.scene.world;
+        let world = &scene.world;
         let mut s = SimStatus {
             header: header.clone(),
             object_name: name.to_string(),
-            scene_name: self.scene.name.clone(),
+            scene_name: scene.name.clone(),
             sim_time: world.time(),
             step: world.steps_taken(),
             episode: self.episode,
@@ -304,8 +318,7 @@ impl Session {
             let mut hs = HandleStatus {
                 name: spec.name.clone(),
                 topic: self.handle_topics.get(h).cloned().unwrap_or_default(),
-                tf_frame: self
-                    .scene
+                tf_frame: scene
                     .handle_tf_frames
                     .get(h)
                     .cloned()
@@ -332,9 +345,9 @@ impl Session {
     /// One marker per collider, at its current pose (attached colliders follow their
     /// handle's target): the ground as a thin square of `style.ground_size`, boxes,
     /// spheres, capsules (a cylinder and its two end spheres) and triangle meshes.
-    fn collider_markers(&self, header: &Header) -> Option<MarkerArray> {
+    fn collider_markers(&self, scene: &Scene, header: &Header) -> Option<MarkerArray> {
         use crate::contact::ColliderShape;
-        let world = &self.scene.world;
+        let world = &scene.world;
         let colliders = world.contact_stage()?.colliders();
         if colliders.is_empty() {
             return None;

@@ -116,7 +116,7 @@ pub fn parse_stl(bytes: &[u8]) -> Result<(Vec<Point3>, Vec<[u32; 3]>), String> {
                 soup.push(p);
             }
         }
-        if soup.len() % 3 != 0 {
+        if !soup.len().is_multiple_of(3) {
             return Err(format!(
                 "{} vertices is not a whole number of facets",
                 soup.len()

@@ -32,7 +32,6 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::Context;
 use serde::Serialize;
 
 use crate::runner::{self, ObserverError, StepObserver};
@@ -422,8 +421,41 @@ pub struct RunTweaks<'a> {
     pub world_hook: Option<&'a mut dyn FnMut(&mut World)>,
 }
 
-/// The override that moves a single-object scene (`source`) by `offset`, m.
-fn offset_override(source: &scene::SceneFile, offset: [f64; 3]) -> anyhow::Result<String> {
+/// Why a stress case or the suite could not run (a failed case is a result, not an error).
+#[derive(Debug, thiserror::Error)]
+pub enum StressError {
+    /// The case's scene (with its overrides) does not load.
+    #[error("stress case {case} (dt {dt} s)")]
+    Scene {
+        case: String,
+        dt: f64,
+        #[source]
+        source: scene::SceneError,
+    },
+    /// The case cannot be moved by an offset (see [`RunTweaks::offset`]).
+    #[error("stress case {case} (dt {dt} s): {reason}")]
+    CannotMove {
+        case: String,
+        dt: f64,
+        reason: &'static str,
+    },
+    /// An observer of the run failed.
+    #[error(transparent)]
+    Observer(#[from] ObserverError),
+    /// The output folder or a report file could not be written.
+    #[error("{message}")]
+    Io {
+        message: String,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+}
+
+/// The override that moves a single-object scene (`source`) by `offset`, m, or why
+/// the scene cannot be moved.
+fn offset_override(source: &scene::SceneFile, offset: [f64; 3]) -> Result<String, &'static str> {
     let moved = |p: [f64; 3]| {
         format!(
             "[{:?}, {:?}, {:?}]",
@@ -432,17 +464,16 @@ fn offset_override(source: &scene::SceneFile, offset: [f64; 3]) -> anyhow::Resul
             p[2] + offset[2]
         )
     };
-    anyhow::ensure!(
-        source.ribbons.is_empty() && source.colliders.is_empty(),
-        "moving a scene with a `ribbons:` list or colliders is not supported"
-    );
+    if !(source.ribbons.is_empty() && source.colliders.is_empty()) {
+        return Err("moving a scene with a `ribbons:` list or colliders is not supported");
+    }
     match (&source.ribbon, &source.paper) {
         (Some(r), None) => Ok(format!("ribbon.base.position={}", moved(r.base.position))),
         (None, Some(p)) => {
             let at = p.placement.as_ref().map_or([0.0; 3], |x| x.position);
             Ok(format!("paper.placement.position={}", moved(at)))
         }
-        _ => anyhow::bail!("moving a scene needs exactly one ribbon or paper"),
+        _ => Err("moving a scene needs exactly one ribbon or paper"),
     }
 }
 
@@ -454,7 +485,7 @@ pub fn run_case(
     quick: bool,
     max_steps: Option<usize>,
     config: &Path,
-) -> anyhow::Result<CaseResult> {
+) -> Result<CaseResult, StressError> {
     run_case_with(case, dt, quick, max_steps, config, RunTweaks::default())
 }
 
@@ -466,17 +497,29 @@ pub fn run_case_with(
     max_steps: Option<usize>,
     config: &Path,
     tweaks: RunTweaks,
-) -> anyhow::Result<CaseResult> {
+) -> Result<CaseResult, StressError> {
     let duration = case.duration_for(dt, quick, max_steps);
     let mut sets = vec![format!("dt={dt}"), format!("duration={duration}")];
     sets.extend((case.overrides)(duration, dt));
     sets.extend(tweaks.sets);
     let path = config.join(case.scene);
-    let context = || format!("stress case {} (dt {dt} s)", case.name);
-    let mut scene = scene::load(&path, &sets).with_context(context)?;
+    let load = |sets: &[String]| {
+        scene::load(&path, sets).map_err(|source| StressError::Scene {
+            case: case.name.to_string(),
+            dt,
+            source,
+        })
+    };
+    let mut scene = load(&sets)?;
     if let Some(offset) = tweaks.offset {
-        sets.push(offset_override(&scene.source, offset).with_context(context)?);
-        scene = scene::load(&path, &sets).with_context(context)?;
+        let moved =
+            offset_override(&scene.source, offset).map_err(|reason| StressError::CannotMove {
+                case: case.name.to_string(),
+                dt,
+                reason,
+            })?;
+        sets.push(moved);
+        scene = load(&sets)?;
     }
     if let Some(hook) = tweaks.world_hook {
         hook(&mut scene.world);
@@ -590,10 +633,12 @@ pub fn run_suite(
     config: &Path,
     out: &Path,
     options: &SuiteOptions,
-) -> anyhow::Result<StressReport> {
+) -> Result<StressReport, StressError> {
     let quick = options.quick;
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("cannot create the output folder {}", out.display()))?;
+    std::fs::create_dir_all(out).map_err(|source| StressError::Io {
+        message: format!("cannot create the output folder {}", out.display()),
+        source,
+    })?;
     let wall = Instant::now();
     let mut results = Vec::new();
     for case in cases() {
@@ -639,10 +684,14 @@ pub fn run_suite(
         wall_s: wall.elapsed().as_secs_f64(),
     };
     let json = out.join("stress.json");
-    std::fs::write(&json, serde_json::to_string_pretty(&report)?)
-        .with_context(|| format!("writing {}", json.display()))?;
-    let md = out.join("stress.md");
-    std::fs::write(&md, markdown(&report)).with_context(|| format!("writing {}", md.display()))?;
+    let write = |path: &Path, text: String| {
+        std::fs::write(path, text).map_err(|source| StressError::Io {
+            message: format!("writing {}", path.display()),
+            source,
+        })
+    };
+    write(&json, serde_json::to_string_pretty(&report)?)?;
+    write(&out.join("stress.md"), markdown(&report))?;
     Ok(report)
 }
 
@@ -722,4 +771,47 @@ pub fn markdown(report: &StressReport) -> String {
         ));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("config")
+    }
+
+    fn first_case() -> StressCase {
+        cases()
+            .into_iter()
+            .next()
+            .expect("at least one stress case")
+    }
+
+    #[test]
+    fn offset_moves_a_single_ribbon_and_refuses_a_ribbons_list() {
+        let one = scene::load(&config().join("scenes/ribbon_extreme_torsion.yaml"), &[]).unwrap();
+        let moved = offset_override(&one.source, [1.0, 0.0, 0.0]).unwrap();
+        assert!(moved.starts_with("ribbon.base.position=["), "{moved}");
+        let list = scene::load(&config().join("scenes/ribbon_double_chain.yaml"), &[]).unwrap();
+        let err = offset_override(&list.source, [1.0, 0.0, 0.0]).unwrap_err();
+        assert!(err.contains("`ribbons:` list"), "{err}");
+    }
+
+    #[test]
+    fn a_bad_override_names_the_case_and_the_scene_error() {
+        let case = first_case();
+        let tweaks = RunTweaks {
+            sets: vec!["no_such_key=1".into()],
+            ..RunTweaks::default()
+        };
+        let err = run_case_with(&case, 0.01, true, Some(3), &config(), tweaks).unwrap_err();
+        assert!(matches!(err, StressError::Scene { .. }), "{err:?}");
+        let text = format!("{:#}", anyhow::Error::from(err));
+        assert!(
+            text.starts_with(&format!("stress case {} (dt 0.01 s): ", case.name)),
+            "{text}"
+        );
+        assert!(text.contains("no_such_key"), "{text}");
+    }
 }

@@ -4,12 +4,14 @@ type `pkg::msg::dds_::Type_`, services on the rmw_cyclonedds wire format)."""
 
 from __future__ import annotations
 
+import fcntl
 import math
 import os
 import random
 import signal
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -56,17 +58,32 @@ def reliable_qos(depth: int = 10, transient_local: bool = False) -> Qos:
 
 
 _used_domains: set[int] = set()
+# Suites running at the same time on one machine (a soak next to CI, two worktrees) pick
+# their domains at random from the same range; a lock file per domain keeps them apart.
+DOMAIN_LOCKS = Path(tempfile.gettempdir()) / "developable_sim_domains"
 
 
 @pytest.fixture
-def domain_id() -> int:
-    """A random ROS domain per test, so tests (and parallel runs) never see each other."""
+def domain_id():
+    """A random ROS domain per test that no other test uses meanwhile, in this process
+    (never twice) or in another (an flock on DOMAIN_LOCKS/<id>.lock, held to the end)."""
+    DOMAIN_LOCKS.mkdir(exist_ok=True)
     rng = random.SystemRandom()
-    while True:
+    for _ in range(10000):
         d = rng.randint(1, 200)
-        if d not in _used_domains:
-            _used_domains.add(d)
-            return d
+        if d in _used_domains:
+            continue
+        lock = open(DOMAIN_LOCKS / f"{d}.lock", "w")
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            lock.close()
+            continue
+        _used_domains.add(d)
+        yield d
+        lock.close()  # releases the flock
+        return
+    raise RuntimeError(f"no free ROS domain in 1..200 ({DOMAIN_LOCKS})")
 
 
 class NodeProcess:
@@ -123,7 +140,9 @@ class NodeProcess:
 
 
 @pytest.fixture
-def start_node(tmp_path):
+def start_node(tmp_path, domain_id):
+    # (domain_id: set up before and torn down after this fixture, so the domain's lock
+    # outlives the nodes)
     """start_node(domain, *args) -> a ready NodeProcess; stopped at test end."""
     started: list[NodeProcess] = []
 

@@ -66,7 +66,9 @@ def test_list_get_describe_and_types(ros, domain_id, start_node):
 def test_set_parameters_take_effect_or_are_refused(ros, domain_id, start_node):
     start_node(domain_id, GRIPPER)
     status = ros.reader("/ribbon/status", rt.SimStatus)
-    markers = ros.reader("/ribbon/markers", rt.MarkerArray, reliable_qos(1, True))
+    # (the head of each MarkerArray only: decoding whole meshes in Python on a loaded
+    # machine is slower than the node makes them, and the test would count the reader)
+    markers = ros.reader("/ribbon/markers", rt.MarkerArrayHead, reliable_qos(1, True))
     ros.wait_matched(status)
     ros.wait_matched(markers)
 
@@ -94,7 +96,7 @@ def test_set_parameters_take_effect_or_are_refused(ros, domain_id, start_node):
     start = ros.take(status, 5.0, until=lambda s: True)[-1].step
     got = ros.take(markers, 2.0)
     end = ros.take(status, 5.0, until=lambda s: True)[-1].step
-    stamps = sorted({(m.markers[0].header.stamp.sec, m.markers[0].header.stamp.nanosec) for m in got})
+    stamps = sorted({(m.header.stamp.sec, m.header.stamp.nanosec) for m in got})
     steps = end - start
     assert steps >= 50, steps
     assert len(stamps) <= steps // 10 + 2, (len(stamps), steps)
@@ -104,9 +106,15 @@ def test_set_parameters_take_effect_or_are_refused(ros, domain_id, start_node):
     (ok,) = set_params(ros, markers_rate=0.0)
     assert ok.successful
     time.sleep(0.3)
+    markers.take(N=100)
+    status.take(N=256)
+    start = ros.take(status, 5.0, until=lambda s: True)[-1].step
     got = ros.take(markers, 1.0)
-    # (a keep-last-1 reader under load can still miss some; many more than 10 Hz arrive)
-    assert len(got) > 20, len(got)
+    status.take(N=256)
+    end = ros.take(status, 5.0, until=lambda s: True)[-1].step
+    # more meshes than 10 Hz would give in those steps (a keep-last-1 reader may miss some)
+    stamps = {(m.header.stamp.sec, m.header.stamp.nanosec) for m in got}
+    assert len(stamps) > (end - start) // 10 + 2, (len(stamps), end - start)
 
     # the input policy: an empty frame id is rejected, then accepted once allowed
     pose = ros.writer("/handles/gripper", rt.PoseStamped, SENSOR_QOS)

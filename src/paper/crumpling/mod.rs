@@ -17,12 +17,15 @@ use super::geometric::{
     Crease, CreaseKind, EdgeKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
     Ruling,
 };
-use super::params::PaperParams;
-use super::pattern::{point_segment, segments_cross, Pattern};
-use crate::geometry::{Point2, Point3};
+use super::pattern::{point_segment, segments_cross};
+use crate::geometry::Point2;
 
+mod context;
 mod propagation;
 mod singular;
+
+use context::Band;
+pub use context::CrumpleContext;
 
 pub use propagation::{propagate, Border, Strip};
 use singular::{insert_in_curved, split_fold};
@@ -47,49 +50,6 @@ pub enum CrumpleEvent {
         material: Point2,
         on_fold: bool,
     },
-}
-
-/// Everything the remeshing needs besides the structure.
-pub struct CrumpleContext<'a> {
-    pub pattern: &'a Pattern,
-    pub params: &'a PaperParams,
-    /// World position of an S_G vertex from its kind and pattern position (the S_P of
-    /// step 1, interpolated; cubic along the boundary).
-    pub position: &'a dyn Fn(&GVertexKind, &Point2) -> Point3,
-}
-
-/// The band of imaginary rulings through T_comp: offsets along v (m).
-#[derive(Clone, Copy, Debug)]
-struct Band {
-    v: Vector2<f64>,
-    v_perp: Vector2<f64>,
-    t_min: f64,
-    t_max: f64,
-}
-
-impl Band {
-    fn line(&self, t: f64) -> (Point2, Vector2<f64>) {
-        (Point2::from(self.v * t), self.v_perp)
-    }
-    /// Parameter range [u0, u1] of segment [p, q] inside the band, if any.
-    fn clip_segment(&self, p: &Point2, q: &Point2) -> Option<(f64, f64)> {
-        let tp = p.coords.dot(&self.v);
-        let tq = q.coords.dot(&self.v);
-        if (tq - tp).abs() < 1e-15 {
-            return (tp >= self.t_min && tp <= self.t_max).then_some((0.0, 1.0));
-        }
-        let u_a = (self.t_min - tp) / (tq - tp);
-        let u_b = (self.t_max - tp) / (tq - tp);
-        let (lo, hi) = (u_a.min(u_b).max(0.0), u_a.max(u_b).min(1.0));
-        (hi > lo).then_some((lo, hi))
-    }
-}
-
-/// A standard normal deviate (Box-Muller) from the seeded generator.
-fn normal(rng: &mut impl Rng) -> f64 {
-    let u1: f64 = 1.0 - rng.random::<f64>();
-    let u2: f64 = rng.random::<f64>();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
 /// Step 2 for the flat region of `strain.face`: propagate, resolve the borders
@@ -465,7 +425,10 @@ pub(crate) fn segment_is_free(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::Point3;
     use crate::paper::compression::{flat_regions, triangle_strain};
+    use crate::paper::params::PaperParams;
+    use crate::paper::pattern::Pattern;
     use rand::SeedableRng;
 
     /// A 10 cm sheet whose band u in [0.04, 0.08] is a curved region of rulings along

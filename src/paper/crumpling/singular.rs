@@ -5,7 +5,7 @@
 use nalgebra::Vector2;
 use rand::Rng;
 
-use super::{normal, Band, CrumpleContext};
+use super::context::{normal, Band, CrumpleContext};
 use crate::geometry::Point2;
 use crate::paper::geometric::{
     Crease, CreaseKind, Endpoint, GeometricLayer, GeometricMesh, Ruling,

@@ -32,6 +32,13 @@ type Mat6 = SMatrix<f64, 6, 6>;
 type Mat7 = SMatrix<f64, 7, 7>;
 type Mat9 = SMatrix<f64, 9, 9>;
 type Mat2x7 = SMatrix<f64, 2, 7>;
+type Mat8x7 = SMatrix<f64, 8, 7>;
+type Mat14 = SMatrix<f64, 14, 14>;
+type Vec14 = SVector<f64, 14>;
+
+/// The root unknowns a loop closure couples with the last element: the floating base
+/// (6, absent columns for a fixed base) and z_1 (= c_1).
+const ROOT: usize = 7;
 
 /// The chain form of the Newton matrix and, after [`ChainModel::factor`], its factors.
 /// Buffers are reused from step to step (no allocation once warm).
@@ -51,8 +58,17 @@ pub struct ChainModel {
     /// Base twists (columns: w_1..3, t_1..3) and the base's own geometric 3x3 block.
     base_twists: Mat6,
     base_local: Matrix3,
-    /// Loop closures: (e1, e2, B) with the term y_e1^T B y_e2.
-    cross: Vec<(usize, usize, Mat8)>,
+    /// Loop closure: B of the term y_{n-1}^T B y_0 (summed over the closures), if any.
+    closure: Option<Mat8>,
+    /// Its low-rank form (see [`ChainModel::closure_columns`]): A = P_{n-1}^T B G
+    /// (ROOT columns of the model's dimension, column-major), U = [A, E] on the free
+    /// set and Y = H0^{-1} U (2 ROOT columns), the capacitance S + U^T Y as its
+    /// eigendecomposition.
+    closure_a: Vec<f64>,
+    closure_u: Vec<f64>,
+    closure_y: Vec<f64>,
+    capacitance: Option<nalgebra::SymmetricEigen<f64, nalgebra::Const<14>>>,
+    scratch_rhs: Vec<f64>,
     // --- factors ---
     gain: Vec<Mat2x7>,
     pivot_inverse: Vec<Matrix2<f64>>,
@@ -60,6 +76,10 @@ pub struct ChainModel {
     root: Option<Cholesky<f64, nalgebra::Const<6>>>,
     feedforward: Vec<nalgebra::Vector2<f64>>,
     prefix: Vec<Vec6>,
+    /// The diagonal of the matrix, once computed for this model (every damping level
+    /// of one Newton iteration factorizes the same matrix).
+    diagonal: Vec<f64>,
+    diagonal_ready: bool,
 }
 
 impl Objective<'_> {
@@ -83,6 +103,7 @@ impl Objective<'_> {
         );
         model.segments = n;
         model.floating = lay.floating;
+        model.diagonal_ready = false;
         let base = lay.base_len();
         let twist = |a: usize| Vec6::from(ws.twists[a].to_array());
         // W_b = P Ω_b - tr(P) Ω_b + v_b × F at the first element b moves
@@ -160,7 +181,14 @@ impl Objective<'_> {
                 }
             }
         }
-        model.cross.clone_from(&ws.cross_blocks);
+        model.closure = None;
+        for (e1, e2, b) in &ws.cross_blocks {
+            assert!(
+                (*e1, *e2) == (n - 1, 0),
+                "a cross block other than the loop closure's"
+            );
+            *model.closure.get_or_insert_with(Mat8::zeros) += b;
+        }
     }
 }
 
@@ -230,21 +258,165 @@ impl ChainModel {
         if self.floating {
             let g0: Mat6 = self.blocks[0].fixed_view::<6, 6>(0, 0).into_owned();
             let s0 = s + g0;
-            for a in 0..6 {
+            for (a, o) in out.iter_mut().enumerate().take(6) {
                 let x = self.base_twists.column(a);
-                out[a] = x.dot(&(s0 * x)) + if a < 3 { self.base_local[(a, a)] } else { 0.0 };
+                *o = x.dot(&(s0 * x)) + if a < 3 { self.base_local[(a, a)] } else { 0.0 };
             }
         }
         self.prefix = prefix;
     }
 
+    /// The diagonal of the whole matrix (the chain's, [`Self::diagonal`], plus the
+    /// loop closure's), computed once per model.
+    pub fn cached_diagonal(&mut self) -> &[f64] {
+        if !self.diagonal_ready {
+            let mut d = std::mem::take(&mut self.diagonal);
+            d.resize(self.dimension(), 0.0);
+            self.diagonal(&mut d);
+            if self.closure.is_some() {
+                self.closure_columns();
+                // C = A E^T + E A^T: 2 A[r_j, j] on the diagonal at root unknown r_j
+                let nq = self.dimension();
+                for j in 0..ROOT {
+                    if let Some(r) = self.root_index(j) {
+                        d[r] += 2.0 * self.closure_a[j * nq + r];
+                    }
+                }
+            }
+            self.diagonal = d;
+            self.diagonal_ready = true;
+        }
+        &self.diagonal
+    }
+
+    /// Root unknown j (0..6 the floating base, 6 z_1) as an index of the unknowns.
+    fn root_index(&self, j: usize) -> Option<usize> {
+        match j {
+            6 => Some(self.c_index(1)),
+            _ if self.floating => Some(j),
+            _ => None,
+        }
+    }
+
+    /// The loop closure's coupling y_{n-1}^T B y_0 as a low-rank matrix. Element 0
+    /// moves only with the root unknowns r: y_0 = G r, G = [[Ξ_base, 0], [0, 0],
+    /// [0, 1]] (8 x ROOT). So the coupling's matrix is C = A E^T + E A^T, with E the
+    /// columns of the unit vectors of r and A = P_{n-1}^T B G, P_{n-1} the map from
+    /// the unknowns to y_{n-1} = (V_{n-1}, c_{n-1}, c_n = 0). Column j of A is the
+    /// gradient of the linear function (B G)_j . y_{n-1}, by the adjoint sweep of
+    /// [`Self::solve_chain`]: O(n) per column.
+    fn closure_columns(&mut self) {
+        let Some(b) = self.closure else { return };
+        let (n, nq) = (self.segments, self.dimension());
+        let mut g = Mat8x7::zeros();
+        for j in 0..6 {
+            g.fixed_view_mut::<6, 1>(0, j)
+                .copy_from(&self.base_twists.column(j));
+        }
+        g[(7, 6)] = 1.0;
+        let bg = b * g;
+        let base = if self.floating { 6 } else { 0 };
+        let mut a = std::mem::take(&mut self.closure_a);
+        a.clear();
+        a.resize(ROOT * nq, 0.0);
+        for j in 0..ROOT {
+            let col = &mut a[j * nq..(j + 1) * nq];
+            let pv: Vec6 = bg.fixed_view::<6, 1>(0, j).into_owned();
+            let mut pc = bg[(6, j)];
+            for k in (1..n).rev() {
+                let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
+                let (c, psi) = (base + k - 1, base + n - 1 + k - 1);
+                col[psi] = xp.dot(&pv);
+                pc += xc.dot(&pv);
+                col[c] = pc;
+            }
+            if self.floating {
+                let wrench = self.base_twists.transpose() * pv;
+                col[..6].copy_from_slice(wrench.as_slice());
+            }
+        }
+        self.closure_a = a;
+    }
+
     /// Factorize H + diag(shift) restricted to the unknowns with `free[i]` (the others
     /// are held at a zero step). False where it is not positive definite.
+    ///
+    /// With a loop closure H = H0 + U S U^T (U = [A, E], S = [[0, I], [I, 0]]), H0 the
+    /// chain: H0 is factorized by the sweep and H by Woodbury's identity with the
+    /// 14 x 14 capacitance K = S + U^T H0^{-1} U. By Haynsworth's inertia additivity
+    /// (on [[H0, U], [U^T, -S]]), In(H) = In(H0) + In(-K) - In(-S): with H0 positive
+    /// definite, H is exactly when K has ROOT positive and ROOT negative eigenvalues.
     pub fn factor(&mut self, free: &[bool], shift: &[f64]) -> bool {
-        assert!(
-            self.cross.is_empty(),
-            "loop closures need the Woodbury step (not built)"
-        );
+        if !self.factor_chain(free, shift) {
+            return false;
+        }
+        self.capacitance = None;
+        if self.closure.is_none() {
+            return true;
+        }
+        if !self.diagonal_ready {
+            self.cached_diagonal();
+        }
+        let nq = self.dimension();
+        self.closure_u.clear();
+        self.closure_u.resize(2 * ROOT * nq, 0.0);
+        for j in 0..ROOT {
+            let (u, a) = (
+                &mut self.closure_u[j * nq..(j + 1) * nq],
+                &self.closure_a[j * nq..(j + 1) * nq],
+            );
+            for ((u, a), &f) in u.iter_mut().zip(a).zip(free) {
+                if f {
+                    *u = *a;
+                }
+            }
+            if let Some(r) = self.root_index(j).filter(|&r| free[r]) {
+                self.closure_u[(ROOT + j) * nq + r] = 1.0;
+            }
+        }
+        let mut y = std::mem::take(&mut self.closure_y);
+        y.clear();
+        y.resize(2 * ROOT * nq, 0.0);
+        for j in 0..2 * ROOT {
+            let column = &self.closure_u[j * nq..(j + 1) * nq];
+            let mut rhs = std::mem::take(&mut self.scratch_rhs);
+            rhs.clear();
+            rhs.extend_from_slice(column);
+            let ok = self.solve_chain(&rhs, &mut y[j * nq..(j + 1) * nq]);
+            self.scratch_rhs = rhs;
+            if !ok {
+                self.closure_y = y;
+                return false;
+            }
+        }
+        let mut k = Mat14::zeros();
+        for i in 0..ROOT {
+            k[(i, ROOT + i)] = 1.0;
+            k[(ROOT + i, i)] = 1.0;
+        }
+        for i in 0..2 * ROOT {
+            let ui = &self.closure_u[i * nq..(i + 1) * nq];
+            for j in 0..2 * ROOT {
+                let yj = &y[j * nq..(j + 1) * nq];
+                k[(i, j)] += ui.iter().zip(yj).map(|(a, b)| a * b).sum::<f64>();
+            }
+        }
+        self.closure_y = y;
+        let k = (k + k.transpose()) * 0.5;
+        let eigen = nalgebra::SymmetricEigen::new(k);
+        let scale = eigen.eigenvalues.amax();
+        let tiny = 1e-13 * scale.max(1.0);
+        let positive = eigen.eigenvalues.iter().filter(|&&l| l > tiny).count();
+        let negative = eigen.eigenvalues.iter().filter(|&&l| l < -tiny).count();
+        if positive != ROOT || negative != ROOT || !scale.is_finite() {
+            return false;
+        }
+        self.capacitance = Some(eigen);
+        true
+    }
+
+    /// The chain's own factorization (no loop closure): see [`Self::factor`].
+    fn factor_chain(&mut self, free: &[bool], shift: &[f64]) -> bool {
         let n = self.segments;
         self.free.clear();
         self.free.extend_from_slice(free);
@@ -357,8 +529,38 @@ impl ChainModel {
     }
 
     /// Solve the factorized system for the right-hand side `rhs` (full length; held
-    /// entries ignored), writing the step to `out` (held entries 0).
+    /// entries ignored), writing the step to `out` (held entries 0). With a loop
+    /// closure, Woodbury: x = x0 - Y K^{-1} U^T x0, x0 = H0^{-1} rhs.
     pub fn solve(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
+        if !self.solve_chain(rhs, out) {
+            return false;
+        }
+        let Some(eigen) = self.capacitance.as_ref() else {
+            return self.closure.is_none();
+        };
+        let nq = self.dimension();
+        let mut t = Vec14::zeros();
+        for (i, ti) in t.iter_mut().enumerate() {
+            let ui = &self.closure_u[i * nq..(i + 1) * nq];
+            *ti = ui.iter().zip(out.iter()).map(|(a, b)| a * b).sum();
+        }
+        // K^{-1} t = Q Λ^{-1} Q^T t
+        let mut s = eigen.eigenvectors.transpose() * t;
+        for (si, l) in s.iter_mut().zip(eigen.eigenvalues.iter()) {
+            *si /= l;
+        }
+        let s = eigen.eigenvectors * s;
+        for (j, sj) in s.iter().enumerate() {
+            let yj = &self.closure_y[j * nq..(j + 1) * nq];
+            for (o, y) in out.iter_mut().zip(yj) {
+                *o -= y * sj;
+            }
+        }
+        out.iter().all(|v| v.is_finite())
+    }
+
+    /// The chain's solve (H0, no loop closure) with the last factorization.
+    fn solve_chain(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
         let n = self.segments;
         self.feedforward.clear();
         self.feedforward.resize(n, nalgebra::Vector2::zeros());
@@ -430,42 +632,41 @@ pub struct ChainMatrix {
     pub model: ChainModel,
     mask: Vec<bool>,
     shift: Vec<f64>,
-    diagonal: Vec<f64>,
     rhs: Vec<f64>,
     out: Vec<f64>,
 }
 
 impl crate::optim::NewtonMatrix for ChainMatrix {
     fn diagonal(&mut self, out: &mut [f64]) {
-        self.model.diagonal(out);
+        out.copy_from_slice(self.model.cached_diagonal());
     }
 
     fn out_of_range(&self, _free: &[usize]) -> bool {
         let m = &self.model;
-        let bad = |x: f64| !(x.abs() < 1e150);
+        let bad = |x: f64| !x.is_finite() || x.abs() >= 1e150;
         m.blocks.iter().any(|b| b.iter().any(|&x| bad(x)))
             || m.local.iter().any(|b| b.iter().any(|&x| bad(x)))
             || m.w_c
                 .iter()
                 .chain(&m.w_psi)
                 .any(|w| w.iter().any(|&x| bad(x)))
+            || m.closure.iter().any(|b| b.iter().any(|&x| bad(x)))
     }
 
     fn factor(&mut self, free: &[usize], damping: f64) -> bool {
         let nq = self.model.dimension();
-        self.diagonal.resize(nq, 0.0);
-        self.model.diagonal(&mut self.diagonal);
         self.mask.clear();
         self.mask.resize(nq, false);
+        let diagonal = self.model.cached_diagonal();
         let mut max_diag: f64 = 0.0;
         for &i in free {
             self.mask[i] = true;
-            max_diag = max_diag.max(self.diagonal[i].abs());
+            max_diag = max_diag.max(diagonal[i].abs());
         }
         let floor = crate::optim::damping_floor(max_diag);
         self.shift.clear();
         self.shift.extend(
-            self.diagonal
+            diagonal
                 .iter()
                 .map(|&d| crate::optim::damped_diagonal(d, damping, floor) - d),
         );

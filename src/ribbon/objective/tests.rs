@@ -375,9 +375,9 @@ fn newton_hessian_matches_finite_differences_in_torsion() {
     check_hessian(&terms, &history, strip, base, &q, true, &all);
 }
 
-/// The check has teeth: where the bending block is clamped to PSD (c_{n-1} ~ 3.4, c^2
-/// > 1/3, the one documented departure from the exact Hessian) it sees the difference,
-/// a few 1e-5 of the largest entry.
+/// The check has teeth: where the bending block is clamped to PSD (c_{n-1} ~ 3.4,
+/// c^2 > 1/3, the one documented departure from the exact Hessian) it sees the
+/// difference, a few 1e-5 of the largest entry.
 #[test]
 #[should_panic(expected = "vs fd")]
 fn hessian_check_sees_the_bending_clamp() {
@@ -458,12 +458,22 @@ fn substitution(lay: &Layout) -> DMatrix<f64> {
 #[test]
 fn chain_solve_is_the_dense_solve() {
     // the chain factorization solves (H_z + diag(shift)) d = r on the free set exactly as
-    // the dense Cholesky does, and fails exactly where it fails
-    for (i, floating) in [false, true].into_iter().enumerate() {
-        let n = 9 + i;
+    // the dense Cholesky does, and fails exactly where it fails: open ribbons and both
+    // loop closures (the Woodbury step), with the root unknowns held too
+    let closures = [
+        None,
+        Some(LoopKind::Orientable),
+        Some(LoopKind::NonOrientable),
+    ];
+    for (i, (floating, closure)) in [false, true]
+        .into_iter()
+        .flat_map(|f| closures.map(|c| (f, c)))
+        .enumerate()
+    {
+        let n = 9 + i % 2;
         let (strip, mut terms, history, mut q, base) =
             problem(n, floating, KineticModel::Full, 30 + i as u64);
-        with_closure(&mut terms, None, 31);
+        with_closure(&mut terms, closure, 31);
         if floating {
             q[0..3].copy_from_slice(&[0.3, -0.1, 0.2]);
         }
@@ -476,8 +486,7 @@ fn chain_solve_is_the_dense_solve() {
         let mut model = chain::ChainModel::default();
         obj.chain_model(&mut ws, &mut model);
         let nq = q.len();
-        let mut diagonal = vec![0.0; nq];
-        model.diagonal(&mut diagonal);
+        let diagonal = model.cached_diagonal().to_vec();
         for j in 0..nq {
             assert!(
                 (diagonal[j] - hz[(j, j)]).abs() <= 1e-10 * hz.amax(),
@@ -492,6 +501,7 @@ fn chain_solve_is_the_dense_solve() {
             (vec![], 1e-3),
             (vec![obj.layout.c(3), obj.layout.c(5)], 1e-1),
             (vec![obj.layout.psi(2)], 0.0),
+            (vec![obj.layout.c(1), 0, 4], 1e-2),
         ] {
             let free: Vec<bool> = (0..nq).map(|j| !held.contains(&j)).collect();
             let shift: Vec<f64> = (0..nq).map(|j| damping * hz[(j, j)].abs() + 1e-9).collect();
@@ -516,7 +526,7 @@ fn chain_solve_is_the_dense_solve() {
             for (r, &j) in idx.iter().enumerate() {
                 assert!(
                     (out[j] - expected[r]).abs() <= 1e-9 * scale,
-                    "unknown {j}: chain {} vs dense {} (floating {floating}, held {held:?})",
+                    "unknown {j}: chain {} vs dense {} (floating {floating}, {closure:?}, held {held:?})",
                     out[j],
                     expected[r]
                 );

@@ -175,18 +175,17 @@ impl SimNode {
 
     /// Send the held replies whose clients can receive them (see `reply`).
     pub(super) fn flush_replies(&mut self) {
-        let participant = self.io.context.domain_participant();
         let Flushed {
             sent,
             sent_unseen,
             failed,
-        } = self.io.services.flush(&participant, Instant::now());
+        } = self.io.flush_replies(Instant::now());
         self.stats.service_replies += sent + sent_unseen;
         self.stats.service_replies_unseen += sent_unseen + failed;
         if sent_unseen + failed > 0 {
             eprintln!(
                 "[developable_sim] warning: {} service repl{} sent although the \
-                 client's reply reader was not discovered within {} s, {failed} failed \
+                 client's reply reader was not matched within {} s, {failed} failed \
                  (is the client on the Cyclone DDS service mapping?)",
                 sent_unseen,
                 if sent_unseen == 1 { "y" } else { "ies" },

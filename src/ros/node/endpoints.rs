@@ -3,7 +3,7 @@
 //! publisher, and the services. Created together, dropped in a fixed order.
 
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use ros2_client::dds::rustdds::mio1::{Interest, Poll, Token, Waker};
 use ros2_client::Subscription;
@@ -18,6 +18,7 @@ use crate::ros::msgs::{
     Clock, MarkerArray, PoseStamped, RosMessage, SimStatus, SingularPoints, TFMessage,
 };
 use crate::ros::names::NodeNames;
+use crate::ros::reply::Flushed;
 use crate::ros::services::Services;
 use crate::scene::Scene;
 
@@ -132,6 +133,15 @@ impl Publishers<'_> {
 }
 
 impl Endpoints {
+    /// Send the held service replies whose clients can receive them (see `reply`).
+    pub(super) fn flush_replies(&mut self, now: Instant) -> Flushed {
+        let participant = self.context.domain_participant();
+        match &self.node {
+            Some(node) => self.services.flush(node, &participant, now),
+            None => Flushed::default(),
+        }
+    }
+
     /// Create every entity the node's scene and settings ask for (`use_sim_time`:
     /// follow an external clock, publish none; `tf_max_lag`, s); `tf_handles`:
     /// (handle, TF frame) of the handles that follow TF frames (they get no pose
