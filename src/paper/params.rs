@@ -122,10 +122,7 @@ pub struct PaperParams {
     /// Newton stops when the largest vertex update is below this, m. Default 1e-6
     /// (1e-5 of the sheet; step 3 restores lengths to ~1e-3 anyway).
     pub newton_tolerance: f64,
-    /// Phase I iterations of Schreck et al.'s length restoration (sec. 6.3: 200), at
-    /// most; 0 (the default) skips their phases I and II: the length projection that
-    /// follows them converges from the FEM step's positions, and from phase II's it
-    /// has further to go (docs/paper_simulator.md#isometry).
+    /// Phase I iterations of the length restoration, at most (sec. 6.3: 200).
     pub isometry_max_iterations: u32,
     /// Stiffness of the collision repulsion springs, N/m. Default 1e4.
     pub collision_stiffness: f64,
@@ -171,7 +168,7 @@ impl Default for PaperParams {
             plastic_angle: std::f64::consts::FRAC_PI_8,
             newton_max_iterations: 20,
             newton_tolerance: 1e-6,
-            isometry_max_iterations: 0,
+            isometry_max_iterations: 200,
             collision_stiffness: 1e4,
             collision_thickness: 5e-4,
             colliders: Vec::new(),

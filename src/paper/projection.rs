@@ -7,8 +7,8 @@
 //! stops after 200 iterations; phase II weighs every edge by its absolute residual, so
 //! the short edges next to a held corner take the residual: +128 % measured on
 //! paper_crumple, 2026-12-02). The paper is silent on what remains. We finish with the
-//! fast projection: the constraints are the edge strains C_e = |p_j - p_i| / l_e - 1
-//! (dimensionless, so a 1.7 mm edge counts as much as a 10 mm one), and each step
+//! fast projection: the constraints are the relative edge-length defects
+//! C_e = (|p_j - p_i|^2 / l_e^2 - 1) / 2 (dimensionless, ~ the strain), and each step
 //! solves (J M^-1 J^T) dlambda = C, dx = -M^-1 J^T dlambda with the held vertices of
 //! infinite mass (they do not move, as in the paper's phase II). By the push-through
 //! identity the step is dx = -(J^T J + mu M)^-1 J^T C, which we solve in the vertices
@@ -17,9 +17,6 @@
 //! damping that keeps the step defined where J is rank deficient (a flat part of the
 //! sheet has no first-order out-of-plane constraint) and that, when the held vertices
 //! make the lengths unreachable, gives the least-squares strain instead of a blow-up.
-//! J^T J is completed by the positive part of each edge's second derivative (a stretched
-//! edge's transverse stiffness), and each step is halved until sum C_e^2 decreases.
-//! (The squared form |d|^2 / l^2 - 1 stalls: a collapsed edge has no gradient.)
 
 use super::physical::PhysicalMesh;
 use super::sparse::BlockSpd;
@@ -40,8 +37,9 @@ fn measure(mesh: &PhysicalMesh, rest: &[f64], position: &[crate::geometry::Point
     let mut worst = 0.0f64;
     let mut merit = 0.0;
     for ([a, b], l) in mesh.edges.iter().zip(rest) {
-        let c = (position[*b as usize] - position[*a as usize]).norm() / l - 1.0;
-        worst = worst.max(c.abs());
+        let d2 = (position[*b as usize] - position[*a as usize]).norm_squared();
+        worst = worst.max((d2.sqrt() / l - 1.0).abs());
+        let c = 0.5 * (d2 / (l * l) - 1.0);
         merit += c * c;
     }
     (worst, merit)
@@ -101,29 +99,19 @@ pub fn project_lengths(
             mu *= 10.0;
             continue;
         }
-        // Gauss-Newton step, halved until the sum of C_e^2 decreases (a line search
-        // costs no solve); a step that does not descend at all gets more damping
-        let mut alpha = 1.0;
-        let mut accepted = false;
-        while alpha > 1.0 / 64.0 {
-            for (v, p) in trial.iter_mut().enumerate() {
-                let dx = Vector3::new(rhs[(3 * v, 0)], rhs[(3 * v + 1, 0)], rhs[(3 * v + 2, 0)]);
-                *p = mesh.position[v] + alpha * dx;
-            }
-            let (w, m) = measure(mesh, &rest, &trial);
-            if m.is_finite() && m < merit {
-                mesh.position.copy_from_slice(&trial);
-                (worst, merit) = (w, m);
-                accepted = true;
-                break;
-            }
-            alpha *= 0.5;
+        for (v, p) in trial.iter_mut().enumerate() {
+            *p = mesh.position[v]
+                + Vector3::new(rhs[(3 * v, 0)], rhs[(3 * v + 1, 0)], rhs[(3 * v + 2, 0)]);
         }
-        mu = if accepted {
-            (mu * 0.1).max(1e-6)
+        let (w, m) = measure(mesh, &rest, &trial);
+        if m.is_finite() && m < merit {
+            mesh.position.copy_from_slice(&trial);
+            (worst, merit) = (w, m);
+            mu = (mu * 0.1).max(1e-9);
         } else {
-            mu * 100.0
-        };
+            // Levenberg-Marquardt: a shorter, more gradient-like step
+            mu *= 10.0;
+        }
     }
     report.strain_after = worst;
     report
@@ -148,30 +136,14 @@ fn assemble(
     for ([i, j], l) in mesh.edges.iter().zip(rest) {
         let (i, j) = (*i as usize, *j as usize);
         let d = mesh.position[j] - mesh.position[i];
-        let len = d.norm();
-        // C_e = |d| / l - 1, dC/dp_j = d / (|d| l) = -dC/dp_i (a collapsed edge keeps
-        // a gradient: any direction, here x)
-        let g = if len > 1e-12 * l {
-            d / (len * l)
-        } else {
-            Vector3::x() / *l
-        };
-        let c = len / l - 1.0;
+        let l2 = l * l;
+        // dC/dp_j = d / l^2 = -dC/dp_i
+        let g = d / l2;
+        let c = 0.5 * (d.norm_squared() / l2 - 1.0);
         let mut block = [0.0; 9];
-        // the Hessian of C_e^2 / 2 is g g^T + C_e (1 - dh dh^T) / (|d| l); its
-        // transverse part is negative for a compressed edge (it may buckle either way)
-        // and is dropped there, kept for a stretched one (projected Newton: Gauss-Newton
-        // alone overshoots on stretched edges, 2026-12-02)
-        let t = (1.0 - l / len.max(1e-300)).max(0.0) / (l * l);
-        let dh = if len > 1e-12 * l {
-            d / len
-        } else {
-            Vector3::x()
-        };
         for r in 0..3 {
             for s in 0..3 {
-                let id = if r == s { 1.0 } else { 0.0 };
-                block[3 * r + s] = g[r] * g[s] + t * (id - dh[r] * dh[s]);
+                block[3 * r + s] = g[r] * g[s];
             }
         }
         a.add_block(i, i, &block);

@@ -17,15 +17,6 @@ use super::geometric::{
     Crease, CreaseKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
 };
 use super::isometry::{restore_lengths, IsometryReport};
-use super::projection::{project_lengths, ProjectionReport};
-
-/// The length projection stops below this largest |edge strain| (0.1 %, the
-/// accuracy of the paper's table III) ...
-const LENGTH_TOLERANCE: f64 = 1e-3;
-/// ... or after this many linear solves (3-6 where the sheet is smooth; more where
-/// it crumples: 20 left one edge of `paper_crumple --set seed=4` at 11 %, 40 at 7.4 %,
-/// 2026-12-02).
-const LENGTH_SOLVES: u32 = 40;
 use super::params::{PaperError, PaperParams};
 use super::pattern::Pattern;
 use super::physical::{build_physical, Interpolator, PhysicalMesh};
@@ -67,7 +58,6 @@ pub struct PaperFrameStats {
     pub junctions: JunctionReport,
     pub cones: ConeReport,
     pub isometry: IsometryReport,
-    pub projection: ProjectionReport,
 }
 
 /// One remeshing attempt of step 2 (see [`PaperFrameStats::crumple_attempts`]).
@@ -521,15 +511,8 @@ impl PaperSim {
             }
         }
         self.held = held;
-        // Schreck et al.'s phases I and II (sec. 6.3) when the scene asks for them
-        // (isometry_max_iterations > 0), then the fast projection onto the pattern's
-        // edge lengths (docs/paper_simulator.md#isometry)
-        if self.params.isometry_max_iterations > 0 {
-            self.frame.isometry =
-                restore_lengths(&mut self.sp, &fixed, self.params.isometry_max_iterations);
-        }
-        self.frame.projection =
-            project_lengths(&mut self.sp, &fixed, LENGTH_TOLERANCE, LENGTH_SOLVES);
+        self.frame.isometry =
+            restore_lengths(&mut self.sp, &fixed, self.params.isometry_max_iterations);
         self.gmesh = gmesh;
         // S_G vertices are the first S_P vertices: their final positions
         for (v, g) in self.gmesh.vertices.iter_mut().enumerate() {
