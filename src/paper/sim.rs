@@ -574,13 +574,14 @@ impl PaperSim {
     /// Display mesh, singular points, frame statistics from S_P and S_G.
     fn rebuild_outputs(&mut self) {
         let sp = &self.sp;
-        self.mesh = SurfaceMesh {
-            vertices: sp.position.clone(),
-            triangles: sp.triangles.clone(),
-            material: sp.material.clone(),
-            rulings: sp.rulings.clone(),
-            regions: sp.region.clone(),
-        };
+        // copied into the display mesh's own buffers (clone_from reuses them: no
+        // allocation per frame once the mesh has reached its size)
+        let mesh = &mut self.mesh;
+        mesh.vertices.clone_from(&sp.position);
+        mesh.triangles.clone_from(&sp.triangles);
+        mesh.material.clone_from(&sp.material);
+        mesh.rulings.clone_from(&sp.rulings);
+        mesh.regions.clone_from(&sp.region);
         self.singular = self
             .layer
             .singular
