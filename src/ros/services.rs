@@ -27,7 +27,17 @@ use super::reply::{ClientWriters, Flushed, HeldReplies};
 pub struct Service<Req: Message + 'static, Resp: Message + 'static> {
     server: Server<Req, Resp>,
     replies: HeldReplies<Resp>,
+    /// The service's ROS name, for the unreadable-request warning.
+    name: String,
+    /// True while requests keep failing to read: the warning is printed once per
+    /// such episode, not once per request.
+    failing: bool,
 }
+
+/// Requests a single `receive` skips past when they fail to read (deserialize or
+/// unwrap), so one bad sample does not stall the good ones queued behind it until
+/// the next wake, yet a reader that fails forever cannot spin the loop.
+const MAX_UNREADABLE_PER_CALL: usize = 16;
 
 impl<Req: Message + Clone + 'static, Resp: Message + 'static> Service<Req, Resp> {
     fn new(
@@ -56,12 +66,36 @@ impl<Req: Message + Clone + 'static, Resp: Message + 'static> Service<Req, Resp>
             .register(&mut server, Token(ctx.token), Interest::READABLE)?;
         ctx.token += 1;
         let replies = HeldReplies::new(n.to_dds_name("rq", ctx.node_name, "Request"));
-        Ok(Service { server, replies })
+        Ok(Service {
+            server,
+            replies,
+            name: name.to_string(),
+            failing: false,
+        })
     }
 
-    /// The next request, if any.
+    /// The next request, if any. A request that cannot be read is reported on stderr
+    /// (once per run of failures, naming the service) and skipped, never dropped
+    /// silently: a client waiting on it would otherwise see only a missing reply.
     pub fn receive(&mut self) -> Option<(RmwRequestId, Req)> {
-        self.server.receive_request().ok().flatten()
+        for _ in 0..MAX_UNREADABLE_PER_CALL {
+            match self.server.receive_request() {
+                Ok(next) => {
+                    self.failing = false;
+                    return next;
+                }
+                Err(e) => {
+                    if !self.failing {
+                        eprintln!(
+                            "warning: service {}: unreadable request dropped: {e:?}",
+                            self.name
+                        );
+                    }
+                    self.failing = true;
+                }
+            }
+        }
+        None
     }
 
     /// Hold the reply to `id` until its client can receive it.
