@@ -231,7 +231,7 @@ fn lbfgsb_baseline_reaches_the_same_final_shape_on_a_unique_path() {
             "solver.max_iterations=20000",
         ],
     );
-    assert_eq!(sn.solver.kind, "gauss_newton");
+    assert_eq!(sn.solver.kind, "chain");
     assert_eq!(sb.solver.kind, "lbfgsb");
     assert_eq!(sb.solver.unconverged_steps, 0);
     let rms = ribbon_rms(&newton, &lbfgsb);

@@ -323,7 +323,7 @@ seed: 0
 gravity: [0.0, 0.0, 0.0] # m/s^2: free flight, the impact only
 
 solver:
-  kind: gauss_newton     # gauss_newton | lbfgsb; default gauss_newton
+  kind: chain          # chain (ours, O(n) per Newton iteration) | gauss_newton (the same method, dense; baseline) | lbfgsb (the paper's); default chain
   max_outer_iterations: 50   # augmented-Lagrangian rounds (loop constraints); default 20
 
 contact:
@@ -416,7 +416,7 @@ seed: 0
 gravity: [0.0, 0.0, -9.81]   # m/s^2
 
 solver:
-  kind: gauss_newton
+  kind: chain          # chain (ours, O(n) per Newton iteration) | gauss_newton (the same method, dense; baseline) | lbfgsb (the paper's); default chain
   max_outer_iterations: 50   # augmented-Lagrangian rounds (loop constraints); default 20
 
 colliders:

@@ -18,13 +18,15 @@ pub enum KineticModel {
 /// Which optimizer solves one implicit-Euler step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SolverKind {
-    /// Ours: projected Gauss-Newton on the exact least-squares structure of the
-    /// objective, with the O(n) twist-suffix assembly and a dense Cholesky (faer).
+    /// Ours, dense: projected Newton on the exact Hessian of the objective, assembled
+    /// densely and factorized by a dense Cholesky (faer), O(n^3) per iteration; the
+    /// baseline of [`SolverKind::Chain`], which takes the same iterates.
     GaussNewton,
     /// The paper's: L-BFGS-B inside the augmented Lagrangian (algorithm 2).
     Lbfgsb,
-    /// Ours: the same projected Newton method (line search, held variables, damping,
-    /// adaptive penalty) with the Newton system solved along the chain in O(n)
+    /// Ours, the default: the same projected Newton method (line search, held
+    /// variables, damping, adaptive penalty) with the Newton system solved along the
+    /// chain in O(n)
     /// (`ribbon::objective::chain`, docs/ribbon_chain_solver.md); a loop closure's
     /// coupling of the two ends by a Woodbury step on top of the sweep.
     Chain,
@@ -98,7 +100,7 @@ pub struct SolverSettings {
 impl Default for SolverSettings {
     fn default() -> Self {
         SolverSettings {
-            kind: SolverKind::GaussNewton,
+            kind: SolverKind::Chain,
             tolerance: 1e-6,
             max_iterations: 200,
             penalty: 1e3,
