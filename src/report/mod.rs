@@ -25,6 +25,7 @@ pub mod plan;
 mod plot;
 pub mod report_error;
 
+pub use plot::write_lines;
 pub use report_error::ReportError;
 
 use std::path::{Path, PathBuf};

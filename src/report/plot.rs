@@ -159,6 +159,42 @@ pub(super) fn write_log_log(path: &Path, plot: &LogLogPlot) -> Result<(), Report
     Ok(())
 }
 
+/// A log-log plot of named series, each a line through filled markers, as a 900 x 600
+/// px PNG: for measurements outside the report, such as the step time against n of
+/// `cargo bench --bench ribbon -- step_vs_n` (examples/step_vs_n_plot.rs).
+pub fn write_lines(
+    path: &Path,
+    title: &str,
+    (x_desc, y_desc): (&str, &str),
+    series: &[(String, Vec<(f64, f64)>)],
+) -> Result<(), ReportError> {
+    const PALETTE: [RGBColor; 5] = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(148, 103, 189),
+        RGBColor(127, 127, 127),
+    ];
+    let series = series
+        .iter()
+        .enumerate()
+        .map(|(i, (label, points))| Series {
+            label: Some(label.clone()),
+            color: PALETTE[i % PALETTE.len()],
+            points: points.clone(),
+            line: true,
+        })
+        .collect();
+    let plot = LogLogPlot {
+        title,
+        x_desc,
+        y_desc,
+        series,
+        level: None,
+    };
+    write_log_log(path, &plot)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -197,6 +233,24 @@ mod tests {
         assert_eq!(err.to_string(), "t: no run to plot");
         assert!(!path.exists());
         write_log_log(&path, &plot(vec![(1.0, 1e-3), (2.0, 5e-4)], None)).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    }
+
+    #[test]
+    fn write_lines_draws_every_series_and_refuses_an_empty_plot() {
+        let dir = std::env::temp_dir().join(format!("plot_lines_test_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("lines.png");
+        let axes = ("n", "ms");
+        let err = write_lines(&path, "empty", axes, &[]).unwrap_err();
+        assert_eq!(err.to_string(), "empty: no run to plot");
+        let series = [
+            ("a".to_string(), vec![(50.0, 0.8), (100.0, 1.6)]),
+            ("b".to_string(), vec![(50.0, 0.9), (100.0, 4.0)]),
+        ];
+        write_lines(&path, "t", axes, &series).unwrap();
         let bytes = std::fs::read(&path).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
