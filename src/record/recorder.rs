@@ -284,18 +284,8 @@ impl SessionRecorder {
         Ok(())
     }
 
-    /// Flush the open chunk now.
-    pub fn flush(&mut self) -> Result<(), RecordError> {
-        self.bag.flush()
-    }
-
     pub fn dir(&self) -> &Path {
         self.bag.dir()
-    }
-
-    /// Why recording stopped, if it did.
-    pub fn failure(&self) -> Option<&str> {
-        self.bag.failure()
     }
 
     /// Messages written per topic.

@@ -29,7 +29,7 @@
 //!
 //! [`ObjectStepReport::work_bound`]: crate::sim::ObjectStepReport::work_bound
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -695,11 +695,6 @@ pub fn run_suite(
     Ok(report)
 }
 
-/// The default config folder: `config/` of the working directory.
-pub fn default_config() -> PathBuf {
-    PathBuf::from("config")
-}
-
 /// The pass/fail table and how to read it.
 pub fn markdown(report: &StressReport) -> String {
     let mut s = String::new();
@@ -775,6 +770,8 @@ pub fn markdown(report: &StressReport) -> String {
 
 #[cfg(test)]
 mod tests {
+    use std::path::PathBuf;
+
     use super::*;
 
     fn config() -> PathBuf {
