@@ -64,12 +64,12 @@ pub struct SessionInfo {
 
 /// The bag topic of a handle's failed TF lookups: beside its input topic, so it reads as
 /// "what became of that handle's input".
-pub fn tf_failure_topic(handle_topic: &str) -> String {
+fn tf_failure_topic(handle_topic: &str) -> String {
     format!("{handle_topic}/tf_lookup_failed")
 }
 
 impl SessionInfo {
-    pub fn to_record(&self) -> BTreeMap<String, String> {
+    fn to_record(&self) -> BTreeMap<String, String> {
         let mut m = BTreeMap::new();
         m.insert("format".into(), "1".into());
         m.insert("version".into(), env!("CARGO_PKG_VERSION").into());

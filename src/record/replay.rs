@@ -421,7 +421,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
 
 /// Status fields that depend on the wall clock or on the node's run state, not on the
 /// simulation: not compared.
-pub const WALL_CLOCK_STATUS_FIELDS: &[&str] = &[
+const WALL_CLOCK_STATUS_FIELDS: &[&str] = &[
     "step_duration",
     "overrun_ticks",
     "dropped_publications",
