@@ -48,7 +48,7 @@ fn a_chain_step_allocates_the_same_whatever_its_iteration_count() {
         // update (per round, not per iteration)
         "solver.max_outer_iterations=1".to_string(),
     ];
-    let mut s = scene::load(&path, &sets).expect("scene");
+    let mut s = scene::load(path, &sets).expect("scene");
     assert_eq!(
         s.world
             .object_as::<RibbonSim>(0)
