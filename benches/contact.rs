@@ -10,25 +10,13 @@
 //!
 //! Run: `cargo bench --bench contact` (add `-- overhead` etc. to filter).
 
-use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use developable_sim::scene::{self, Scene};
+use developable_sim::scene;
 
-fn load(name: &str, sets: &[String]) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config/scenes")
-        .join(format!("{name}.yaml"));
-    scene::load(&path, sets).expect("scene")
-}
-
-fn warmed(mut s: Scene, warm: usize) -> Scene {
-    for _ in 0..warm {
-        s.world.step(&[]);
-    }
-    s
-}
+mod common;
+use common::{step_from, warm, warmed};
 
 const FREE: &str = "duration: 1.0\ndt: 0.01\nribbon:\n  segments: 50\n  base: {mode: floating, position: [0, 0, 0.5]}\n";
 
@@ -47,17 +35,11 @@ fn overhead(c: &mut Criterion) {
         + "colliders:\n  - {kind: plane}\ncontact: {thickness: 0.002}\n";
     let resting = scene::load_str(&resting, Path::new("resting.yaml"), &[]).expect("scene");
     for (name, base) in [
-        ("no_colliders", warmed(free, 5)),
-        ("far_ground", warmed(far, 5)),
-        ("resting", warmed(resting, 5)),
+        ("no_colliders", warm(free, 5)),
+        ("far_ground", warm(far, 5)),
+        ("resting", warm(resting, 5)),
     ] {
-        group.bench_function(name, |b| {
-            b.iter_batched(
-                || base.clone(),
-                |mut s| black_box(s.world.step(&[])),
-                criterion::BatchSize::LargeInput,
-            )
-        });
+        group.bench_function(name, step_from(&base));
     }
     group.finish();
 }
@@ -71,14 +53,8 @@ fn scenes(c: &mut Criterion) {
         ("ribbon_mobius_chain", 25),
         ("ribbon_gripper_push", 60),
     ] {
-        let base = warmed(load(name, &[]), warm);
-        group.bench_function(name, |b| {
-            b.iter_batched(
-                || base.clone(),
-                |mut s| black_box(s.world.step(&[])),
-                criterion::BatchSize::LargeInput,
-            )
-        });
+        let base = warmed(name, &[], warm);
+        group.bench_function(name, step_from(&base));
     }
     group.finish();
 }
@@ -88,19 +64,11 @@ fn closeness(c: &mut Criterion) {
     group.sample_size(10);
     for kind in ["stiff", "plain"] {
         let base = warmed(
-            load(
-                "ribbon_double_chain",
-                &[format!("contact.closeness={kind}")],
-            ),
+            "ribbon_double_chain",
+            &[format!("contact.closeness={kind}")],
             15,
         );
-        group.bench_function(BenchmarkId::new("double_chain", kind), |b| {
-            b.iter_batched(
-                || base.clone(),
-                |mut s| black_box(s.world.step(&[])),
-                criterion::BatchSize::LargeInput,
-            )
-        });
+        group.bench_function(BenchmarkId::new("double_chain", kind), step_from(&base));
     }
     group.finish();
 }

@@ -11,28 +11,13 @@
 //! to filter); `python3 tools/step_vs_n.py` prints the step_vs_n medians as JSON.
 
 use std::hint::black_box;
-use std::path::Path;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use developable_sim::ribbon::objective::GradientMode;
 use developable_sim::ribbon::{RibbonSim, SolverKind};
-use developable_sim::scene::{self, Scene};
 
-fn load(name: &str, sets: &[String]) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config/scenes")
-        .join(format!("{name}.yaml"));
-    scene::load(&path, sets).expect("scene")
-}
-
-/// A scene advanced `warm` steps, so the step measured is mid-motion.
-fn warmed(name: &str, sets: &[String], warm: usize) -> Scene {
-    let mut s = load(name, sets);
-    for _ in 0..warm {
-        s.world.step(&[]);
-    }
-    s
-}
+mod common;
+use common::{step_from, warmed};
 
 fn step_per_scene(c: &mut Criterion) {
     let mut group = c.benchmark_group("step");
@@ -46,13 +31,7 @@ fn step_per_scene(c: &mut Criterion) {
         ("mobius_band", 5),
     ] {
         let base = warmed(name, &[], warm);
-        group.bench_function(BenchmarkId::new("newton", name), |b| {
-            b.iter_batched(
-                || base.clone(),
-                |mut s| black_box(s.world.step(&[])),
-                criterion::BatchSize::LargeInput,
-            )
-        });
+        group.bench_function(BenchmarkId::new("newton", name), step_from(&base));
     }
     let base = warmed(
         "ribbon_extreme_torsion",
@@ -60,13 +39,10 @@ fn step_per_scene(c: &mut Criterion) {
         50,
     );
     group.sample_size(10);
-    group.bench_function(BenchmarkId::new("lbfgsb", "ribbon_extreme_torsion"), |b| {
-        b.iter_batched(
-            || base.clone(),
-            |mut s| black_box(s.world.step(&[])),
-            criterion::BatchSize::LargeInput,
-        )
-    });
+    group.bench_function(
+        BenchmarkId::new("lbfgsb", "ribbon_extreme_torsion"),
+        step_from(&base),
+    );
     group.finish();
 }
 
@@ -123,13 +99,7 @@ fn step_vs_n(c: &mut Criterion) {
                 .params
                 .solver
                 .kind = kind;
-            group.bench_function(BenchmarkId::new(kind_name(kind), n), |b| {
-                b.iter_batched(
-                    || start.clone(),
-                    |mut s| black_box(s.world.step(&[])),
-                    criterion::BatchSize::LargeInput,
-                )
-            });
+            group.bench_function(BenchmarkId::new(kind_name(kind), n), step_from(&start));
         }
     }
     group.finish();

@@ -18,110 +18,20 @@ goes back to the scene's scripted trajectory only after a reset (the last pose h
 import argparse
 import math
 import os
+import sys
 import time
-from dataclasses import dataclass, field
+from pathlib import Path
 
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
-from cyclonedds.idl import IdlStruct
-from cyclonedds.idl import types as t
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
 
-
-@dataclass
-class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: t.int32 = 0
-    nanosec: t.uint32 = 0
-
-
-@dataclass
-class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time = field(default_factory=Time)
-    frame_id: str = ""
-
-
-@dataclass
-class Point(IdlStruct, typename="geometry_msgs::msg::dds_::Point_"):
-    x: t.float64 = 0.0
-    y: t.float64 = 0.0
-    z: t.float64 = 0.0
-
-
-@dataclass
-class Quaternion(IdlStruct, typename="geometry_msgs::msg::dds_::Quaternion_"):
-    x: t.float64 = 0.0
-    y: t.float64 = 0.0
-    z: t.float64 = 0.0
-    w: t.float64 = 1.0
-
-
-@dataclass
-class Pose(IdlStruct, typename="geometry_msgs::msg::dds_::Pose_"):
-    position: Point = field(default_factory=Point)
-    orientation: Quaternion = field(default_factory=Quaternion)
-
-
-@dataclass
-class PoseStamped(IdlStruct, typename="geometry_msgs::msg::dds_::PoseStamped_"):
-    header: Header = field(default_factory=Header)
-    pose: Pose = field(default_factory=Pose)
-
-
-@dataclass
-class HandleStatus(IdlStruct, typename="developable_sim::msg::dds_::HandleStatus_"):
-    name: str = ""
-    topic: str = ""
-    external: bool = False
-    target: Pose = field(default_factory=Pose)
-    last_stamp: Time = field(default_factory=Time)
-    accepted: t.uint64 = 0
-    normalized: t.uint64 = 0
-    rejected_non_finite: t.uint64 = 0
-    rejected_zero_quaternion: t.uint64 = 0
-    rejected_stale_stamp: t.uint64 = 0
-    rejected_unknown_frame: t.uint64 = 0
-    rejected_future_stamp: t.uint64 = 0
-    tf_frame: str = ""
-    rejected_tf_lookup: t.uint64 = 0
-
-
-@dataclass
-class SimStatus(IdlStruct, typename="developable_sim::msg::dds_::SimStatus_"):
-    header: Header = field(default_factory=Header)
-    object_name: str = ""
-    scene_name: str = ""
-    sim_time: t.float64 = 0.0
-    step: t.uint64 = 0
-    episode: t.uint32 = 0
-    dt: t.float64 = 0.0
-    paused: bool = False
-    step_duration: t.float64 = 0.0
-    solver_iterations: t.uint32 = 0
-    outer_iterations: t.uint32 = 0
-    converged: bool = False
-    kept_previous_state: bool = False
-    kinetic_energy: t.float64 = 0.0
-    elastic_energy: t.float64 = 0.0
-    gravity_energy: t.float64 = 0.0
-    external_energy: t.float64 = 0.0
-    total_energy: t.float64 = 0.0
-    isometry_error: t.float64 = 0.0
-    constraint_violation: t.float64 = 0.0
-    singular_point_count: t.uint32 = 0
-    compression_mean_pct: t.float64 = 0.0
-    compressed_edges_pct: t.float64 = 0.0
-    strain_mean_pct: t.float64 = 0.0
-    strain_max_pct: t.float64 = 0.0
-    strained_edges_pct: t.float64 = 0.0
-    overrun_ticks: t.uint64 = 0
-    dropped_publications: t.uint64 = 0
-    rejected_inputs: t.uint64 = 0
-    unconverged_steps: t.uint64 = 0
-    rejected_steps: t.uint64 = 0
-    handles: t.sequence[HandleStatus] = field(default_factory=list)
+# the message types, written once for the Python tests and the scripts
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "python"))
+from ros_types import Header, Point, Pose, PoseStamped, Quaternion, SimStatus, Time  # noqa: E402
 
 
 def main() -> None:

@@ -52,8 +52,9 @@ pub struct Image {
 }
 
 impl Image {
-    /// The colour of pixel (x, y).
-    pub fn pixel(&self, x: u32, y: u32) -> [u8; 3] {
+    /// The colour of pixel (x, y) (the tests read the picture through it).
+    #[cfg(test)]
+    fn pixel(&self, x: u32, y: u32) -> [u8; 3] {
         let i = 3 * (y * self.width + x) as usize;
         [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
     }
@@ -124,7 +125,7 @@ pub fn render_png(
 }
 
 /// Write `image` as an 8-bit RGB PNG.
-pub fn write_png(image: &Image, path: &Path) -> Result<(), RenderError> {
+fn write_png(image: &Image, path: &Path) -> Result<(), RenderError> {
     let file = std::fs::File::create(path).map_err(|source| RenderError::Io {
         path: path.to_path_buf(),
         source,

@@ -112,7 +112,7 @@ impl PhaseClock for PhaseTimer {
 }
 
 /// Median wall time of one objective + adjoint gradient evaluation, microseconds.
-pub fn gradient_cost_us(scene: &mut Scene) -> f64 {
+fn gradient_cost_us(scene: &mut Scene) -> f64 {
     let mut samples = Vec::new();
     let mut g = Vec::new();
     for object in scene.world.objects_mut() {

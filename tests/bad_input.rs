@@ -3,24 +3,14 @@
 //! disk that fills while recording ends the run with a clear error and a bag whose
 //! recorded messages are all still readable (and `bag reindex` repairs it).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 use developable_sim::record::read::scan;
 use developable_sim::scene;
 
-const TORSION: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/config/scenes/ribbon_extreme_torsion.yaml"
-);
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("bad_input_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::{metadata, scratch, TORSION};
 
 fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_developable_sim"))
@@ -89,23 +79,20 @@ fn a_missing_scene_or_an_unwritable_bag_folder_is_named_with_the_cause() {
     assert!(!e.contains("panicked"), "{e}");
 }
 
-/// The MCAP file grows past RLIMIT_FSIZE (`ulimit -f`, 512-byte blocks) like a full disk:
-/// with SIGXFSZ ignored (the disposition survives exec) the write fails with EFBIG.
-#[test]
-fn a_full_disk_while_recording_ends_the_run_clearly_and_keeps_the_bag_readable() {
+/// Run the binary with `args` (quoted for sh) while its files may not grow past
+/// RLIMIT_FSIZE = 64 blocks of 512 bytes (`ulimit -f`), like a disk full at 32 KiB: a
+/// few hundred messages of the torsion scene fit, a 2 s run does not. With SIGXFSZ
+/// ignored (the disposition survives exec) the write past it fails with EFBIG. Asserts
+/// that the run fails with exit code 2 and does not panic; returns its stderr, or None
+/// (and says it skipped) without /bin/sh.
+fn under_a_full_disk(args: &str) -> Option<String> {
     if !Path::new("/bin/sh").exists() {
         eprintln!("skipped: no /bin/sh");
-        return;
+        return None;
     }
-    let dir = scratch("full_disk");
-    let bag = dir.join("bag");
-    // 64 blocks = 32 KiB: a few hundred messages of the torsion scene fit, a 2 s run
-    // does not
     let script = format!(
-        "trap '' XFSZ; ulimit -f 64 && exec '{}' run '{}' --record '{}'",
+        "trap '' XFSZ; ulimit -f 64 && exec '{}' {args}",
         env!("CARGO_BIN_EXE_developable_sim"),
-        TORSION,
-        bag.display()
     );
     let out = Command::new("/bin/sh")
         .args(["-c", &script])
@@ -114,6 +101,17 @@ fn a_full_disk_while_recording_ends_the_run_clearly_and_keeps_the_bag_readable()
     let e = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{e}");
     assert!(!e.contains("panicked"), "{e}");
+    Some(e)
+}
+
+#[test]
+fn a_full_disk_while_recording_ends_the_run_clearly_and_keeps_the_bag_readable() {
+    let dir = scratch("full_disk");
+    let bag = dir.join("bag");
+    let args = format!("run '{TORSION}' --record '{}'", bag.display());
+    let Some(e) = under_a_full_disk(&args) else {
+        return;
+    };
     // the error names the bag file and the cause
     assert!(e.contains("bag_0.mcap"), "{e}");
     assert!(e.contains("File too large"), "{e}");
@@ -129,8 +127,7 @@ fn a_full_disk_while_recording_ends_the_run_clearly_and_keeps_the_bag_readable()
     let after = scan(&mcap).unwrap();
     assert!(after.complete, "reindex writes a complete file");
     assert_eq!(after.message_count(), before.message_count());
-    let meta: developable_sim::record::metadata::MetadataFile =
-        serde_yaml::from_str(&std::fs::read_to_string(bag.join("metadata.yaml")).unwrap()).unwrap();
+    let meta = metadata(&bag);
     assert_eq!(
         meta.rosbag2_bagfile_information.message_count,
         after.message_count()
@@ -144,28 +141,18 @@ fn a_full_disk_while_recording_ends_the_run_clearly_and_keeps_the_bag_readable()
 /// holds what was written before the failure, and replays identical up to there.
 #[test]
 fn a_full_disk_while_the_node_records_is_logged_once_and_the_node_goes_on() {
-    if !Path::new("/bin/sh").exists() {
-        eprintln!("skipped: no /bin/sh");
-        return;
-    }
     let dir = scratch("node_full_disk");
     let bag = dir.join("bag");
     let domain = (100 + std::process::id() % 100).to_string();
     // as fast as possible: 200 steps of the torsion scene, far more than 32 KiB
-    let script = format!(
-        "trap '' XFSZ; ulimit -f 64 && exec '{}' node '{}' --as-fast-as-possible --duration 2 \
-         --domain-id {domain} --record '{}'",
-        env!("CARGO_BIN_EXE_developable_sim"),
-        TORSION,
+    let args = format!(
+        "node '{TORSION}' --as-fast-as-possible --duration 2 --domain-id {domain} \
+         --record '{}'",
         bag.display()
     );
-    let out = Command::new("/bin/sh")
-        .args(["-c", &script])
-        .output()
-        .unwrap();
-    let e = stderr(&out);
-    assert_eq!(out.status.code(), Some(2), "{e}");
-    assert!(!e.contains("panicked"), "{e}");
+    let Some(e) = under_a_full_disk(&args) else {
+        return;
+    };
     let stopped: Vec<&str> = e
         .lines()
         .filter(|l| l.contains("recording stopped"))
@@ -201,8 +188,7 @@ fn a_full_disk_while_the_node_records_is_logged_once_and_the_node_goes_on() {
         status_count > 0 && status_count < 201,
         "the failure came before the end: {status_count} statuses"
     );
-    let meta: developable_sim::record::metadata::MetadataFile =
-        serde_yaml::from_str(&std::fs::read_to_string(bag.join("metadata.yaml")).unwrap()).unwrap();
+    let meta = metadata(&bag);
     assert_eq!(meta.rosbag2_bagfile_information.message_count, recorded);
     // replay compares everything up to the failure, and finds it identical
     let out = bin().arg("replay").arg(&bag).output().unwrap();

@@ -6,6 +6,9 @@ use std::path::{Path, PathBuf};
 use developable_sim::runner;
 use developable_sim::scene;
 
+mod common;
+use common::{lowest_z, scratch};
+
 const ONE: &str = "duration: 0.05\ndt: 0.01\nribbon:\n  segments: 10\n  base: {mode: floating, position: [0, 0, 0.2]}\n";
 
 fn load_err(text: &str) -> String {
@@ -68,7 +71,7 @@ fn a_contact_section_alone_builds_ribbon_ribbon_contact() {
 
 #[test]
 fn a_ribbon_lands_on_a_mesh_collider_read_from_an_obj_file() {
-    let dir = std::env::temp_dir().join(format!("contact_mesh_{}", std::process::id()));
+    let dir = scratch("mesh");
     std::fs::create_dir_all(dir.join("meshes")).unwrap();
     // a 2 m x 2 m square at z = 0.05 as two triangles
     std::fs::write(
@@ -86,13 +89,7 @@ fn a_ribbon_lands_on_a_mesh_collider_read_from_an_obj_file() {
         assert!(r.contact.unwrap().report.resolved);
     }
     // resting on the mesh: h/2 above its surface, not fallen through
-    let zmin = s
-        .world
-        .mesh(0)
-        .vertices
-        .iter()
-        .map(|v| v.z)
-        .fold(f64::INFINITY, f64::min);
+    let zmin = lowest_z(s.world.mesh(0));
     assert!(
         (zmin - 0.051).abs() < 1e-4,
         "lowest vertex at {zmin} m, the mesh is at 0.05 m"

@@ -8,7 +8,7 @@
 //! must stay h/2 from a collider surface and h from another ribbon's mid-surface. The
 //! accepted slack is 1e-4 m (the bound); the stage resolves to 1e-6 m.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use developable_sim::geometry::{Point3, Pose};
 use developable_sim::ribbon::RibbonSim;
@@ -17,19 +17,11 @@ use developable_sim::sim::StepReport;
 use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::TriMesh;
 
+mod common;
+use common::{load, lowest_z};
+
 /// Accepted overlap of thickened surfaces, m.
 const SLACK: f64 = 1e-4;
-
-fn scene_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config/scenes")
-        .join(format!("{name}.yaml"))
-}
-
-fn load(name: &str, sets: &[&str]) -> Scene {
-    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    scene::load(&scene_path(name), &sets).unwrap_or_else(|e| panic!("{name}: {e}"))
-}
 
 /// The smallest separation margin over all vertices, m: min over colliders of
 /// (signed distance - h/2) and over other ribbons of (distance - h). Negative means
@@ -115,13 +107,7 @@ fn falling_ribbon_stays_above_the_ground_and_its_correction_does_not_accumulate(
     let (s, reports) = run_checked("ribbon_falling", &["duration=0.6"]);
     // it has landed: the lowest vertex rests at h/2
     let h = s.world.contact_stage().unwrap().settings().thickness;
-    let zmin = s
-        .world
-        .mesh(0)
-        .vertices
-        .iter()
-        .map(|v| v.z)
-        .fold(f64::INFINITY, f64::min);
+    let zmin = lowest_z(s.world.mesh(0));
     assert!((zmin - 0.5 * h).abs() < 1e-5, "lowest vertex at {zmin} m");
     // the developability error after contact (|X - X~|) of the resting steps is the
     // one-step gravity sag g h^2 ~ 1e-3 m, bounded, not growing with time

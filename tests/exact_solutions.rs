@@ -11,19 +11,14 @@ use std::process::Command;
 use developable_sim::report::exact::{vibration_bending_angles, ExactProblem, VIBRATION_TIP};
 use developable_sim::report::exact_run::{problem_of, run_exact_scene};
 
-fn scene(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config/scenes")
-        .join(format!("{name}.yaml"))
-}
+mod common;
+use common::{scene_path, scratch};
 
 /// A copy of a scene with `from` replaced by `to` in its text, in a fresh folder.
 fn variant(name: &str, dir: &str, from: &str, to: &str) -> PathBuf {
-    let text = std::fs::read_to_string(scene(name)).unwrap();
+    let text = std::fs::read_to_string(scene_path(name)).unwrap();
     assert!(text.contains(from), "{name} has no `{from}`");
-    let folder = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(dir);
-    let _ = std::fs::remove_dir_all(&folder);
-    std::fs::create_dir_all(&folder).unwrap();
+    let folder = scratch(dir);
     let file = folder.join(format!("{name}.yaml"));
     std::fs::write(&file, text.replace(from, to)).unwrap();
     file
@@ -32,7 +27,7 @@ fn variant(name: &str, dir: &str, from: &str, to: &str) -> PathBuf {
 /// The vibrating cantilever's start in the scene file is the generated first mode.
 #[test]
 fn the_vibrating_scene_starts_in_the_first_mode() {
-    let s = developable_sim::scene::load(&scene("exact_vibrating_cantilever"), &[]).unwrap();
+    let s = developable_sim::scene::load(&scene_path("exact_vibrating_cantilever"), &[]).unwrap();
     let listed = s
         .source
         .ribbon
@@ -60,7 +55,7 @@ fn run_quick(file: &Path) -> developable_sim::report::exact_run::ExactSceneRepor
 #[test]
 fn static_scenes_converge_at_second_order_and_the_paper_clamp_does_not() {
     for name in ["exact_heavy_cantilever", "exact_buckled_strip"] {
-        let r = run_quick(&scene(name));
+        let r = run_quick(&scene_path(name));
         assert!(matches!(
             r.problem,
             ExactProblem::HeavyCantilever { .. } | ExactProblem::BuckledStrip { .. }
@@ -141,7 +136,7 @@ fn the_paper_clamp_fails_the_report() {
 /// The vibrating cantilever's error falls at first order in dt (implicit Euler).
 #[test]
 fn the_vibrating_cantilever_is_first_order_in_dt() {
-    let r = run_quick(&scene("exact_vibrating_cantilever"));
+    let r = run_quick(&scene_path("exact_vibrating_cantilever"));
     for c in &r.checks {
         assert!(c.pass, "{c:?}");
     }

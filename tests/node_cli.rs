@@ -2,22 +2,12 @@
 //! names the file (or the command line) and the key, and exit code 2; a handle target
 //! the object cannot reach is named while the node goes on.
 
-use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const BIN: &str = env!("CARGO_BIN_EXE_developable_sim");
-const SCENE: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/config/scenes/ribbon_extreme_torsion.yaml"
-);
+mod common;
+use common::{scratch, TORSION};
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("node_cli_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+const BIN: &str = env!("CARGO_BIN_EXE_developable_sim");
 
 /// Run the binary; returns (exit code, stderr).
 fn run(args: &[&str], env: &[(&str, &str)]) -> (i32, String) {
@@ -93,15 +83,15 @@ fn bad_params_files_name_the_file_and_the_key() {
         let p = path.to_str().unwrap();
         let mut expected = expected.clone();
         expected.push(p);
-        check(&["node", SCENE, "--params", p], &[], &expected);
+        check(&["node", TORSION, "--params", p], &[], &expected);
         check(
-            &["node", SCENE, "--ros-args", "--params-file", p],
+            &["node", TORSION, "--ros-args", "--params-file", p],
             &[],
             &expected,
         );
     }
     check(
-        &["node", SCENE, "--params", "/nonexistent/params.yaml"],
+        &["node", TORSION, "--params", "/nonexistent/params.yaml"],
         &[],
         &["/nonexistent/params.yaml", "cannot read"],
     );
@@ -110,48 +100,48 @@ fn bad_params_files_name_the_file_and_the_key() {
 #[test]
 fn bad_command_line_values_are_explained() {
     check(
-        &["node", SCENE, "--lockstep", "nosuch"],
+        &["node", TORSION, "--lockstep", "nosuch"],
         &[],
         &["--lockstep", "twist_end"],
     );
     check(
-        &["node", SCENE, "--ros-args", "-p", "lockstep:=nosuch"],
+        &["node", TORSION, "--ros-args", "-p", "lockstep:=nosuch"],
         &[],
         &["command line (-p)", "lockstep"],
     );
     check(
-        &["node", SCENE, "--ros-args", "-p", "duration"],
+        &["node", TORSION, "--ros-args", "-p", "duration"],
         &[],
         &["NAME:=VALUE"],
     );
     check(
-        &["node", SCENE, "--ros-args", "--bogus"],
+        &["node", TORSION, "--ros-args", "--bogus"],
         &[],
         &["unknown ROS argument"],
     );
     check(
-        &["node", SCENE],
+        &["node", TORSION],
         &[("ROS_DOMAIN_ID", "abc")],
         &["ROS_DOMAIN_ID"],
     );
     check(
-        &["node", SCENE, "--domain-id", "300"],
+        &["node", TORSION, "--domain-id", "300"],
         &[],
         &["out of range"],
     );
     check(
-        &["node", SCENE, "--namespace", "/a b"],
+        &["node", TORSION, "--namespace", "/a b"],
         &[],
         &["invalid ROS name"],
     );
     check(&["node"], &[], &["no scene"]);
     check(
-        &["run", SCENE, "--ros-args", "-p", "a:=1"],
+        &["run", TORSION, "--ros-args", "-p", "a:=1"],
         &[],
         &["--ros-args"],
     );
     check(
-        &["node", SCENE, "--set", "ribbon.segments=1"],
+        &["node", TORSION, "--set", "ribbon.segments=1"],
         &[],
         &["ribbon.segments"],
     );
@@ -164,7 +154,7 @@ fn a_bag_folder_in_use_is_refused() {
     check(
         &[
             "run",
-            SCENE,
+            TORSION,
             "--duration",
             "0.02",
             "--record",

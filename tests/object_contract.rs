@@ -3,17 +3,11 @@
 //! world's one rule for non-finite handle targets covers the objects and the colliders
 //! a handle carries.
 
-use std::path::PathBuf;
-
 use developable_sim::geometry::Pose;
-use developable_sim::scene::{self, Scene};
+use developable_sim::scene::Scene;
 
-fn load(name: &str) -> Scene {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("config/scenes")
-        .join(format!("{name}.yaml"));
-    scene::load(&path, &[]).expect("scene loads")
-}
+mod common;
+use common::load;
 
 /// Bits of every mesh vertex of the world.
 fn mesh_bits(s: &Scene) -> Vec<u64> {
@@ -57,7 +51,7 @@ fn run(
 /// sees the finger).
 #[test]
 fn a_non_finite_target_holds_the_last_one_for_a_carried_collider() {
-    let base = load("ribbon_gripper_push");
+    let base = load("ribbon_gripper_push", &[]);
     assert!(base.world.contact_stage().is_some());
     let with_nan = run(base.clone(), 45, 0, 30..40, &|_, _| nan_pose());
     let holding = run(base.clone(), 45, 0, 30..40, &|s, _| {
@@ -83,7 +77,7 @@ fn a_non_finite_target_holds_the_last_one_for_a_carried_collider() {
 /// The same rule for a paper sheet's handle (paper_cylinder_then_bend).
 #[test]
 fn a_non_finite_target_holds_the_last_one_for_a_paper_handle() {
-    let base = load("paper_cylinder_then_bend");
+    let base = load("paper_cylinder_then_bend", &[]);
     let with_nan = run(base.clone(), 20, 0, 10..15, &|_, _| nan_pose());
     let holding = run(base.clone(), 20, 0, 10..15, &|s, _| {
         s.world.current_targets()[0]
@@ -102,7 +96,7 @@ fn every_kind_answers_through_the_trait() {
         ("ribbon_extreme_torsion", "ribbon", "chain", true),
         ("paper_cylinder_then_bend", "paper", "paper_newton", false),
     ] {
-        let mut s = load(scene);
+        let mut s = load(scene, &[]);
         let report = s.world.step(&[]);
         let object = s.world.object(0);
         assert_eq!(object.kind(), kind);
@@ -119,7 +113,7 @@ fn every_kind_answers_through_the_trait() {
 /// A reset restores the initial objects (boxed clones taken at construction).
 #[test]
 fn reset_restores_the_initial_objects() {
-    let mut s = load("ribbon_extreme_torsion");
+    let mut s = load("ribbon_extreme_torsion", &[]);
     let start = mesh_bits(&s);
     for _ in 0..5 {
         s.world.step(&[]);

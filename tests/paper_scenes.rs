@@ -2,29 +2,11 @@
 //! vertices appearing where the paper has them and persisting, determinism, the effect
 //! of epsilon_c, and the stats JSON fields of paper objects.
 
-use std::path::PathBuf;
-
 use developable_sim::paper::PaperSim;
-use developable_sim::runner;
 use developable_sim::scene::{self, Scene};
-use developable_sim::stats::RunStats;
 
-fn scene_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("config/scenes")
-        .join(format!("{name}.yaml"))
-}
-
-fn load(name: &str, sets: &[&str]) -> Scene {
-    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    scene::load(&scene_path(name), &sets).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn run(name: &str, sets: &[&str]) -> (Scene, RunStats) {
-    let mut s = load(name, sets);
-    let stats = runner::run(&mut s, &mut (), &|| false).expect("run");
-    (s, stats)
-}
+mod common;
+use common::{load, run, scene_path};
 
 fn paper(scene: &Scene) -> &PaperSim {
     scene.world.object_as::<PaperSim>(0).expect("a paper scene")

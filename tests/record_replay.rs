@@ -7,28 +7,18 @@ use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use developable_sim::record::bag::{BagOptions, BagWriter};
-use developable_sim::record::metadata::{MetadataFile, Qos};
+use developable_sim::record::metadata::Qos;
 use developable_sim::record::read::{mcap_files, reindex, scan, BagEvent, BagMessage, McapStream};
 use developable_sim::record::recorder::RunRecorder;
-use developable_sim::record::replay::{replay, ReplayOptions};
+use developable_sim::record::replay::{replay, ReplayOptions, ReplayReport, TopicReport};
 use developable_sim::ros::cdr;
 use developable_sim::ros::msgs::{
     Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints, Time,
 };
 use developable_sim::{runner, scene};
 
-const TORSION: &str = concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/config/scenes/ribbon_extreme_torsion.yaml"
-);
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("record_replay_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::{metadata, scratch, TORSION};
 
 /// Record `duration` s of the torsion scene headless into `dir/bag`.
 fn record(dir: &Path, duration: f64, options: BagOptions) -> PathBuf {
@@ -40,8 +30,20 @@ fn record(dir: &Path, duration: f64, options: BagOptions) -> PathBuf {
     bag
 }
 
-fn metadata(bag: &Path) -> MetadataFile {
-    serde_yaml::from_str(&std::fs::read_to_string(bag.join("metadata.yaml")).unwrap()).unwrap()
+/// A fresh scratch folder `name` with 0.1 s (10 steps) of the torsion scene recorded in
+/// it, where the tampering tests start: (folder, bag).
+fn record_tenth(name: &str) -> (PathBuf, PathBuf) {
+    let dir = scratch(name);
+    let bag = record(&dir, 0.1, BagOptions::default());
+    (dir, bag)
+}
+
+/// The comparison of `name` in a replay's report.
+fn topic<'a>(r: &'a ReplayReport, name: &str) -> &'a TopicReport {
+    r.topics
+        .iter()
+        .find(|t| t.topic == name)
+        .unwrap_or_else(|| panic!("no {name} in {r:?}"))
 }
 
 #[test]
@@ -79,15 +81,11 @@ fn replay_with_another_scene_reports_the_largest_difference() {
     .unwrap();
     assert!(!r.identical);
     assert!(r.max_abs_difference > 0.0 && r.max_abs_difference.is_finite());
-    let status = r
-        .topics
-        .iter()
-        .find(|t| t.topic == "/ribbon/status")
-        .unwrap();
+    let status = topic(&r, "/ribbon/status");
     assert!(status.differing > 0);
     assert!(status.max_at.starts_with("step "), "{}", status.max_at);
     // the clock does not depend on the stiffness
-    let clock = r.topics.iter().find(|t| t.topic == "/clock").unwrap();
+    let clock = topic(&r, "/clock");
     assert_eq!(clock.differing, 0);
 }
 
@@ -284,17 +282,16 @@ fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&BagMessage) -> Option<V
     out.close().unwrap();
 }
 
-/// `developable_sim replay BAG`: (exit code, stdout).
-fn replay_cli(bag: &Path) -> (Option<i32>, String) {
+/// `developable_sim replay BAG` exits with `code` and says `verdict` on stdout.
+fn replay_cli_says(bag: &Path, code: i32, verdict: &str) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_developable_sim"))
         .arg("replay")
         .arg(bag)
         .output()
         .unwrap();
-    (
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-    )
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(code), "{stdout}");
+    assert!(stdout.contains(verdict), "{stdout}");
 }
 
 /// The status of step `step` on `/ribbon/status`, decoded.
@@ -309,21 +306,17 @@ fn status_at(m: &BagMessage, step: u64) -> Option<SimStatus> {
 #[test]
 fn an_untouched_copy_replays_identical_and_exits_0() {
     // the rewriting itself changes nothing: the tampering tests below see only their edit
-    let dir = scratch("copy");
-    let bag = record(&dir, 0.1, BagOptions::default());
+    let (dir, bag) = record_tenth("copy");
     let copy = dir.join("copy");
     rewrite(&bag, &copy, |m| Some(m.data.clone()));
     let r = replay(&copy, &ReplayOptions::default()).unwrap();
     assert!(r.identical, "{r:?}");
-    let (code, out) = replay_cli(&copy);
-    assert_eq!(code, Some(0), "{out}");
-    assert!(out.contains("identical"), "{out}");
+    replay_cli_says(&copy, 0, "identical");
 }
 
 #[test]
 fn a_zero_flipped_in_sign_is_a_difference_and_exits_1() {
-    let dir = scratch("signed_zero");
-    let bag = record(&dir, 0.1, BagOptions::default());
+    let (dir, bag) = record_tenth("signed_zero");
     let tampered = dir.join("tampered");
     let mut flipped = 0;
     rewrite(&bag, &tampered, |m| {
@@ -339,11 +332,7 @@ fn a_zero_flipped_in_sign_is_a_difference_and_exits_1() {
     assert_eq!(flipped, 1);
     let r = replay(&tampered, &ReplayOptions::default()).unwrap();
     assert!(!r.identical, "{r:?}");
-    let status = r
-        .topics
-        .iter()
-        .find(|t| t.topic == "/ribbon/status")
-        .unwrap();
+    let status = topic(&r, "/ribbon/status");
     assert_eq!(status.differing, 1, "{status:?}");
     assert_eq!(
         status.max_abs_difference, 0.0,
@@ -353,16 +342,13 @@ fn a_zero_flipped_in_sign_is_a_difference_and_exits_1() {
         status.first_difference, "step 3: gravity_energy",
         "{status:?}"
     );
-    let (code, out) = replay_cli(&tampered);
-    assert_eq!(code, Some(1), "{out}");
-    assert!(out.contains("DIFFERENT"), "{out}");
+    replay_cli_says(&tampered, 1, "DIFFERENT");
 }
 
 #[test]
 fn a_nan_with_other_bits_is_a_difference() {
     // a NaN in place of a NaN with different bits (the sign): not identical
-    let dir = scratch("nan_bits");
-    let bag = record(&dir, 0.1, BagOptions::default());
+    let (dir, bag) = record_tenth("nan_bits");
     let (a, b) = (dir.join("a"), dir.join("b"));
     let nan = |sign: f64| {
         move |m: &BagMessage| {
@@ -378,11 +364,7 @@ fn a_nan_with_other_bits_is_a_difference() {
     // both differ from the replay, which computes a finite isometry error
     for bag in [&a, &b] {
         let r = replay(bag, &ReplayOptions::default()).unwrap();
-        let status = r
-            .topics
-            .iter()
-            .find(|t| t.topic == "/ribbon/status")
-            .unwrap();
+        let status = topic(&r, "/ribbon/status");
         assert_eq!(status.differing, 1, "{status:?}");
         assert_eq!(status.max_abs_difference, f64::INFINITY);
     }
@@ -390,8 +372,7 @@ fn a_nan_with_other_bits_is_a_difference() {
 
 #[test]
 fn an_output_missing_from_the_bag_is_a_difference_and_exits_1() {
-    let dir = scratch("missing");
-    let bag = record(&dir, 0.1, BagOptions::default());
+    let (dir, bag) = record_tenth("missing");
     let tampered = dir.join("tampered");
     // drop the markers of step 4 (the statuses say which step a message belongs to)
     let mut step = 0;
@@ -409,18 +390,13 @@ fn an_output_missing_from_the_bag_is_a_difference_and_exits_1() {
     assert_eq!(dropped, 1);
     let r = replay(&tampered, &ReplayOptions::default()).unwrap();
     assert!(!r.identical, "{r:?}");
-    let markers = r
-        .topics
-        .iter()
-        .find(|t| t.topic == "/ribbon/markers")
-        .unwrap();
+    let markers = topic(&r, "/ribbon/markers");
     assert_eq!((markers.missing, markers.differing), (1, 0), "{markers:?}");
     assert!(
         markers.first_difference.starts_with("step 4:"),
         "{markers:?}"
     );
-    let (code, out) = replay_cli(&tampered);
-    assert_eq!(code, Some(1), "{out}");
+    replay_cli_says(&tampered, 1, "DIFFERENT");
 
     // the last state's markers missing from a complete bag count too
     let last = dir.join("last");
@@ -436,11 +412,7 @@ fn an_output_missing_from_the_bag_is_a_difference_and_exits_1() {
         Some(m.data.clone())
     });
     let r = replay(&last, &ReplayOptions::default()).unwrap();
-    let markers = r
-        .topics
-        .iter()
-        .find(|t| t.topic == "/ribbon/markers")
-        .unwrap();
+    let markers = topic(&r, "/ribbon/markers");
     assert_eq!(markers.missing, 1, "{markers:?}");
     assert!(
         markers.first_difference.starts_with("step 10:"),

@@ -10,6 +10,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use developable_sim::ribbon::{RibbonSim, SolverKind};
 use developable_sim::scene;
 
+mod common;
+use common::TORSION;
+
 struct Counting;
 
 static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
@@ -37,8 +40,7 @@ fn allocations() -> u64 {
 
 #[test]
 fn a_chain_step_allocates_the_same_whatever_its_iteration_count() {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("config/scenes/ribbon_extreme_torsion.yaml");
+    let path = Path::new(TORSION);
     let sets = [
         "ribbon.segments=100".to_string(),
         "solver.kind=chain".to_string(),
@@ -46,7 +48,7 @@ fn a_chain_step_allocates_the_same_whatever_its_iteration_count() {
         // update (per round, not per iteration)
         "solver.max_outer_iterations=1".to_string(),
     ];
-    let mut s = scene::load(&path, &sets).expect("scene");
+    let mut s = scene::load(path, &sets).expect("scene");
     assert_eq!(
         s.world
             .object_as::<RibbonSim>(0)

@@ -4,16 +4,15 @@
 //! open ribbons, loops (mobius_band, the orientable loop of ribbon_extreme_dragging)
 //! and the multi-ribbon chains of loops with contact (double and Moebius chains).
 
-use std::path::Path;
-
 use developable_sim::metrics::{rms_distance, strip_samples};
 use developable_sim::ribbon::{RibbonSim, SolverKind};
 use developable_sim::scene::{self, Scene};
 
+mod common;
+use common::scene_path;
+
 fn load(name: &str, n: usize) -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config/scenes")
-        .join(format!("{name}.yaml"));
+    let path = scene_path(name);
     let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
     if text.contains("\nribbons:") {
         // a multi-ribbon scene: every entry of its `ribbons:` list gets n elements

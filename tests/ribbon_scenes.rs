@@ -1,29 +1,15 @@
 //! The paper's ribbon scenes end to end (Pan et al. sec. 6): invariants, constraints,
 //! determinism, step-size agreement, full vs lumped kinetics, solver agreement.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use developable_sim::metrics::{rms_distance, strip_samples};
 use developable_sim::ribbon::RibbonSim;
+use developable_sim::runner;
 use developable_sim::scene::{self, Scene};
-use developable_sim::{runner, stats::RunStats};
 
-fn scene_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("config/scenes")
-        .join(format!("{name}.yaml"))
-}
-
-fn load(name: &str, sets: &[&str]) -> Scene {
-    let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
-    scene::load(&scene_path(name), &sets).unwrap_or_else(|e| panic!("{e}"))
-}
-
-fn run(name: &str, sets: &[&str]) -> (Scene, RunStats) {
-    let mut s = load(name, sets);
-    let stats = runner::run(&mut s, &mut (), &|| false).expect("run");
-    (s, stats)
-}
+mod common;
+use common::{load, run};
 
 fn ribbon(scene: &Scene) -> &RibbonSim {
     scene

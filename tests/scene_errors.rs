@@ -6,6 +6,9 @@ use std::process::Command;
 
 use developable_sim::scene;
 
+mod common;
+use common::scratch;
+
 const BASE: &str =
     "duration: 0.05\ndt: 0.01\nribbon:\n  length: 1.0\n  width: 0.05\n  segments: 10\n";
 
@@ -116,8 +119,7 @@ fn bin() -> Command {
 
 #[test]
 fn the_cli_exits_non_zero_with_a_clear_message_and_no_panic() {
-    let dir = std::env::temp_dir().join(format!("dsim_cli_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("cli");
     let bad = dir.join("bad.yaml");
     std::fs::write(&bad, format!("{BASE}  width: 0.05\n")).unwrap();
     let out = bin().arg("run").arg(&bad).output().unwrap();

@@ -28,6 +28,20 @@ fn case(name: &str) -> StressCase {
         .unwrap_or_else(|| panic!("no stress case {name}"))
 }
 
+/// Run `c` at `dt` with the `--quick` length and `tweaks`: the one call the suite's own
+/// negative tests vary.
+fn quick_with(c: &StressCase, dt: f64, tweaks: RunTweaks) -> CaseResult {
+    stress::run_case_with(c, dt, true, None, &config(), tweaks).unwrap()
+}
+
+/// One inner iteration in one augmented-Lagrangian round per step: no step can converge.
+fn one_iteration() -> Vec<String> {
+    vec![
+        "solver.max_iterations=1".to_string(),
+        "solver.max_outer_iterations=1".to_string(),
+    ]
+}
+
 /// Run `name` at `dt` (quick length) and assert the suite's criteria one by one, so a
 /// failure names the one that broke.
 fn check(name: &str, dt: f64) -> CaseResult {
@@ -121,17 +135,10 @@ fn paper_crumpling_and_compression_stay_finite_and_bounded() {
 
 #[test]
 fn unconverged_steps_are_counted_not_hidden() {
-    // one inner iteration per step cannot converge: every step must be counted
+    // no step can converge: every step must be counted
     let path = config().join("scenes/ribbon_two_grippers.yaml");
-    let mut s = scene::load(
-        &path,
-        &[
-            "duration=0.05".into(),
-            "solver.max_iterations=1".into(),
-            "solver.max_outer_iterations=1".into(),
-        ],
-    )
-    .unwrap();
+    let sets = [vec!["duration=0.05".to_string()], one_iteration()].concat();
+    let mut s = scene::load(&path, &sets).unwrap();
     let stats = developable_sim::runner::run(&mut s, &mut (), &|| false).unwrap();
     assert_eq!(stats.steps, 5);
     assert_eq!(stats.solver.unconverged_steps, 5, "{:?}", stats.solver);
@@ -174,14 +181,7 @@ fn the_node_status_counts_unconverged_steps() {
     use developable_sim::ros::input::InputPolicy;
     use developable_sim::ros::session::{FrameContent, Session};
     let path = config().join("scenes/ribbon_two_grippers.yaml");
-    let s = scene::load(
-        &path,
-        &[
-            "solver.max_iterations=1".into(),
-            "solver.max_outer_iterations=1".into(),
-        ],
-    )
-    .unwrap();
+    let s = scene::load(&path, &one_iteration()).unwrap();
     let policy = InputPolicy {
         frame_id: s.frame_id.clone(),
         accept_empty_frame_id: false,
@@ -284,18 +284,14 @@ fn reject(world: &mut developable_sim::sim::World) {
 #[test]
 fn a_solver_that_never_moves_fails_every_case() {
     for c in stress::cases() {
-        let r = stress::run_case_with(
+        let r = quick_with(
             &c,
             0.1,
-            true,
-            None,
-            &config(),
             RunTweaks {
                 world_hook: Some(&mut freeze),
                 ..RunTweaks::default()
             },
-        )
-        .unwrap();
+        );
         // the energy stays flat, so the energy bound alone would pass it
         assert!(r.finite && r.energy_ratio_max <= 1.0, "{r:#?}");
         assert_eq!(r.unconverged_steps, r.object_steps, "{r:#?}");
@@ -306,25 +302,16 @@ fn a_solver_that_never_moves_fails_every_case() {
 
 #[test]
 fn a_solver_held_to_one_iteration_fails_the_suite() {
-    // one inner iteration in one augmented-Lagrangian round per step: every step stops on
-    // the limit
-    let sets = vec![
-        "solver.max_iterations=1".to_string(),
-        "solver.max_outer_iterations=1".to_string(),
-    ];
+    // every step stops on the iteration limit
     let c = case("handle_jump");
-    let r = stress::run_case_with(
+    let r = quick_with(
         &c,
         0.01,
-        true,
-        None,
-        &config(),
         RunTweaks {
-            sets,
+            sets: one_iteration(),
             ..RunTweaks::default()
         },
-    )
-    .unwrap();
+    );
     assert!(!r.pass && r.reason.contains("unconverged"), "{r:#?}");
     // the threshold is the stated share: with an allowance of every step, it passes
     // that criterion (whatever else it fails is named separately)
@@ -336,21 +323,14 @@ fn a_solver_held_to_one_iteration_fails_the_suite() {
         },
         ..c
     };
-    let r = stress::run_case_with(
+    let r = quick_with(
         &lenient,
         0.01,
-        true,
-        None,
-        &config(),
         RunTweaks {
-            sets: vec![
-                "solver.max_iterations=1".to_string(),
-                "solver.max_outer_iterations=1".to_string(),
-            ],
+            sets: one_iteration(),
             ..RunTweaks::default()
         },
-    )
-    .unwrap();
+    );
     assert!(!r.reason.contains("unconverged"), "{r:#?}");
 }
 
@@ -361,18 +341,14 @@ fn rejected_steps_fail_a_run_unless_the_case_expects_them() {
     // stand-in rejects every step
     let c = case("handle_jump");
     let run = |c: &StressCase| {
-        stress::run_case_with(
+        quick_with(
             c,
             0.1,
-            true,
-            None,
-            &config(),
             RunTweaks {
                 world_hook: Some(&mut reject),
                 ..RunTweaks::default()
             },
         )
-        .unwrap()
     };
     let r = run(&c);
     assert_eq!(r.rejected_steps, r.steps, "{r:#?}");
@@ -400,18 +376,14 @@ fn injected_energy_fails_the_suite_at_the_stated_bound() {
     let mut record = |r: &mut developable_sim::sim::StepReport| {
         totals.push(r.objects.iter().map(|o| o.energies.total()).sum::<f64>());
     };
-    let base = stress::run_case_with(
+    let base = quick_with(
         &c,
         0.1,
-        true,
-        None,
-        &config(),
         RunTweaks {
             report_hook: Some(&mut record),
             ..RunTweaks::default()
         },
-    )
-    .unwrap();
+    );
     assert!(base.pass, "{base:#?}");
     let last = *totals.last().unwrap();
     let allowance = base.work_bound
@@ -428,18 +400,14 @@ fn injected_energy_fails_the_suite_at_the_stated_bound() {
                 r.objects[0].energies.kinetic += extra;
             }
         };
-        stress::run_case_with(
+        quick_with(
             &c,
             0.1,
-            true,
-            None,
-            &config(),
             RunTweaks {
                 report_hook: Some(&mut hook),
                 ..RunTweaks::default()
             },
         )
-        .unwrap()
     };
     let above = inject(headroom + 1e-3 * allowance);
     assert!(
@@ -462,18 +430,14 @@ fn a_translated_case_gives_the_same_verdict_and_margins() {
     ] {
         let c = case(name);
         let here = stress::run_case(&c, dt, true, None, &config()).unwrap();
-        let moved = stress::run_case_with(
+        let moved = quick_with(
             &c,
             dt,
-            true,
-            None,
-            &config(),
             RunTweaks {
                 offset: Some([10.0, -5.0, 3.0]),
                 ..RunTweaks::default()
             },
-        )
-        .unwrap();
+        );
         // the move is real: E(0) changed (by m g 3 m for gravity, -F . d for the force)
         assert!(
             (moved.energy_initial - here.energy_initial).abs() > 1e-3,

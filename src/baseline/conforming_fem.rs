@@ -491,7 +491,7 @@ impl ConformingFem {
     }
 
     /// Gradient of [`Self::elastic_energy`], J/m, three entries per vertex.
-    pub fn elastic_gradient(&self, x: &[Point3], g: &mut [f64]) {
+    fn elastic_gradient(&self, x: &[Point3], g: &mut [f64]) {
         g.iter_mut().for_each(|v| *v = 0.0);
         let k = self.params.stretch_stiffness;
         for &(a, b, rest) in &self.edges {

@@ -5,4 +5,4 @@
 
 pub mod conforming_fem;
 
-pub use conforming_fem::{BaselineError, ConformingFem, ConformingFemParams, FemStepReport};
+pub use conforming_fem::{BaselineError, ConformingFem, ConformingFemParams};

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 /// The (year, month 1-12, day 1-31) of `days` days after 1970-01-01 in the proleptic
 /// Gregorian calendar (H. Hinnant's `civil_from_days`: eras of 400 years = 146 097
 /// days, years starting on March 1 so that the leap day is the last day of a year).
-pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
+fn civil_from_days(days: i64) -> (i64, u32, u32) {
     let z = days + 719_468;
     let era = z.div_euclid(146_097);
     let doe = z.rem_euclid(146_097);
@@ -20,7 +20,7 @@ pub fn civil_from_days(days: i64) -> (i64, u32, u32) {
 }
 
 /// The folder name for a recording started `secs` seconds after the Unix epoch (UTC).
-pub fn bag_folder_name(secs: i64) -> String {
+fn bag_folder_name(secs: i64) -> String {
     let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
     let (year, month, day) = civil_from_days(days);
     format!(

@@ -70,7 +70,7 @@ pub fn identity(args: &NodeArgs, ros: &RosArgs) -> Result<(String, String, Strin
 
 /// The parameters: `--params` files, then `--ros-args --params-file` files, in order,
 /// then `-p` (a later source replaces an earlier one).
-pub fn read_params(args: &NodeArgs, ros: &RosArgs, fqn: &str) -> Result<Params, ParamsError> {
+fn read_params(args: &NodeArgs, ros: &RosArgs, fqn: &str) -> Result<Params, ParamsError> {
     let mut p = Params::default();
     for f in args.params.iter().chain(&ros.params_files) {
         params::read_params_file(f, fqn, &mut p)?;
@@ -121,7 +121,7 @@ fn non_negative(p: &Params, name: &str, default: f64) -> Result<f64, ParamsError
 
 /// The scene file (the SCENE argument > the `scene` parameter) and its overrides (the
 /// `scene_overrides` parameter, then `--set`: a later override wins).
-pub fn scene_source(args: &NodeArgs, p: &Params) -> Result<(PathBuf, Vec<String>), LaunchError> {
+fn scene_source(args: &NodeArgs, p: &Params) -> Result<(PathBuf, Vec<String>), LaunchError> {
     let path = match (&args.scene, p.string("scene").filter(|s| !s.is_empty())) {
         (Some(s), _) => s.clone(),
         (None, Some(s)) => PathBuf::from(s),
@@ -242,7 +242,7 @@ pub fn record(args: &NodeArgs, p: &Params) -> Result<Option<(PathBuf, BagOptions
 }
 
 /// Marker sizes (`marker.line_width`, `marker.sphere_diameter`, m).
-pub fn marker_style(p: &Params) -> Result<MarkerStyle, ParamsError> {
+fn marker_style(p: &Params) -> Result<MarkerStyle, ParamsError> {
     Ok(MarkerStyle {
         line_width: positive(p, "marker.line_width", 0.002)?,
         sphere_diameter: positive(p, "marker.sphere_diameter", 0.012)?,
@@ -252,7 +252,7 @@ pub fn marker_style(p: &Params) -> Result<MarkerStyle, ParamsError> {
 
 /// Which handle poses are accepted: the scene's frame id, `accept_empty_frame_id`,
 /// `max_stamp_lead` (s).
-pub fn input_policy(p: &Params, scene: &Scene) -> Result<InputPolicy, ParamsError> {
+fn input_policy(p: &Params, scene: &Scene) -> Result<InputPolicy, ParamsError> {
     Ok(InputPolicy {
         frame_id: scene.frame_id.clone(),
         accept_empty_frame_id: p.bool("accept_empty_frame_id").unwrap_or(false),

@@ -66,7 +66,7 @@ impl Motion {
 /// Real roots of `c[0] + c[1] t + c[2] t^2 + c[3] t^3` in [0, 1], ascending, written to
 /// `out`; returns how many. Roots of even multiplicity (tangencies) are reported when
 /// the cubic's value there is within `1e-12` of its coefficient scale.
-pub fn cubic_roots_unit(c: [f64; 4], out: &mut [f64; 4]) -> usize {
+fn cubic_roots_unit(c: [f64; 4], out: &mut [f64; 4]) -> usize {
     let scale = c.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     if scale == 0.0 || !scale.is_finite() {
         return 0;

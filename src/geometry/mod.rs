@@ -19,8 +19,3 @@ pub type Vector3 = nalgebra::Vector3<f64>;
 pub type Point2 = nalgebra::Point2<f64>;
 pub type Matrix3 = nalgebra::Matrix3<f64>;
 pub type Rotation = nalgebra::UnitQuaternion<f64>;
-
-/// True when every component is finite (not NaN, not ±inf).
-pub fn is_finite_vec(v: &Vector3) -> bool {
-    v.iter().all(|x| x.is_finite())
-}

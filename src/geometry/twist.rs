@@ -11,23 +11,12 @@ pub struct Twist {
 }
 
 impl Twist {
-    pub const ZERO: Twist = Twist {
-        angular: Vector3::new(0.0, 0.0, 0.0),
-        linear: Vector3::new(0.0, 0.0, 0.0),
-    };
-
     /// Rotation with unit rate about the line through `point_in_world` along `axis`.
     pub fn rotation_about(axis: Vector3, point_in_world: &Point3) -> Twist {
         Twist {
             angular: axis,
             linear: point_in_world.coords.cross(&axis),
         }
-    }
-
-    /// Velocity of a world point under this twist.
-    #[inline]
-    pub fn velocity_at(&self, p: &Point3) -> Vector3 {
-        self.angular.cross(&p.coords) + self.linear
     }
 
     /// The twist as a 6-vector `[angular; linear]`.

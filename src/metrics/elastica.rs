@@ -112,7 +112,7 @@ fn curve(states: &[State], length: f64) -> PlanarCurve {
 
 /// RK4 steps of the exact solutions: the global error, O((L / steps)^4), is below
 /// 1e-13 relative for the loads the tests use (checked by halving in the tests).
-pub const STEPS: usize = 4000;
+const STEPS: usize = 4000;
 
 /// A cantilever clamped horizontally at the origin (theta(0) = 0) and free at s = L,
 /// under its weight q (N/m, acting along -z): B theta'' = q (L - s) cos theta,
@@ -150,7 +150,7 @@ fn heavy_cantilever_in(length: f64, bending: f64, q: f64, steps: usize) -> Plana
 
 /// Complete elliptic integrals K(k), E(k) of modulus k in [0, 1) by the arithmetic-
 /// geometric mean (Abramowitz & Stegun 17.6).
-pub fn elliptic_ke(k: f64) -> (f64, f64) {
+fn elliptic_ke(k: f64) -> (f64, f64) {
     let (mut a, mut b) = (1.0_f64, (1.0 - k * k).sqrt());
     let mut c = k;
     let mut sum = 0.5 * c * c;
@@ -248,8 +248,9 @@ impl CantileverMode {
             sigma,
         }
     }
-    /// beta_1 L (dimensionless, 1.8751...).
-    pub fn beta_l(&self) -> f64 {
+    /// beta_1 L (dimensionless, 1.8751...); the tests check it against the known root.
+    #[cfg(test)]
+    fn beta_l(&self) -> f64 {
         self.beta * self.length
     }
     /// omega_1 = beta_1^2 sqrt(B / mu), rad/s, for bending stiffness B (N m^2) and mass

@@ -169,7 +169,7 @@ impl BagWriter {
     }
 
     /// The MCAP file.
-    pub fn mcap_path(&self) -> PathBuf {
+    fn mcap_path(&self) -> PathBuf {
         self.dir.join(&self.file_name)
     }
 
@@ -430,7 +430,7 @@ impl Drop for BagWriter {
 }
 
 /// The folder's last path component (`bags/demo` -> `demo`).
-pub fn folder_name(dir: &Path) -> String {
+fn folder_name(dir: &Path) -> String {
     dir.file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty() && s != "." && s != "..")

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::RecordError;
 
 /// rosbag2 metadata version written (Jazzy).
-pub const VERSION: u32 = 9;
+const VERSION: u32 = 9;
 
 /// The offered QoS of a recorded topic (what rosbag2 stores so `ros2 bag play` can
 /// offer the same). Only the policies the node uses; the rest are ROS defaults.
@@ -88,7 +88,7 @@ pub struct RosDuration {
 
 impl RosDuration {
     /// rmw's "infinite" duration as rosbag2 writes it.
-    pub const INFINITE: RosDuration = RosDuration {
+    const INFINITE: RosDuration = RosDuration {
         sec: 9_223_372_036,
         nsec: 854_775_807,
     };
@@ -236,7 +236,7 @@ pub fn build(
 }
 
 /// The ROS 2 distribution this build speaks (the ros2-client feature).
-pub fn ros_distro() -> &'static str {
+fn ros_distro() -> &'static str {
     if cfg!(feature = "humble") && !cfg!(feature = "jazzy") {
         "humble"
     } else {

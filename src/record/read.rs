@@ -95,7 +95,7 @@ impl McapStream {
     }
 
     /// Channels seen so far, by id.
-    pub fn channels(&self) -> &BTreeMap<u16, ChannelInfo> {
+    fn channels(&self) -> &BTreeMap<u16, ChannelInfo> {
         &self.channels
     }
 

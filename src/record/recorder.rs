@@ -64,12 +64,12 @@ pub struct SessionInfo {
 
 /// The bag topic of a handle's failed TF lookups: beside its input topic, so it reads as
 /// "what became of that handle's input".
-pub fn tf_failure_topic(handle_topic: &str) -> String {
+fn tf_failure_topic(handle_topic: &str) -> String {
     format!("{handle_topic}/tf_lookup_failed")
 }
 
 impl SessionInfo {
-    pub fn to_record(&self) -> BTreeMap<String, String> {
+    fn to_record(&self) -> BTreeMap<String, String> {
         let mut m = BTreeMap::new();
         m.insert("format".into(), "1".into());
         m.insert("version".into(), env!("CARGO_PKG_VERSION").into());
@@ -284,18 +284,8 @@ impl SessionRecorder {
         Ok(())
     }
 
-    /// Flush the open chunk now.
-    pub fn flush(&mut self) -> Result<(), RecordError> {
-        self.bag.flush()
-    }
-
     pub fn dir(&self) -> &Path {
         self.bag.dir()
-    }
-
-    /// Why recording stopped, if it did.
-    pub fn failure(&self) -> Option<&str> {
-        self.bag.failure()
     }
 
     /// Messages written per topic.

@@ -19,7 +19,7 @@ use super::recorder::{SessionInfo, SESSION_RECORD};
 use super::RecordError;
 use crate::ros::cdr;
 use crate::ros::input::InputPolicy;
-use crate::ros::introspect::{compare, to_value, Value};
+use crate::ros::introspect::{compare, to_value};
 use crate::ros::msgs::{Clock, MarkerArray, PoseStamped, RosMessage, SimStatus, SingularPoints};
 use crate::ros::session::{Frame, FrameContent, Session};
 use crate::sim::StepReport;
@@ -421,7 +421,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
 
 /// Status fields that depend on the wall clock or on the node's run state, not on the
 /// simulation: not compared.
-pub const WALL_CLOCK_STATUS_FIELDS: &[&str] = &[
+const WALL_CLOCK_STATUS_FIELDS: &[&str] = &[
     "step_duration",
     "overrun_ticks",
     "dropped_publications",
@@ -479,9 +479,4 @@ fn advance(
         }
     }
     Ok(())
-}
-
-/// A [`Value`] for tests and tools.
-pub fn value_of<M: Serialize>(m: &M) -> Option<Value> {
-    to_value(m).ok()
 }

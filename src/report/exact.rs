@@ -167,7 +167,7 @@ pub fn vibration_bending_angles(length: f64, segments: usize, tip: f64) -> Vec<f
 }
 
 /// World position of material point (s, v) on the exact strip: (x(s), v, z(s)).
-pub fn exact_point(curve: &PlanarCurve, m: &Point2) -> Point3 {
+fn exact_point(curve: &PlanarCurve, m: &Point2) -> Point3 {
     let p = curve.at(m.x);
     Point3::new(p[0], m.y, p[1])
 }
@@ -349,15 +349,15 @@ pub fn order(points: &[(f64, f64)]) -> Option<f64> {
 }
 
 /// The bounds `report --quick` holds the exact-solution scenes to (issue 15).
-pub const MIN_ORDER_IN_N: f64 = 1.8;
+const MIN_ORDER_IN_N: f64 = 1.8;
 /// Implicit Euler is first order: the measured slope in dt must lie in this range.
-pub const ORDER_IN_DT: (f64, f64) = (0.7, 1.3);
+const ORDER_IN_DT: (f64, f64) = (0.7, 1.3);
 /// Largest relative error at n = 50 of the static scenes (moment-matched clamp).
-pub const MAX_RELATIVE_ERROR_AT_50: f64 = 2e-3;
+const MAX_RELATIVE_ERROR_AT_50: f64 = 2e-3;
 /// Largest relative distance of the dynamic scene's errors from implicit Euler's theory
 /// on the first mode (what is left is the spatial error and the geometric
 /// nonlinearity: 2 % at dt 1.8 ms, n = 50, measured 2026-12-02).
-pub const MAX_DISTANCE_FROM_THEORY: f64 = 0.1;
+const MAX_DISTANCE_FROM_THEORY: f64 = 0.1;
 
 /// One pass / fail check of the exact-solution scenes.
 #[derive(Clone, Debug, PartialEq)]

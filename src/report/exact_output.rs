@@ -15,7 +15,7 @@ use super::plan::{Method, Sweep};
 use super::plot::{write_log_log, LogLogPlot, Series};
 use super::report_error::{io, ReportError};
 
-pub const EXACT_CSV_HEADER: &str = "scene,method,clamp,sweep,dt_s,segments,tolerance,steps,error_rms_m,error_relative,cpu_s,wall_s,iterations_median,unconverged_steps,stuck_steps,finite";
+const EXACT_CSV_HEADER: &str = "scene,method,clamp,sweep,dt_s,segments,tolerance,steps,error_rms_m,error_relative,cpu_s,wall_s,iterations_median,unconverged_steps,stuck_steps,finite";
 
 /// `exact.csv`: one row per run.
 pub fn write_exact_csv(path: &Path, scenes: &[ExactSceneReport]) -> Result<(), ReportError> {

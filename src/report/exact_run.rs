@@ -91,7 +91,7 @@ pub fn problem_of(file: &Path) -> Result<Option<ExactProblem>, ReportError> {
 }
 
 /// The scene-file name of a clamp rule.
-pub fn clamp_name(rule: ClampRule) -> &'static str {
+fn clamp_name(rule: ClampRule) -> &'static str {
     match rule {
         ClampRule::MomentMatched => "moment_matched",
         ClampRule::DualLength => "dual_length",

@@ -88,7 +88,7 @@ pub fn scene_defaults(file: &Path, duration: Option<f64>) -> Result<SceneDefault
 /// bend by n psi in all; a run with `n` elements instead of the scene's `n0` gets psi
 /// n0 / n, the same curve (same curvature psi n / l, same ruling angle), not a helix
 /// with n / n0 times as many turns.
-pub fn same_shape_overrides(
+fn same_shape_overrides(
     file: &Path,
     kind: SceneKind,
     spec: &RunSpec,

@@ -78,7 +78,7 @@ pub struct ReportScene {
 /// The scenes reported by default. The ribbons are compared only over the part of
 /// their motion where the trajectory is well posed, so an error against a reference
 /// means something (see `why`).
-pub const DEFAULT_SCENES: [ReportScene; 3] = [
+const DEFAULT_SCENES: [ReportScene; 3] = [
     ReportScene {
         name: "ribbon_extreme_torsion",
         quick_duration: 0.4,
@@ -171,7 +171,7 @@ pub const DEFAULT_SCENES: [ReportScene; 3] = [
 ];
 
 /// `*` and `?` file-name matching.
-pub fn glob_match(pattern: &str, name: &str) -> bool {
+fn glob_match(pattern: &str, name: &str) -> bool {
     fn rec(p: &[u8], n: &[u8]) -> bool {
         match (p.first(), n.first()) {
             (None, None) => true,

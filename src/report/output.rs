@@ -52,7 +52,7 @@ pub struct SceneReport {
 
 impl SceneReport {
     /// The method whose dt sweep gives the order in time.
-    pub fn fast_method(&self) -> Method {
+    fn fast_method(&self) -> Method {
         match self.plan.defaults.kind {
             SceneKind::Ribbon => Method::GaussNewton,
             SceneKind::Paper => Method::Paper,
@@ -60,7 +60,7 @@ impl SceneReport {
     }
 
     /// (dt, RMS error over time) of `method`'s dt sweep, coarse to fine.
-    pub fn dt_sweep(&self, method: Method) -> Vec<(f64, f64)> {
+    fn dt_sweep(&self, method: Method) -> Vec<(f64, f64)> {
         let mut v: Vec<(f64, f64)> = self
             .rows
             .iter()
@@ -72,19 +72,19 @@ impl SceneReport {
     }
 
     /// Slope of ln(error against the reference) over ln(dt), the fast method.
-    pub fn order_against_reference(&self) -> Option<f64> {
+    fn order_against_reference(&self) -> Option<f64> {
         log_log_slope(&self.dt_sweep(self.fast_method()))
     }
 
     /// The reference's estimated time error: RMS over time of its distance to the same
     /// run at twice its dt (for a first-order method e(2h) - e(h) ~ e(h)), m.
-    pub fn reference_error_estimate(&self) -> Option<f64> {
+    fn reference_error_estimate(&self) -> Option<f64> {
         self.reference_check.error.map(|e| e.rms_over_time)
     }
 
     /// Local order of the reference's own halvings ([`halving_order`]): its 2 dt run's
     /// distance to it against the 4 dt run's distance to the 2 dt run.
-    pub fn reference_order(&self) -> Option<f64> {
+    fn reference_order(&self) -> Option<f64> {
         halving_order(
             self.reference_error_estimate()?,
             self.reference_halving?.rms_over_time,
@@ -94,12 +94,12 @@ impl SceneReport {
     /// The reference's time error implied by its halvings, m ([`error_from_halvings`]):
     /// None when they do not converge (the reference's error is then not bounded by
     /// this report).
-    pub fn reference_error_bound(&self) -> Option<f64> {
+    fn reference_error_bound(&self) -> Option<f64> {
         error_from_halvings(self.reference_error_estimate()?, self.reference_order())
     }
 
     /// The reference and its 2 dt and 4 dt checks.
-    pub fn reference_rows(&self) -> [&Row; 3] {
+    fn reference_rows(&self) -> [&Row; 3] {
         [
             &self.reference,
             &self.reference_check,
@@ -234,7 +234,7 @@ fn sci(v: f64) -> String {
 
 /// Runs whose process CPU time exceeds their wall time by more than 5 % (+ 5 ms of
 /// clock granularity): they used more than one thread.
-pub fn multithreaded_runs(s: &SceneReport) -> Vec<&Row> {
+fn multithreaded_runs(s: &SceneReport) -> Vec<&Row> {
     s.reference_rows()
         .into_iter()
         .chain(&s.rows)
@@ -244,7 +244,7 @@ pub fn multithreaded_runs(s: &SceneReport) -> Vec<&Row> {
 
 /// Local orders along a (dt, error) sequence, coarse to fine: ln(e_i / e_i+1) /
 /// ln(dt_i / dt_i+1) for each pair.
-pub fn local_orders(sweep: &[(f64, f64)]) -> Vec<f64> {
+fn local_orders(sweep: &[(f64, f64)]) -> Vec<f64> {
     sweep
         .windows(2)
         .filter(|w| w[0].1 > 0.0 && w[1].1 > 0.0 && w[0].0 != w[1].0)
@@ -618,7 +618,7 @@ pub fn write_summary(
 
 /// The run-time budget of the equal-time comparison: the CPU time of the middle run of
 /// the fast method's dt sweep, s.
-pub fn equal_time_budget(s: &SceneReport) -> Option<f64> {
+fn equal_time_budget(s: &SceneReport) -> Option<f64> {
     let mut runs: Vec<&Row> = s
         .rows
         .iter()
@@ -629,7 +629,7 @@ pub fn equal_time_budget(s: &SceneReport) -> Option<f64> {
 }
 
 /// The smallest error `method` reaches with a run of at most `budget` s of CPU time.
-pub fn best_error(s: &SceneReport, method: Method, budget: f64) -> Option<f64> {
+fn best_error(s: &SceneReport, method: Method, budget: f64) -> Option<f64> {
     let pts: Vec<(f64, f64)> = s
         .rows
         .iter()

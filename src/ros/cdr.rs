@@ -19,7 +19,7 @@ pub enum CdrError {
 }
 
 /// Encapsulation header of little-endian plain CDR.
-pub const CDR_LE_HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
+const CDR_LE_HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Encode `msg` with the CDR_LE encapsulation header.
 pub fn encode<M: Serialize>(msg: &M) -> Result<Vec<u8>, CdrError> {

@@ -29,7 +29,7 @@ pub const DEFAULT_BIND: &str = "127.0.0.1";
 /// Messages queued per client before the oldest is dropped. Foxglove shows the newest
 /// mesh; 64 meshes of a 150-segment ribbon are ~4 MB per stalled client, where the
 /// SDK's default of 1024 would be ~60 MB.
-pub const CLIENT_BACKLOG: usize = 64;
+const CLIENT_BACKLOG: usize = 64;
 
 /// Where the server listens.
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -21,7 +21,7 @@ const INSIDE_TOLERANCE: f64 = 1e-6;
 
 /// The world frame at material point `m` of `mesh` (None: outside the pattern, or a
 /// degenerate mesh).
-pub fn frame_at(mesh: &SurfaceMesh, m: Point2) -> Option<Pose> {
+fn frame_at(mesh: &SurfaceMesh, m: Point2) -> Option<Pose> {
     let mut best: Option<(f64, usize, [f64; 3])> = None;
     for (k, t) in mesh.triangles.iter().enumerate() {
         let [a, b, c] = t.map(|i| mesh.material[i as usize]);

@@ -24,7 +24,7 @@ pub const TF_QOS: Qos = Qos {
     transient_local: false,
 };
 /// `/tf_static`: reliable, transient local (a late joiner gets the whole static tree).
-pub const TF_STATIC_QOS: Qos = Qos {
+const TF_STATIC_QOS: Qos = Qos {
     depth: 100,
     reliable: true,
     transient_local: true,

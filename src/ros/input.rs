@@ -11,7 +11,7 @@ use super::msgs::{HandleStatus, PoseStamped, Time};
 pub const MIN_QUATERNION_NORM: f64 = 1e-6;
 /// Accepted quaternions whose norm differs from 1 by more than this are counted as
 /// normalized (all accepted quaternions are normalized).
-pub const NORMALIZED_TOLERANCE: f64 = 1e-6;
+const NORMALIZED_TOLERANCE: f64 = 1e-6;
 
 /// What the filter accepts.
 #[derive(Clone, Debug, PartialEq)]

@@ -65,11 +65,6 @@ impl Time {
     pub fn nanos(&self) -> i64 {
         self.sec as i64 * 1_000_000_000 + self.nanosec as i64
     }
-
-    /// Seconds since the clock's epoch.
-    pub fn secs(&self) -> f64 {
-        self.sec as f64 + self.nanosec as f64 * 1e-9
-    }
 }
 
 /// `builtin_interfaces/msg/Duration`.
@@ -250,8 +245,6 @@ impl Marker {
     pub const TRIANGLE_LIST: i32 = 11;
     // `action`
     pub const ADD: i32 = 0;
-    pub const DELETE: i32 = 2;
-    pub const DELETEALL: i32 = 3;
 }
 
 /// `visualization_msgs/msg/MarkerArray`.
@@ -349,18 +342,6 @@ pub struct HandleStatus {
     pub rejected_future_stamp: u64,
     pub tf_frame: String,
     pub rejected_tf_lookup: u64,
-}
-
-impl HandleStatus {
-    /// All rejected poses.
-    pub fn rejected(&self) -> u64 {
-        self.rejected_non_finite
-            + self.rejected_zero_quaternion
-            + self.rejected_stale_stamp
-            + self.rejected_unknown_frame
-            + self.rejected_future_stamp
-            + self.rejected_tf_lookup
-    }
 }
 
 /// `developable_sim/msg/SimStatus` (msg/SimStatus.msg).

@@ -22,7 +22,7 @@ use super::foxglove::{Advertised, FoxgloveConfig, FoxgloveOut};
 use super::input::InputPolicy;
 use super::names::NodeNames;
 use super::node_stats::DropLog;
-pub use super::node_stats::{rss_kib, LatencyStats, NodeStats, Window};
+pub use super::node_stats::NodeStats;
 use super::param_server::ParamTable;
 use super::params::{ParamValue, Params};
 use super::session::{Frame, FrameContent, MarkerStyle, Session};
@@ -279,11 +279,6 @@ impl SimNode {
     /// Wakes the loop (for a signal handler: set the stop flag, then wake).
     pub fn waker(&self) -> Arc<Waker> {
         Arc::clone(&self.io.waker)
-    }
-
-    /// The resolved names (for the start-up banner).
-    pub fn names(&self) -> &NodeNames {
-        &self.names
     }
 
     fn period(&self) -> Duration {

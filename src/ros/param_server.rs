@@ -8,7 +8,7 @@ use super::params::{set_from_command_line, Declared, ParamType, ParamValue, Para
 
 /// Parameters that can change at run time, with the bound their value must keep
 /// (lower bound, whether the bound itself is allowed).
-pub const RUNTIME: &[(&str, Option<(f64, bool)>)] = &[
+const RUNTIME: &[(&str, Option<(f64, bool)>)] = &[
     ("paused", None),
     ("markers_rate", Some((0.0, true))),
     ("accept_empty_frame_id", None),
@@ -39,7 +39,7 @@ fn type_code(ty: ParamType) -> u8 {
 }
 
 /// A value as `rcl_interfaces/msg/ParameterValue`.
-pub fn to_msg(v: &ParamValue) -> ParameterValue {
+fn to_msg(v: &ParamValue) -> ParameterValue {
     let mut m = ParameterValue::default();
     match v {
         ParamValue::Bool(b) => (m.type_, m.bool_value) = (pt::BOOL, *b),

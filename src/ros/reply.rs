@@ -31,7 +31,7 @@ pub const RECHECK: Duration = Duration::from_millis(5);
 /// the client's participant has at least one matched reply reader: the discovery
 /// database may keep a predecessor's disposed endpoint for a while, so the counts alone
 /// could hold a reply until [`GIVE_UP`].
-pub const PAIR_WAIT: Duration = Duration::from_millis(200);
+const PAIR_WAIT: Duration = Duration::from_millis(200);
 /// How long a reply waits for the client's reader before it is sent regardless.
 pub const GIVE_UP: Duration = Duration::from_secs(5);
 
@@ -60,7 +60,7 @@ impl ClientWriters {
     /// its reply, given the readers `matched` to the reply writer: its participant has
     /// as many of them as request writers, or at least one and the reply has waited
     /// [`PAIR_WAIT`] (see the module doc).
-    pub fn settled(
+    fn settled(
         &self,
         request_topic: &str,
         matched: &[GUID],

@@ -206,7 +206,7 @@ pub fn parse_msg(package: &str, text: &str) -> Result<Vec<FieldDef>, String> {
 }
 
 /// `Type` -> `package/msg/Type`, `pkg/Type` -> `pkg/msg/Type`, `pkg/msg/Type` unchanged.
-pub fn normalize_type(package: &str, name: &str) -> String {
+fn normalize_type(package: &str, name: &str) -> String {
     let parts: Vec<&str> = name.split('/').collect();
     match parts.as_slice() {
         [t] => format!("{package}/msg/{t}"),

@@ -141,10 +141,6 @@ impl Session {
         self.inputs[handle].rejected_tf_lookup += 1;
     }
 
-    pub fn inputs(&self) -> &[HandleInput] {
-        &self.inputs
-    }
-
     /// Advance the world one step with the newest targets. Returns the report and the
     /// wall time of the step, s.
     pub fn step(&mut self) -> (StepReport, f64) {

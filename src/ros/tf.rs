@@ -31,7 +31,7 @@ use crate::geometry::{Pose, Rotation};
 use super::msgs::{Quaternion, TransformStamped, Vector3};
 
 /// How long dynamic transforms are kept behind a frame's newest stamp (tf2's default).
-pub const CACHE_TIME: Duration = Duration::from_secs(10);
+const CACHE_TIME: Duration = Duration::from_secs(10);
 
 /// Default of the `tf_max_lag` parameter, s: a lookup at most this long after the newest
 /// transform of a chain takes that newest transform.

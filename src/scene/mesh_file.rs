@@ -31,7 +31,7 @@ pub fn load_mesh(path: &Path) -> Result<(Vec<Point3>, Vec<[u32; 3]>), String> {
 
 /// Parse OBJ text: `v x y z` and `f a b c ...` (1-based or negative indices, `a/t/n`
 /// forms accepted); everything else is ignored.
-pub fn parse_obj(text: &str) -> Result<(Vec<Point3>, Vec<[u32; 3]>), String> {
+fn parse_obj(text: &str) -> Result<(Vec<Point3>, Vec<[u32; 3]>), String> {
     let mut vertices = Vec::new();
     let mut triangles = Vec::new();
     for (ln, line) in text.lines().enumerate() {
@@ -79,7 +79,7 @@ pub fn parse_obj(text: &str) -> Result<(Vec<Point3>, Vec<[u32; 3]>), String> {
 
 /// Parse STL, binary when its size matches the triangle count of the header, else
 /// ASCII.
-pub fn parse_stl(bytes: &[u8]) -> Result<(Vec<Point3>, Vec<[u32; 3]>), String> {
+fn parse_stl(bytes: &[u8]) -> Result<(Vec<Point3>, Vec<[u32; 3]>), String> {
     let mut soup: Vec<[f64; 3]> = Vec::new();
     let binary = bytes.len() >= 84 && {
         let count = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as usize;

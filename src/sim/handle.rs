@@ -83,13 +83,6 @@ impl Trajectory {
         }
         Pose::from_parts(position.coords.into(), rotation)
     }
-
-    /// Total rotation angle (rad) about the first motion's axis by time `t`, unwrapped:
-    /// used where a target must turn by more than pi (an extreme twist), since a pose
-    /// alone cannot tell 4*pi from 0.
-    pub fn end_time(&self) -> f64 {
-        self.motions.iter().map(|m| m.end).fold(0.0, f64::max)
-    }
 }
 
 #[cfg(test)]

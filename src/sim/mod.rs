@@ -13,8 +13,8 @@ mod world;
 
 pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
 pub use object::{
-    CompressionStats, ContactBody, Energies, NoClock, ObjectSim, ObjectStepReport, Phase,
-    PhaseClock, SingularPoint, StepContext,
+    CompressionStats, ContactBody, Energies, ObjectSim, ObjectStepReport, Phase, PhaseClock,
+    SingularPoint, StepContext,
 };
-pub use reach::{ReachMessage, ReachWatch};
+pub use reach::ReachWatch;
 pub use world::{ContactStepReport, StepReport, World};

@@ -122,26 +122,6 @@ pub struct StepContext<'a> {
     pub clock: &'a dyn PhaseClock,
 }
 
-impl<'a> StepContext<'a> {
-    /// A step of `dt` s to `time` s of object `index`, its phases run untimed.
-    pub fn new(
-        dt: f64,
-        time: f64,
-        index: usize,
-        handles: &'a [HandleSpec],
-        targets: &'a [Pose],
-    ) -> StepContext<'a> {
-        StepContext {
-            dt,
-            time,
-            index,
-            handles,
-            targets,
-            clock: &NoClock,
-        }
-    }
-}
-
 /// Edge strains of an object's physical mesh in its last frame (Schreck et al. table
 /// IV, V: compression; stretch as well), for objects that measure them (the paper).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

@@ -9,11 +9,11 @@ use super::{HandleSpec, StepReport};
 /// A grasp point farther than this from its target is out of reach, m: 1000x the
 /// solver's default constraint tolerance (1e-6 m), so no converging step comes near it,
 /// and small next to a gripper's own precision (~1 mm).
-pub const OUT_OF_REACH: f64 = 1e-3;
+const OUT_OF_REACH: f64 = 1e-3;
 
 /// Back in reach below half of [`OUT_OF_REACH`] (hysteresis: a violation hovering at
 /// the threshold does not repeat the message every tick).
-pub const BACK_IN_REACH: f64 = 0.5 * OUT_OF_REACH;
+const BACK_IN_REACH: f64 = 0.5 * OUT_OF_REACH;
 
 /// Per object: whether its handles are out of reach now.
 #[derive(Clone, Debug, Default)]

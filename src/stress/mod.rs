@@ -29,7 +29,7 @@
 //!
 //! [`ObjectStepReport::work_bound`]: crate::sim::ObjectStepReport::work_bound
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use serde::Serialize;
@@ -48,7 +48,7 @@ pub const PAPER_ENERGY_RELATIVE_TOLERANCE: f64 = 0.25;
 /// Absolute energy allowance, J (round-off of energies near zero).
 pub const ENERGY_ABSOLUTE_TOLERANCE: f64 = 1e-6;
 /// The time steps of every case, s.
-pub const TIME_STEPS: [f64; 3] = [0.001, 0.01, 0.1];
+const TIME_STEPS: [f64; 3] = [0.001, 0.01, 0.1];
 /// Share of a run's object steps that may stop on the solver's iteration limit (the
 /// best finite iterate is kept): a healthy case converges nearly everywhere; a solver
 /// that never moves (every step on the limit) fails.
@@ -66,7 +66,7 @@ pub struct Allowance {
 }
 
 /// The suite's default: [`UNCONVERGED_FRACTION`], no rejected step.
-pub const DEFAULT_ALLOWANCE: Allowance = Allowance {
+const DEFAULT_ALLOWANCE: Allowance = Allowance {
     unconverged_fraction: UNCONVERGED_FRACTION,
     rejected_steps: 0,
     reason: "",
@@ -111,7 +111,7 @@ pub struct StressCase {
 impl StressCase {
     /// Simulated time of a run with step `dt`: the case's duration, cut to the step
     /// limit (`max_steps` replaces the case's), and at least three steps.
-    pub fn duration_for(&self, dt: f64, quick: bool, max_steps: Option<usize>) -> f64 {
+    fn duration_for(&self, dt: f64, quick: bool, max_steps: Option<usize>) -> f64 {
         let (d, max) = if quick {
             (self.quick_duration, self.quick_max_steps)
         } else {
@@ -695,11 +695,6 @@ pub fn run_suite(
     Ok(report)
 }
 
-/// The default config folder: `config/` of the working directory.
-pub fn default_config() -> PathBuf {
-    PathBuf::from("config")
-}
-
 /// The pass/fail table and how to read it.
 pub fn markdown(report: &StressReport) -> String {
     let mut s = String::new();
@@ -775,6 +770,8 @@ pub fn markdown(report: &StressReport) -> String {
 
 #[cfg(test)]
 mod tests {
+    use std::path::PathBuf;
+
     use super::*;
 
     fn config() -> PathBuf {
