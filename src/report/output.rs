@@ -290,6 +290,24 @@ pub fn write_summary(
         // the exact-solution section is appended by the caller (`run_report`)
         return std::fs::write(path, md).map_err(io("cannot write", path));
     }
+    summary_header(&mut md, scenes, kind, command, (wall_s, cpu_s))?;
+    for s in scenes {
+        scene_reference(&mut md, s)?;
+        scene_runs(&mut md, s)?;
+        scene_order_and_front(&mut md, s)?;
+        scene_equal_time(&mut md, s)?;
+    }
+    std::fs::write(path, md).map_err(io("cannot write", path))
+}
+
+/// The report's opening: how errors and run times are measured, the methods.
+fn summary_header(
+    md: &mut String,
+    scenes: &[SceneReport],
+    kind: &str,
+    command: &str,
+    (wall_s, cpu_s): (f64, f64),
+) -> Result<(), ReportError> {
     writeln!(md, "# Error against run time\n")?;
     writeln!(
         md,
@@ -336,284 +354,304 @@ pub fn write_summary(
          keeps its shape: psi per crease scaled by n0/n); paper: boundary sample \
          density, samples/m.\n"
     )?;
-    for s in scenes {
-        let d = &s.plan.defaults;
-        let r = &s.reference.run.spec;
-        writeln!(md, "## {}\n", s.name)?;
-        if let Some(why) = &s.duration_note {
-            writeln!(
-                md,
-                "Compared over {} s, shorter than the scene: {why}.\n",
-                d.duration
-            )?;
-        }
+    Ok(())
+}
+
+/// A scene's heading and its reference: the run, its own error, warnings.
+fn scene_reference(md: &mut String, s: &SceneReport) -> Result<(), ReportError> {
+    let d = &s.plan.defaults;
+    let r = &s.reference.run.spec;
+    writeln!(md, "## {}\n", s.name)?;
+    if let Some(why) = &s.duration_note {
         writeln!(
             md,
-            "Simulated {} s, compared at {} times ({}) on {} material points. Reference: \
-             `{}`, dt = {} s (the sample interval / {}), resolution {} (default \
-             {}), tolerance {:e}; its run took {:.2} s CPU, {} of its {} steps stopped \
-             unconverged ({} of them stuck: no step found from the start).\n",
-            d.duration,
-            s.plan.sample_times.len(),
-            s.plan
-                .sample_times
-                .iter()
-                .map(|t| format!("{t:.3}"))
-                .collect::<Vec<_>>()
-                .join(", "),
-            s.points_total,
-            r.method.name(),
-            r.dt,
-            (s.plan.sample_times[0] / r.dt).round(),
-            r.resolution,
-            d.resolution,
-            r.tolerance,
-            s.reference.run.cpu_s,
-            s.reference.run.unconverged_steps,
-            s.reference.run.steps,
-            s.reference.run.stuck_steps,
+            "Compared over {} s, shorter than the scene: {why}.\n",
+            d.duration
         )?;
-        if let Some(e) = s.reference_error_estimate() {
-            write!(
-                md,
-                "**The reference's own error**: the same run at twice its dt \
-                 (`reference_2dt`) is {} m from it (RMS over time; {} at the end), and \
-                 the run at four times its dt (`reference_4dt`) is {} m from the 2 dt \
-                 run: local order of the reference's halvings {}. ",
-                sci(e),
-                s.reference_check
-                    .error
-                    .map_or("-".into(), |e| sci(e.at_end)),
-                s.reference_halving
-                    .map_or("-".into(), |e| sci(e.rms_over_time)),
-                s.reference_order()
-                    .map_or("n/a".into(), |p| format!("**{p:.2}**")),
-            )?;
-            match (s.reference_order(), s.reference_error_bound()) {
-                (Some(p), Some(b)) if p < 0.8 => writeln!(
-                    md,
-                    "Below first order, so the 2 dt distance understates the \
-                     reference's error: if the halvings kept shrinking at this order, \
-                     e(h) ~ d / (2^p - 1) = {} m; errors below that are not resolved \
-                     by this reference.\n",
-                    sci(b)
-                )?,
-                (_, Some(_)) => writeln!(
-                    md,
-                    "For implicit Euler (first order) e(2h) - e(h) ~ e(h), so errors \
-                     below ~{} m are not resolved by this reference.\n",
-                    sci(e)
-                )?,
-                (_, None) => writeln!(
-                    md,
-                    "**Halving dt does not bring these runs closer** (order <= 0.2: \
-                     the 4 dt run is hardly farther from the 2 dt run than that is from \
-                     the reference, where first order would make it twice as far), so \
-                     the reference is not converged in dt and its error is not bounded \
-                     by this report: {} m is only a lower bound, and errors within a few \
-                     times it are not resolved.\n",
-                    sci(e)
-                )?,
-            }
-        }
-        // measured separately (see docs/accuracy.md); shown where this run's halvings agree
-        if let Some(note) = s
-            .reference_note
-            .as_ref()
-            .filter(|_| s.reference_order().is_none_or(|p| p < 0.8))
-        {
-            writeln!(
-                md,
-                "**Why the reference does not converge in dt**: {note}.\n"
-            )?;
-        }
-        let stuck: Vec<usize> = s
-            .reference_rows()
+    }
+    writeln!(
+        md,
+        "Simulated {} s, compared at {} times ({}) on {} material points. Reference: \
+         `{}`, dt = {} s (the sample interval / {}), resolution {} (default \
+         {}), tolerance {:e}; its run took {:.2} s CPU, {} of its {} steps stopped \
+         unconverged ({} of them stuck: no step found from the start).\n",
+        d.duration,
+        s.plan.sample_times.len(),
+        s.plan
+            .sample_times
             .iter()
-            .map(|r| r.run.stuck_steps)
-            .collect();
-        if stuck.iter().any(|&n| n > 0) {
-            writeln!(
-                md,
-                "**Warning**: steps stuck at their start (the solver found no step and \
-                 kept it; for a ribbon that is the previous state, so the velocity drops \
-                 to zero): reference {}, 2 dt run {}, 4 dt run {}. A run with such a step \
-                 is not a converged solution; errors against it mean little.\n",
-                stuck[0], stuck[1], stuck[2]
-            )?;
-        }
-        if d.kind == SceneKind::Paper {
-            let used_min = s
-                .rows
-                .iter()
-                .filter_map(|r| r.error.map(|e| e.points_used_min))
-                .min()
-                .unwrap_or(0);
-            writeln!(
-                md,
-                "The paper pattern is remeshed while it runs, so the comparison uses a \
-                 grid of {} points inside the sheet (inset 1 % of its size) and skips the \
-                 points that fall outside either run's pattern at a sample time; the \
-                 fewest compared at any sample time in any run: {used_min}.\n",
-                s.points_total
-            )?;
-        }
-        writeln!(
+            .map(|t| format!("{t:.3}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        s.points_total,
+        r.method.name(),
+        r.dt,
+        (s.plan.sample_times[0] / r.dt).round(),
+        r.resolution,
+        d.resolution,
+        r.tolerance,
+        s.reference.run.cpu_s,
+        s.reference.run.unconverged_steps,
+        s.reference.run.steps,
+        s.reference.run.stuck_steps,
+    )?;
+    if let Some(e) = s.reference_error_estimate() {
+        write!(
             md,
-            "| method | sweep | dt s | resolution | tolerance | error_rms m | error_end m | isometry max | constraint max m | CPU s | CPU s per sim. s | wall s | step CPU ms (median) | iterations (median) | unconverged |"
-        )?;
-        writeln!(
-            md,
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
-        )?;
-        let threaded = multithreaded_runs(s);
-        for row in s.reference_rows().into_iter().chain(&s.rows) {
-            let r = &row.run;
-            let (e, e_end) = row
+            "**The reference's own error**: the same run at twice its dt \
+             (`reference_2dt`) is {} m from it (RMS over time; {} at the end), and \
+             the run at four times its dt (`reference_4dt`) is {} m from the 2 dt \
+             run: local order of the reference's halvings {}. ",
+            sci(e),
+            s.reference_check
                 .error
-                .map(|e| (sci(e.rms_over_time), sci(e.at_end)))
-                .unwrap_or(("-".into(), "-".into()));
-            let mark = if threaded.iter().any(|t| std::ptr::eq(*t, row)) {
-                " (>1 thread)"
-            } else {
-                ""
-            };
-            let unconverged = if r.stuck_steps > 0 {
-                format!("{} ({} stuck)", r.unconverged_steps, r.stuck_steps)
-            } else {
-                r.unconverged_steps.to_string()
-            };
-            writeln!(
-                md,
-                "| {} | {} | {:.6} | {} | {:e} | {e} | {e_end} | {} | {} | {:.3}{mark} | {:.3} | {:.3} | {:.3} | {} | {unconverged} |",
-                r.spec.method.name(),
-                r.spec.sweep.name(),
-                r.spec.dt,
-                r.spec.resolution,
-                r.spec.tolerance,
-                sci(r.isometry_error_max),
-                sci(r.constraint_violation_max),
-                r.cpu_s,
-                r.cpu_s / d.duration,
-                r.wall_s,
-                r.step_cpu_ms_median,
-                r.iterations_median,
-            )?;
-        }
-        let fast = s.fast_method();
-        writeln!(md)?;
-        let sweep = s.dt_sweep(fast);
-        writeln!(
-            md,
-            "**Order in time** (implicit Euler, `{}`): slope of ln(error) against ln(dt) \
-             over its dt sweep {}; from successive halvings (each run against the next \
-             finer one, which cancels the reference's own error) {}. Local orders, coarse \
-             to fine: against the reference {}; successive halvings {} (the distances \
-             between successive runs, m: {}).\n",
-            fast.name(),
-            s.order_against_reference()
+                .map_or("-".into(), |e| sci(e.at_end)),
+            s.reference_halving
+                .map_or("-".into(), |e| sci(e.rms_over_time)),
+            s.reference_order()
                 .map_or("n/a".into(), |p| format!("**{p:.2}**")),
-            s.self_convergence_order
-                .map_or("n/a".into(), |p| format!("**{p:.2}**")),
-            list(&local_orders(&sweep)),
-            list(&local_orders(&s.successive_differences)),
-            if s.successive_differences.is_empty() {
-                "n/a".to_string()
-            } else {
-                s.successive_differences
-                    .iter()
-                    .map(|(_, e)| sci(*e))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            },
         )?;
-        let points: Vec<(f64, f64)> = s
-            .rows
-            .iter()
-            .map(|r| {
-                (
-                    r.run.cpu_s,
-                    r.error.map_or(f64::INFINITY, |e| e.rms_over_time),
-                )
-            })
-            .collect();
-        writeln!(
-            md,
-            "**Pareto front** (no other run is both faster, in CPU time, and more \
-             accurate):\n"
-        )?;
-        for i in pareto_front(&points) {
-            let r = &s.rows[i].run;
-            writeln!(
+        match (s.reference_order(), s.reference_error_bound()) {
+            (Some(p), Some(b)) if p < 0.8 => writeln!(
                 md,
-                "- `{}` {} sweep, dt = {} s, resolution {}, tolerance {:e}: {} m in {:.3} s CPU",
-                r.spec.method.name(),
-                r.spec.sweep.name(),
-                r.spec.dt,
-                r.spec.resolution,
-                r.spec.tolerance,
-                sci(points[i].1),
-                points[i].0
-            )?;
-        }
-        writeln!(md)?;
-        if let Some(budget) = equal_time_budget(s) {
-            writeln!(
+                "Below first order, so the 2 dt distance understates the \
+                 reference's error: if the halvings kept shrinking at this order, \
+                 e(h) ~ d / (2^p - 1) = {} m; errors below that are not resolved \
+                 by this reference.\n",
+                sci(b)
+            )?,
+            (_, Some(_)) => writeln!(
                 md,
-                "**At equal run time** (budget {budget:.3} s CPU: the CPU time of the \
-                 middle run of the `{}` dt sweep): the best error each method reaches \
-                 within it, and what its cheapest run costs.\n",
-                fast.name()
-            )?;
-            writeln!(md, "| method | best error within budget, m | ratio to `{}` | cheapest run: CPU s, error m |", fast.name())?;
-            writeln!(md, "|---|---|---|---|")?;
-            let fast_err = best_error(s, fast, budget);
-            for m in s.methods() {
-                let best = best_error(s, m, budget);
-                let cheapest = s
-                    .rows
-                    .iter()
-                    .filter(|r| r.run.spec.method == m && r.error.is_some())
-                    .min_by(|a, b| a.run.cpu_s.total_cmp(&b.run.cpu_s));
-                writeln!(
-                    md,
-                    "| `{}` | {} | {} | {} |",
-                    m.name(),
-                    best.map_or("none within budget".into(), sci),
-                    match (best, fast_err) {
-                        (Some(b), Some(f)) if f > 0.0 => format!("{:.2}", b / f),
-                        _ => "-".into(),
-                    },
-                    cheapest.map_or("-".into(), |r| format!(
-                        "{:.3} s, {}",
-                        r.run.cpu_s,
-                        sci(r.error.map_or(f64::NAN, |e| e.rms_over_time))
-                    ))
-                )?;
-            }
-            writeln!(md)?;
-            match (fast_err, s.reference_error_bound()) {
-                (Some(f), Some(b)) if f < 3.0 * b => writeln!(
-                    md,
-                    "The `{}` error within budget ({} m) is less than 3x the \
-                     reference's own error ({} m, above): the ratios at this budget are \
-                     not resolved.\n",
-                    fast.name(),
-                    sci(f),
-                    sci(b)
-                )?,
-                (Some(_), None) if s.reference_error_estimate().is_some() => writeln!(
-                    md,
-                    "The reference is not converged in dt (above): the errors and ratios \
-                     at this budget hold only where they are well above its {} m lower \
-                     bound.\n",
-                    sci(s.reference_error_estimate().unwrap_or(f64::NAN))
-                )?,
-                _ => {}
-            }
+                "For implicit Euler (first order) e(2h) - e(h) ~ e(h), so errors \
+                 below ~{} m are not resolved by this reference.\n",
+                sci(e)
+            )?,
+            (_, None) => writeln!(
+                md,
+                "**Halving dt does not bring these runs closer** (order <= 0.2: \
+                 the 4 dt run is hardly farther from the 2 dt run than that is from \
+                 the reference, where first order would make it twice as far), so \
+                 the reference is not converged in dt and its error is not bounded \
+                 by this report: {} m is only a lower bound, and errors within a few \
+                 times it are not resolved.\n",
+                sci(e)
+            )?,
         }
     }
-    std::fs::write(path, md).map_err(io("cannot write", path))
+    // measured separately (see docs/accuracy.md); shown where this run's halvings agree
+    if let Some(note) = s
+        .reference_note
+        .as_ref()
+        .filter(|_| s.reference_order().is_none_or(|p| p < 0.8))
+    {
+        writeln!(
+            md,
+            "**Why the reference does not converge in dt**: {note}.\n"
+        )?;
+    }
+    let stuck: Vec<usize> = s
+        .reference_rows()
+        .iter()
+        .map(|r| r.run.stuck_steps)
+        .collect();
+    if stuck.iter().any(|&n| n > 0) {
+        writeln!(
+            md,
+            "**Warning**: steps stuck at their start (the solver found no step and \
+             kept it; for a ribbon that is the previous state, so the velocity drops \
+             to zero): reference {}, 2 dt run {}, 4 dt run {}. A run with such a step \
+             is not a converged solution; errors against it mean little.\n",
+            stuck[0], stuck[1], stuck[2]
+        )?;
+    }
+    if d.kind == SceneKind::Paper {
+        let used_min = s
+            .rows
+            .iter()
+            .filter_map(|r| r.error.map(|e| e.points_used_min))
+            .min()
+            .unwrap_or(0);
+        writeln!(
+            md,
+            "The paper pattern is remeshed while it runs, so the comparison uses a \
+             grid of {} points inside the sheet (inset 1 % of its size) and skips the \
+             points that fall outside either run's pattern at a sample time; the \
+             fewest compared at any sample time in any run: {used_min}.\n",
+            s.points_total
+        )?;
+    }
+    Ok(())
+}
+
+/// A scene's table of runs, the reference's first.
+fn scene_runs(md: &mut String, s: &SceneReport) -> Result<(), ReportError> {
+    let d = &s.plan.defaults;
+    writeln!(
+        md,
+        "| method | sweep | dt s | resolution | tolerance | error_rms m | error_end m | isometry max | constraint max m | CPU s | CPU s per sim. s | wall s | step CPU ms (median) | iterations (median) | unconverged |"
+    )?;
+    writeln!(
+        md,
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+    )?;
+    let threaded = multithreaded_runs(s);
+    for row in s.reference_rows().into_iter().chain(&s.rows) {
+        let r = &row.run;
+        let (e, e_end) = row
+            .error
+            .map(|e| (sci(e.rms_over_time), sci(e.at_end)))
+            .unwrap_or(("-".into(), "-".into()));
+        let mark = if threaded.iter().any(|t| std::ptr::eq(*t, row)) {
+            " (>1 thread)"
+        } else {
+            ""
+        };
+        let unconverged = if r.stuck_steps > 0 {
+            format!("{} ({} stuck)", r.unconverged_steps, r.stuck_steps)
+        } else {
+            r.unconverged_steps.to_string()
+        };
+        writeln!(
+            md,
+            "| {} | {} | {:.6} | {} | {:e} | {e} | {e_end} | {} | {} | {:.3}{mark} | {:.3} | {:.3} | {:.3} | {} | {unconverged} |",
+            r.spec.method.name(),
+            r.spec.sweep.name(),
+            r.spec.dt,
+            r.spec.resolution,
+            r.spec.tolerance,
+            sci(r.isometry_error_max),
+            sci(r.constraint_violation_max),
+            r.cpu_s,
+            r.cpu_s / d.duration,
+            r.wall_s,
+            r.step_cpu_ms_median,
+            r.iterations_median,
+        )?;
+    }
+    Ok(())
+}
+
+/// A scene's order in time and its Pareto front.
+fn scene_order_and_front(md: &mut String, s: &SceneReport) -> Result<(), ReportError> {
+    let fast = s.fast_method();
+    writeln!(md)?;
+    let sweep = s.dt_sweep(fast);
+    writeln!(
+        md,
+        "**Order in time** (implicit Euler, `{}`): slope of ln(error) against ln(dt) \
+         over its dt sweep {}; from successive halvings (each run against the next \
+         finer one, which cancels the reference's own error) {}. Local orders, coarse \
+         to fine: against the reference {}; successive halvings {} (the distances \
+         between successive runs, m: {}).\n",
+        fast.name(),
+        s.order_against_reference()
+            .map_or("n/a".into(), |p| format!("**{p:.2}**")),
+        s.self_convergence_order
+            .map_or("n/a".into(), |p| format!("**{p:.2}**")),
+        list(&local_orders(&sweep)),
+        list(&local_orders(&s.successive_differences)),
+        if s.successive_differences.is_empty() {
+            "n/a".to_string()
+        } else {
+            s.successive_differences
+                .iter()
+                .map(|(_, e)| sci(*e))
+                .collect::<Vec<_>>()
+                .join(", ")
+        },
+    )?;
+    let points: Vec<(f64, f64)> = s
+        .rows
+        .iter()
+        .map(|r| {
+            (
+                r.run.cpu_s,
+                r.error.map_or(f64::INFINITY, |e| e.rms_over_time),
+            )
+        })
+        .collect();
+    writeln!(
+        md,
+        "**Pareto front** (no other run is both faster, in CPU time, and more \
+         accurate):\n"
+    )?;
+    for i in pareto_front(&points) {
+        let r = &s.rows[i].run;
+        writeln!(
+            md,
+            "- `{}` {} sweep, dt = {} s, resolution {}, tolerance {:e}: {} m in {:.3} s CPU",
+            r.spec.method.name(),
+            r.spec.sweep.name(),
+            r.spec.dt,
+            r.spec.resolution,
+            r.spec.tolerance,
+            sci(points[i].1),
+            points[i].0
+        )?;
+    }
+    writeln!(md)?;
+    Ok(())
+}
+
+/// A scene's comparison of the methods at equal run time, if it has a budget.
+fn scene_equal_time(md: &mut String, s: &SceneReport) -> Result<(), ReportError> {
+    let fast = s.fast_method();
+    if let Some(budget) = equal_time_budget(s) {
+        writeln!(
+            md,
+            "**At equal run time** (budget {budget:.3} s CPU: the CPU time of the \
+             middle run of the `{}` dt sweep): the best error each method reaches \
+             within it, and what its cheapest run costs.\n",
+            fast.name()
+        )?;
+        writeln!(md, "| method | best error within budget, m | ratio to `{}` | cheapest run: CPU s, error m |", fast.name())?;
+        writeln!(md, "|---|---|---|---|")?;
+        let fast_err = best_error(s, fast, budget);
+        for m in s.methods() {
+            let best = best_error(s, m, budget);
+            let cheapest = s
+                .rows
+                .iter()
+                .filter(|r| r.run.spec.method == m && r.error.is_some())
+                .min_by(|a, b| a.run.cpu_s.total_cmp(&b.run.cpu_s));
+            writeln!(
+                md,
+                "| `{}` | {} | {} | {} |",
+                m.name(),
+                best.map_or("none within budget".into(), sci),
+                match (best, fast_err) {
+                    (Some(b), Some(f)) if f > 0.0 => format!("{:.2}", b / f),
+                    _ => "-".into(),
+                },
+                cheapest.map_or("-".into(), |r| format!(
+                    "{:.3} s, {}",
+                    r.run.cpu_s,
+                    sci(r.error.map_or(f64::NAN, |e| e.rms_over_time))
+                ))
+            )?;
+        }
+        writeln!(md)?;
+        match (fast_err, s.reference_error_bound()) {
+            (Some(f), Some(b)) if f < 3.0 * b => writeln!(
+                md,
+                "The `{}` error within budget ({} m) is less than 3x the \
+                 reference's own error ({} m, above): the ratios at this budget are \
+                 not resolved.\n",
+                fast.name(),
+                sci(f),
+                sci(b)
+            )?,
+            (Some(_), None) if s.reference_error_estimate().is_some() => writeln!(
+                md,
+                "The reference is not converged in dt (above): the errors and ratios \
+                 at this budget hold only where they are well above its {} m lower \
+                 bound.\n",
+                sci(s.reference_error_estimate().unwrap_or(f64::NAN))
+            )?,
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// The run-time budget of the equal-time comparison: the CPU time of the middle run of
