@@ -19,7 +19,7 @@ use super::recorder::{SessionInfo, SESSION_RECORD};
 use super::RecordError;
 use crate::ros::cdr;
 use crate::ros::input::InputPolicy;
-use crate::ros::introspect::{compare, to_value};
+use crate::ros::introspect::{compare, to_value, Value};
 use crate::ros::msgs::{Clock, MarkerArray, PoseStamped, RosMessage, SimStatus, SingularPoints};
 use crate::ros::session::{Frame, FrameContent, Session};
 use crate::sim::StepReport;
@@ -144,10 +144,7 @@ fn topic_entry<'a>(
 
 /// Replay the bag folder `dir`.
 pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, RecordError> {
-    let bag_err = |message: String| RecordError::Bag {
-        path: dir.to_path_buf(),
-        message,
-    };
+    let bag_err = |message: String| bag_error(dir, message);
     let start = std::time::Instant::now();
     let files = mcap_files(dir)?;
     let mut report = ReplayReport {
@@ -179,64 +176,13 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                     if session.is_some() {
                         continue;
                     }
-                    let i = SessionInfo::from_record(&values)
-                        .map_err(|m| bag_err(format!("{}: {m}", file.display())))?;
-                    let scene = match &options.scene {
-                        Some(p) => crate::scene::load(p, &[]),
-                        None => {
-                            crate::scene::load_str(&i.scene_yaml, Path::new(&i.scene_file), &[])
-                        }
-                    }
-                    .map_err(|e| bag_err(format!("cannot rebuild the scene: {e}")))?;
-                    report.scene = scene.name.clone();
-                    if scene.world.handles().len() != i.handle_topics.len()
-                        || scene.world.object_names().len() != i.object_topics.len()
-                    {
-                        return Err(bag_err(format!(
-                            "the scene has {} handles and {} objects, the bag {} and {}",
-                            scene.world.handles().len(),
-                            scene.world.object_names().len(),
-                            i.handle_topics.len(),
-                            i.object_topics.len()
-                        )));
-                    }
-                    let policy = InputPolicy {
-                        frame_id: i.frame_id.clone(),
-                        accept_empty_frame_id: i.accept_empty_frame_id,
-                        max_stamp_lead: i.max_stamp_lead,
-                    };
-                    let status_topics = if i.status_handle_topics.len() == i.handle_topics.len() {
-                        i.status_handle_topics.clone()
-                    } else {
-                        i.handle_topics.clone()
-                    };
-                    let mut s = Session::new(scene, policy, status_topics);
-                    s.style.line_width = i.line_width;
-                    s.style.sphere_diameter = i.sphere_diameter;
-                    for (h, t) in i.handle_topics.iter().enumerate() {
-                        routes.insert(t.clone(), Route::Input(h));
-                    }
-                    for (h, t) in i.tf_failure_topics.iter().enumerate() {
-                        routes.insert(t.clone(), Route::TfFailure(h));
-                    }
-                    if let Some(c) = &i.clock_topic {
-                        routes.insert(c.clone(), Route::Output(Output::Clock));
-                    }
-                    if let Some(c) = &i.colliders_topic {
-                        content.markers = true;
-                        routes.insert(c.clone(), Route::Output(Output::Colliders));
-                    }
-                    for (o, (m, sp, st)) in i.object_topics.iter().enumerate() {
-                        if let Some(m) = m {
-                            content.markers = true;
-                            routes.insert(m.clone(), Route::Output(Output::Markers(o)));
-                        }
-                        if let Some(sp) = sp {
-                            content.singular_points = true;
-                            routes.insert(sp.clone(), Route::Output(Output::Singular(o)));
-                        }
-                        routes.insert(st.clone(), Route::Output(Output::Status(o)));
-                    }
+                    let (s, i) = start_session(
+                        (dir, file),
+                        &values,
+                        options,
+                        &mut report,
+                        (&mut routes, &mut content),
+                    )?;
                     session = Some(s);
                     info = Some(i);
                 }
@@ -337,50 +283,8 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                             .map_err(|e| bag_err(e.to_string()))?;
                             seen.insert(out);
                             let entry = topic_entry(&mut per_topic, &m.topic, &m.type_name);
-                            entry.compared += 1;
                             let step = current.map(|c| c.1).unwrap_or(0);
-                            match computed {
-                                None => {
-                                    entry.differing += 1;
-                                    entry.structural.get_or_insert_with(|| {
-                                        format!(
-                                            "step {step}: recorded but not produced by the replay"
-                                        )
-                                    });
-                                    if entry.first_difference.is_empty() {
-                                        entry.first_difference = format!(
-                                            "step {step}: recorded, not produced by the replay"
-                                        );
-                                    }
-                                }
-                                Some(mut c) => {
-                                    let mut r = recorded;
-                                    if matches!(out, Output::Status(_)) {
-                                        for f in WALL_CLOCK_STATUS_FIELDS {
-                                            r.zero_field(f);
-                                            c.zero_field(f);
-                                        }
-                                    }
-                                    let d = compare(&r, &c);
-                                    if !d.is_zero() {
-                                        entry.differing += 1;
-                                        if entry.first_difference.is_empty() {
-                                            let at =
-                                                d.structural.as_deref().unwrap_or(&d.first_path);
-                                            entry.first_difference = format!("step {step}: {at}");
-                                        }
-                                    }
-                                    if d.max_abs > entry.max_abs_difference {
-                                        entry.max_abs_difference = d.max_abs;
-                                        entry.max_at = format!("step {step}: {}", d.max_path);
-                                    }
-                                    if let Some(sd) = d.structural {
-                                        entry
-                                            .structural
-                                            .get_or_insert_with(|| format!("step {step}: {sd}"));
-                                    }
-                                }
-                            }
+                            tally(entry, step, out, recorded, computed);
                         }
                     }
                 }
@@ -417,6 +321,133 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
         .all(|t| t.differing == 0 && t.missing == 0 && t.structural.is_none());
     report.wall_s = start.elapsed().as_secs_f64();
     Ok(report)
+}
+
+fn bag_error(dir: &Path, message: String) -> RecordError {
+    RecordError::Bag {
+        path: dir.to_path_buf(),
+        message,
+    }
+}
+
+/// The session a bag's SESSION_RECORD describes: its scene rebuilt (or the one given in
+/// `options`), the topics routed to inputs and outputs, the outputs it recorded.
+fn start_session(
+    (dir, file): (&Path, &Path),
+    values: &BTreeMap<String, String>,
+    options: &ReplayOptions,
+    report: &mut ReplayReport,
+    (routes, content): (&mut BTreeMap<String, Route>, &mut FrameContent),
+) -> Result<(Session, SessionInfo), RecordError> {
+    let i = SessionInfo::from_record(values)
+        .map_err(|m| bag_error(dir, format!("{}: {m}", file.display())))?;
+    let scene = match &options.scene {
+        Some(p) => crate::scene::load(p, &[]),
+        None => crate::scene::load_str(&i.scene_yaml, Path::new(&i.scene_file), &[]),
+    }
+    .map_err(|e| bag_error(dir, format!("cannot rebuild the scene: {e}")))?;
+    report.scene = scene.name.clone();
+    if scene.world.handles().len() != i.handle_topics.len()
+        || scene.world.object_names().len() != i.object_topics.len()
+    {
+        return Err(bag_error(
+            dir,
+            format!(
+                "the scene has {} handles and {} objects, the bag {} and {}",
+                scene.world.handles().len(),
+                scene.world.object_names().len(),
+                i.handle_topics.len(),
+                i.object_topics.len()
+            ),
+        ));
+    }
+    let policy = InputPolicy {
+        frame_id: i.frame_id.clone(),
+        accept_empty_frame_id: i.accept_empty_frame_id,
+        max_stamp_lead: i.max_stamp_lead,
+    };
+    let status_topics = if i.status_handle_topics.len() == i.handle_topics.len() {
+        i.status_handle_topics.clone()
+    } else {
+        i.handle_topics.clone()
+    };
+    let mut s = Session::new(scene, policy, status_topics);
+    s.style.line_width = i.line_width;
+    s.style.sphere_diameter = i.sphere_diameter;
+    for (h, t) in i.handle_topics.iter().enumerate() {
+        routes.insert(t.clone(), Route::Input(h));
+    }
+    for (h, t) in i.tf_failure_topics.iter().enumerate() {
+        routes.insert(t.clone(), Route::TfFailure(h));
+    }
+    if let Some(c) = &i.clock_topic {
+        routes.insert(c.clone(), Route::Output(Output::Clock));
+    }
+    if let Some(c) = &i.colliders_topic {
+        content.markers = true;
+        routes.insert(c.clone(), Route::Output(Output::Colliders));
+    }
+    for (o, (m, sp, st)) in i.object_topics.iter().enumerate() {
+        if let Some(m) = m {
+            content.markers = true;
+            routes.insert(m.clone(), Route::Output(Output::Markers(o)));
+        }
+        if let Some(sp) = sp {
+            content.singular_points = true;
+            routes.insert(sp.clone(), Route::Output(Output::Singular(o)));
+        }
+        routes.insert(st.clone(), Route::Output(Output::Status(o)));
+    }
+    Ok((s, i))
+}
+
+/// Count one recorded output against what the replay computed for it.
+fn tally(
+    entry: &mut TopicReport,
+    step: u64,
+    out: Output,
+    recorded: Value,
+    computed: Option<Value>,
+) {
+    entry.compared += 1;
+    match computed {
+        None => {
+            entry.differing += 1;
+            entry.structural.get_or_insert_with(|| {
+                format!("step {step}: recorded but not produced by the replay")
+            });
+            if entry.first_difference.is_empty() {
+                entry.first_difference =
+                    format!("step {step}: recorded, not produced by the replay");
+            }
+        }
+        Some(mut c) => {
+            let mut r = recorded;
+            if matches!(out, Output::Status(_)) {
+                for f in WALL_CLOCK_STATUS_FIELDS {
+                    r.zero_field(f);
+                    c.zero_field(f);
+                }
+            }
+            let d = compare(&r, &c);
+            if !d.is_zero() {
+                entry.differing += 1;
+                if entry.first_difference.is_empty() {
+                    let at = d.structural.as_deref().unwrap_or(&d.first_path);
+                    entry.first_difference = format!("step {step}: {at}");
+                }
+            }
+            if d.max_abs > entry.max_abs_difference {
+                entry.max_abs_difference = d.max_abs;
+                entry.max_at = format!("step {step}: {}", d.max_path);
+            }
+            if let Some(sd) = d.structural {
+                entry
+                    .structural
+                    .get_or_insert_with(|| format!("step {step}: {sd}"));
+            }
+        }
+    }
 }
 
 /// Status fields that depend on the wall clock or on the node's run state, not on the
