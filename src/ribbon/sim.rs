@@ -77,6 +77,161 @@ pub struct RibbonSim {
     loaded_before: Vec<Pose>,
 }
 
+/// The constraints the world's handles put on one ribbon: equalities (position,
+/// orientation, loop closure) and normal guides, each with the handle that drives it.
+struct HandleConstraints {
+    equalities: Vec<Equality>,
+    /// The world handle of each equality (None for a loop closure).
+    equality_handles: Vec<Option<usize>>,
+    normal_guides: Vec<NormalGuide>,
+    /// The world handle of each normal guide.
+    guide_handles: Vec<usize>,
+}
+
+impl HandleConstraints {
+    /// The constraints of the handles with `object == index` (the one driving a
+    /// prescribed base excepted) and the loop closure, in that order; targets are
+    /// placeholders until the first step sets them.
+    fn new(params: &RibbonParams, index: usize, handles: &[HandleSpec]) -> HandleConstraints {
+        let mut c = HandleConstraints {
+            equalities: Vec::new(),
+            equality_handles: Vec::new(),
+            normal_guides: Vec::new(),
+            guide_handles: Vec::new(),
+        };
+        let driven_by = match &params.base {
+            BaseMode::Prescribed { driven_by, .. } => *driven_by,
+            _ => None,
+        };
+        for (h, spec) in handles.iter().enumerate() {
+            if spec.object != index || Some(h) == driven_by {
+                continue;
+            }
+            if spec.position_axes.iter().any(|&a| a) {
+                c.equalities.push(Equality::Position {
+                    material_point: spec.material_point,
+                    target: Point3::origin(),
+                    axes: spec.position_axes,
+                });
+                c.equality_handles.push(Some(h));
+            }
+            match spec.orientation {
+                OrientationMode::Free => {}
+                OrientationMode::Normal { stiffness } => {
+                    c.normal_guides.push(NormalGuide {
+                        material_point: spec.material_point,
+                        target: Vector3::z(),
+                        stiffness,
+                    });
+                    c.guide_handles.push(h);
+                }
+                OrientationMode::Full => {
+                    c.equalities.push(Equality::Orientation {
+                        material_point: spec.material_point,
+                        target: nalgebra::Matrix3::identity(),
+                    });
+                    c.equality_handles.push(Some(h));
+                }
+            }
+        }
+        if let Some(kind) = params.loop_closure {
+            c.equalities.push(Equality::Loop(kind));
+            c.equality_handles.push(None);
+        }
+        c
+    }
+}
+
+/// The coordinates of a ribbon in `initial` shape with its base at `base_pose`, plus
+/// the seeded `imperfection` (rad) on every crease's c_k and psi_k.
+fn initial_coordinates(
+    n: usize,
+    base_pose: Pose,
+    initial: &RibbonInitialShape,
+    imperfection: Imperfection,
+) -> Coordinates {
+    let mut coords = Coordinates::flat(n, base_pose);
+    match initial {
+        RibbonInitialShape::Flat => {}
+        RibbonInitialShape::Ring => {
+            for k in 1..n {
+                coords.bending_angle[k] = 2.0 * std::f64::consts::PI / n as f64;
+            }
+        }
+        RibbonInitialShape::Helix {
+            crease_direction,
+            bending_angle,
+        } => {
+            for k in 1..n {
+                coords.crease_direction[k] = *crease_direction;
+                coords.bending_angle[k] = *bending_angle;
+            }
+        }
+        RibbonInitialShape::Explicit {
+            crease_direction,
+            bending_angle,
+        } => {
+            coords.crease_direction[1..n].copy_from_slice(&crease_direction[..n - 1]);
+            coords.bending_angle[1..n].copy_from_slice(&bending_angle[..n - 1]);
+        }
+    }
+    if imperfection.amplitude > 0.0 {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(imperfection.seed);
+        let a = imperfection.amplitude;
+        for k in 1..n {
+            coords.crease_direction[k] += rng.random_range(-a..=a);
+            coords.bending_angle[k] += rng.random_range(-a..=a);
+        }
+    }
+    coords
+}
+
+/// The step objective's data before the first step: the material (density, bending
+/// weights per crease with the clamps, regularizer), gravity (m/s^2), the point forces
+/// (N), the handles' equalities (zero multipliers) and normal guides, the scene's mu and
+/// the crease bound Δc_max. h is a placeholder (0.01 s) that every step overwrites.
+fn initial_terms(
+    params: &RibbonParams,
+    strip: &Strip,
+    index: usize,
+    handles: &[HandleSpec],
+    forces: &[RibbonForce],
+    equalities: Vec<Equality>,
+    normal_guides: Vec<NormalGuide>,
+) -> StepTerms {
+    let multipliers = equalities.iter().map(|e| vec![0.0; e.rows()]).collect();
+    let mut crease_bending = Vec::new();
+    crease_bending_weights(
+        params.bending_stiffness,
+        strip,
+        params.clamp,
+        &clamp_stations(&params.base, handles, index),
+        &mut crease_bending,
+    );
+    StepTerms {
+        h: 0.01,
+        kinetic: params.kinetic,
+        density: params.density,
+        crease_bending,
+        crease_regularizer: params.crease_regularizer,
+        gravity: Vector3::from(params.gravity),
+        normal_guides,
+        forces: forces
+            .iter()
+            .map(|f| PointForce {
+                material_point: f.material_point,
+                force: f.force,
+            })
+            .collect(),
+        equalities,
+        multipliers,
+        end_crease_multipliers: [0.0, 0.0],
+        penalty: params.solver.penalty,
+        crease_bound: params.crease_bound(),
+    }
+}
+
 impl RibbonSim {
     /// A ribbon at rest in `initial` shape. `handles` are the world's handles; those
     /// with `object == index` act on this ribbon.
@@ -98,40 +253,7 @@ impl RibbonSim {
             BaseMode::Prescribed { pose, .. } => *pose,
             BaseMode::Floating { initial } => *initial,
         };
-        let mut coords = Coordinates::flat(n, base_pose);
-        match initial {
-            RibbonInitialShape::Flat => {}
-            RibbonInitialShape::Ring => {
-                for k in 1..n {
-                    coords.bending_angle[k] = 2.0 * std::f64::consts::PI / n as f64;
-                }
-            }
-            RibbonInitialShape::Helix {
-                crease_direction,
-                bending_angle,
-            } => {
-                for k in 1..n {
-                    coords.crease_direction[k] = *crease_direction;
-                    coords.bending_angle[k] = *bending_angle;
-                }
-            }
-            RibbonInitialShape::Explicit {
-                crease_direction,
-                bending_angle,
-            } => {
-                coords.crease_direction[1..n].copy_from_slice(&crease_direction[..n - 1]);
-                coords.bending_angle[1..n].copy_from_slice(&bending_angle[..n - 1]);
-            }
-        }
-        if imperfection.amplitude > 0.0 {
-            use rand::{Rng, SeedableRng};
-            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(imperfection.seed);
-            let a = imperfection.amplitude;
-            for k in 1..n {
-                coords.crease_direction[k] += rng.random_range(-a..=a);
-                coords.bending_angle[k] += rng.random_range(-a..=a);
-            }
-        }
+        let coords = initial_coordinates(n, base_pose, initial, imperfection);
         let mut frames = Frames::default();
         reconstruct(&strip, &coords, &mut frames);
         let history = RimHistory::at_rest(&strip, &coords.crease_direction, &frames);
@@ -140,80 +262,16 @@ impl RibbonSim {
             segments: n,
             floating,
         };
-
-        let mut equalities = Vec::new();
-        let mut equality_handles = Vec::new();
-        let mut normal_guides = Vec::new();
-        let mut guide_handles = Vec::new();
-        let driven_by = match &params.base {
-            BaseMode::Prescribed { driven_by, .. } => *driven_by,
-            _ => None,
-        };
-        for (h, spec) in handles.iter().enumerate() {
-            if spec.object != index || Some(h) == driven_by {
-                continue;
-            }
-            if spec.position_axes.iter().any(|&a| a) {
-                equalities.push(Equality::Position {
-                    material_point: spec.material_point,
-                    target: Point3::origin(),
-                    axes: spec.position_axes,
-                });
-                equality_handles.push(Some(h));
-            }
-            match spec.orientation {
-                OrientationMode::Free => {}
-                OrientationMode::Normal { stiffness } => {
-                    normal_guides.push(NormalGuide {
-                        material_point: spec.material_point,
-                        target: Vector3::z(),
-                        stiffness,
-                    });
-                    guide_handles.push(h);
-                }
-                OrientationMode::Full => {
-                    equalities.push(Equality::Orientation {
-                        material_point: spec.material_point,
-                        target: nalgebra::Matrix3::identity(),
-                    });
-                    equality_handles.push(Some(h));
-                }
-            }
-        }
-        if let Some(kind) = params.loop_closure {
-            equalities.push(Equality::Loop(kind));
-            equality_handles.push(None);
-        }
-        let multipliers = equalities.iter().map(|e| vec![0.0; e.rows()]).collect();
-        let mut crease_bending = Vec::new();
-        crease_bending_weights(
-            params.bending_stiffness,
+        let constraints = HandleConstraints::new(&params, index, handles);
+        let terms = initial_terms(
+            &params,
             &strip,
-            params.clamp,
-            &clamp_stations(&params.base, handles, index),
-            &mut crease_bending,
+            index,
+            handles,
+            forces,
+            constraints.equalities,
+            constraints.normal_guides,
         );
-        let terms = StepTerms {
-            h: 0.01,
-            kinetic: params.kinetic,
-            density: params.density,
-            crease_bending,
-            crease_regularizer: params.crease_regularizer,
-            gravity: Vector3::from(params.gravity),
-            normal_guides,
-            forces: forces
-                .iter()
-                .map(|f| PointForce {
-                    material_point: f.material_point,
-                    force: f.force,
-                })
-                .collect(),
-            equalities,
-            multipliers,
-            end_crease_multipliers: [0.0, 0.0],
-            penalty: params.solver.penalty,
-            crease_bound: params.crease_bound(),
-        };
         let mut q = vec![0.0; layout.len()];
         layout.pack(&coords, &base_pose, &mut q);
         let mut sim = RibbonSim {
@@ -225,8 +283,8 @@ impl RibbonSim {
             previous_history: history.clone(),
             history,
             terms,
-            equality_handles,
-            guide_handles,
+            equality_handles: constraints.equality_handles,
+            guide_handles: constraints.guide_handles,
             solver: StepSolver::default(),
             q,
             mesh: SurfaceMesh::default(),

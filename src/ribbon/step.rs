@@ -251,6 +251,101 @@ impl BoxProblem for ZChain<'_, '_, '_> {
     }
 }
 
+/// What one round's multiplier update (algorithm 2) gives: the new multipliers and the
+/// residuals at the round's q.
+struct MultiplierUpdate {
+    /// λ - μ C per equality (`StepTerms::multipliers` layout), J/m for positions.
+    multipliers: Vec<Vec<f64>>,
+    /// min(0, λ + μ (Δc_max -+ c_{n-1})) of the two end-crease inequalities.
+    end_crease_multipliers: [f64; 2],
+    /// Whether an end-crease inequality is active (before or after the update).
+    end_active: bool,
+    /// Largest position residual, m, and the index of its equality.
+    max_position: f64,
+    worst: Option<usize>,
+    /// Largest rotation residual, dimensionless.
+    max_rotation: f64,
+    /// c_{n-1} at the round's q.
+    c_last: f64,
+}
+
+/// The residuals at the round's new `q` and the multiplier update they give (algorithm
+/// 2), read from `objective.terms`; the caller stores them once the objective is done.
+fn multiplier_update(
+    objective: &Objective,
+    workspace: &mut Workspace,
+    q: &[f64],
+) -> MultiplierUpdate {
+    let terms = objective.terms;
+    let layout = objective.layout;
+    objective.prepare(q, workspace);
+    let mut residual = [0.0; 9];
+    let mut max_pos: f64 = 0.0;
+    let mut max_rot: f64 = 0.0;
+    let mut worst: Option<usize> = None;
+    let mut updates: Vec<Vec<f64>> = Vec::with_capacity(terms.equalities.len());
+    for (index, (eq, lambda)) in terms.equalities.iter().zip(&terms.multipliers).enumerate() {
+        let rows = eq.rows();
+        objective.equality_residual(workspace, eq, &mut residual[..rows]);
+        for (i, r) in residual[..rows].iter().enumerate() {
+            if eq.is_rotation_row(i) {
+                max_rot = max_rot.max(r.abs());
+            } else if r.abs() > max_pos {
+                max_pos = r.abs();
+                worst = Some(index);
+            }
+        }
+        updates.push(
+            lambda
+                .iter()
+                .zip(&residual[..rows])
+                .map(|(l, c)| l - terms.penalty * c)
+                .collect(),
+        );
+    }
+    let bound = terms.crease_bound;
+    let c_last = q[layout.c(layout.segments - 1)];
+    let mu = terms.penalty;
+    let end = [
+        (terms.end_crease_multipliers[0] + mu * (bound - c_last)).min(0.0),
+        (terms.end_crease_multipliers[1] + mu * (bound + c_last)).min(0.0),
+    ];
+    let end_active =
+        end.iter().any(|&l| l < 0.0) || terms.end_crease_multipliers.iter().any(|&l| l < 0.0);
+    MultiplierUpdate {
+        multipliers: updates,
+        end_crease_multipliers: end,
+        end_active,
+        max_position: max_pos,
+        worst,
+        max_rotation: max_rot,
+        c_last,
+    }
+}
+
+/// The next step's starting mu after a step that did not raise it: relaxed toward the
+/// scene's (a large mu makes the inner problems stiffer), but not below |lambda| / (l/n)
+/// for the position rows, J/m^2. The shifted penalty mu/2 (C - lambda/mu)^2 pulls toward
+/// a point lambda/mu away from the target; with the large multiplier that holds a stiff
+/// ribbon (~1e3 N) and the scene's mu that point is ~1 m away, and the next step's first
+/// round ran off to it (a 0.97 m violation on a 1000 J ribbon). One element length
+/// keeps it on the ribbon's own scale.
+fn relaxed_penalty(strip: Strip, terms: &StepTerms, settings: &SolverSettings) -> f64 {
+    let element = strip.length / strip.segments as f64;
+    let mut largest_force: f64 = 0.0;
+    for (eq, lambda) in terms.equalities.iter().zip(&terms.multipliers) {
+        for (i, l) in lambda.iter().enumerate() {
+            if !eq.is_rotation_row(i) {
+                largest_force = largest_force.max(l.abs());
+            }
+        }
+    }
+    let floor = (largest_force / element)
+        .min(MAX_PENALTY_GROWTH * settings.penalty)
+        .max(settings.penalty);
+    (terms.penalty / PENALTY_GROWTH).max(floor)
+}
+
 impl StepSolver {
     /// Solve one step starting from (and writing to) `q`. `terms` multipliers are
     /// updated in place (augmented Lagrangian).
@@ -265,7 +360,6 @@ impl StepSolver {
         settings: &SolverSettings,
         q: &mut [f64],
     ) -> SolveOutcome {
-        let nq = q.len();
         let mut outcome = SolveOutcome {
             converged: true,
             ..Default::default()
@@ -275,7 +369,6 @@ impl StepSolver {
         // Adaptive penalty (ours; the paper's solver keeps the scene's fixed mu): mu
         // carries over from the last step, relaxed at its end (below).
         let adaptive = matches!(settings.kind, SolverKind::GaussNewton | SolverKind::Chain);
-        let chain = settings.kind == SolverKind::Chain;
         if !adaptive {
             objective_terms.penalty = settings.penalty;
         }
@@ -286,148 +379,22 @@ impl StepSolver {
             self.q_prev.extend_from_slice(q);
             let objective = Objective::new(strip, floating, objective_terms, history, base);
             let layout = objective.layout;
-            self.z.resize(nq, 0.0);
-            q_to_z(&layout, q, &mut self.z);
             let bound = objective_terms.crease_bound;
-            self.lower.clear();
-            self.upper.clear();
-            self.lower.resize(nq, f64::NEG_INFINITY);
-            self.upper.resize(nq, f64::INFINITY);
-            for k in 1..layout.segments {
-                self.lower[layout.c(k)] = -bound;
-                self.upper[layout.c(k)] = bound;
-            }
-            // keep the start feasible
-            for i in 0..nq {
-                self.z[i] = self.z[i].clamp(self.lower[i], self.upper[i]);
-            }
-            self.q_scratch.resize(nq, 0.0);
-            self.gq_scratch.resize(nq, 0.0);
-            let mut problem = ZProblem {
-                objective: &objective,
-                workspace: &mut self.workspace,
-                q: std::mem::take(&mut self.q_scratch),
-                gq: std::mem::take(&mut self.gq_scratch),
-                mode: GradientMode::Adjoint,
-                second_order: false,
-            };
-            let (iterations, converged, f) = match settings.kind {
-                SolverKind::GaussNewton | SolverKind::Chain => {
-                    // relative gradient tolerance against the first round's start (the
-                    // solver measures it at its first evaluation)
-                    let opts = NewtonOptions {
-                        max_iterations: settings.max_iterations,
-                        pgtol: settings.tolerance * pg0.unwrap_or(0.0),
-                        ftol: FTOL,
-                        pgtol_relative_to_start: match pg0 {
-                            Some(_) => None,
-                            None => Some(settings.tolerance),
-                        },
-                        // a later round differs from the last one only by the multiplier
-                        // update: start with chord steps on its final factorization
-                        reuse_factorization: outer > 0,
-                    };
-                    problem.second_order = true;
-                    let r = if chain {
-                        self.chain.minimize(
-                            &mut ZChain(&mut problem),
-                            &mut self.z,
-                            &self.lower,
-                            &self.upper,
-                            &opts,
-                        )
-                    } else {
-                        self.newton.minimize(
-                            &mut ZNewton(&mut problem),
-                            &mut self.z,
-                            &self.lower,
-                            &self.upper,
-                            &opts,
-                        )
-                    };
-                    pg0.get_or_insert(r.initial_projected_gradient_inf.max(1e-300));
-                    (r.iterations, r.converged, r.f)
-                }
-                SolverKind::Lbfgsb => {
-                    // relative gradient tolerance against the first round's start
-                    let scale = *pg0.get_or_insert_with(|| {
-                        let mut g = vec![0.0; nq];
-                        problem.evaluate(&self.z, Some(&mut g));
-                        crate::optim::projected_gradient_inf(&self.z, &g, &self.lower, &self.upper)
-                            .max(1e-300)
-                    });
-                    let pgtol = settings.tolerance * scale;
-                    let options = LbfgsbOptions {
-                        max_iterations: settings.max_iterations as usize,
-                        pgtol,
-                        ftol: FTOL,
-                        ..LbfgsbOptions::default()
-                    };
-                    if self.lbfgsb.as_ref().map(|(n, _)| *n) != Some(nq) {
-                        self.lbfgsb = Some((nq, Lbfgsb::new(nq, options)));
-                    }
-                    let (_, solver) = self.lbfgsb.as_mut().expect("created above");
-                    *solver.options_mut() = options;
-                    let r = solver.minimize(&mut self.z, &self.lower, &self.upper, |z, g| {
-                        problem.evaluate(z, Some(g))
-                    });
-                    (r.iterations as u32, r.converged(), r.f)
-                }
-            };
-            self.q_scratch = std::mem::take(&mut problem.q);
-            self.gq_scratch = std::mem::take(&mut problem.gq);
-            drop(problem);
+            self.start_round(&layout, q, bound);
+            let (iterations, converged, f) =
+                self.inner_solve(&objective, settings, outer, &mut pg0);
             outcome.iterations += iterations;
             outcome.outer_iterations = outer + 1;
             outcome.converged &= converged;
             outcome.objective = f;
             z_to_q(&layout, &self.z, q);
-            // residuals at the new q and the multiplier update (algorithm 2)
-            objective.prepare(q, &mut self.workspace);
-            let mut residual = [0.0; 9];
-            let mut max_pos: f64 = 0.0;
-            let mut max_rot: f64 = 0.0;
-            let mut worst: Option<usize> = None;
-            let mut updates: Vec<Vec<f64>> = Vec::with_capacity(objective_terms.equalities.len());
-            for (index, (eq, lambda)) in objective_terms
-                .equalities
-                .iter()
-                .zip(&objective_terms.multipliers)
-                .enumerate()
-            {
-                let rows = eq.rows();
-                objective.equality_residual(&self.workspace, eq, &mut residual[..rows]);
-                for (i, r) in residual[..rows].iter().enumerate() {
-                    if eq.is_rotation_row(i) {
-                        max_rot = max_rot.max(r.abs());
-                    } else if r.abs() > max_pos {
-                        max_pos = r.abs();
-                        worst = Some(index);
-                    }
-                }
-                updates.push(
-                    lambda
-                        .iter()
-                        .zip(&residual[..rows])
-                        .map(|(l, c)| l - objective_terms.penalty * c)
-                        .collect(),
-                );
-            }
-            let c_last = q[layout.c(layout.segments - 1)];
-            let mu = objective_terms.penalty;
-            let end = [
-                (objective_terms.end_crease_multipliers[0] + mu * (bound - c_last)).min(0.0),
-                (objective_terms.end_crease_multipliers[1] + mu * (bound + c_last)).min(0.0),
-            ];
-            let end_active = end.iter().any(|&l| l < 0.0)
-                || objective_terms
-                    .end_crease_multipliers
-                    .iter()
-                    .any(|&l| l < 0.0);
-            objective_terms.multipliers = updates;
-            objective_terms.end_crease_multipliers = end;
+            let update = multiplier_update(&objective, &mut self.workspace, q);
+            let (max_pos, max_rot, c_last) =
+                (update.max_position, update.max_rotation, update.c_last);
+            objective_terms.multipliers = update.multipliers;
+            objective_terms.end_crease_multipliers = update.end_crease_multipliers;
             outcome.constraint_violation = max_pos;
-            outcome.worst_equality = worst;
+            outcome.worst_equality = update.worst;
             outcome.orientation_violation = max_rot;
             let change = q
                 .iter()
@@ -452,7 +419,7 @@ impl StepSolver {
             let stalled = residual > 0.25 * last_residual || change < settings.outer_tolerance;
             let grow = adaptive && !satisfied && stalled && objective_terms.penalty < cap;
             last_residual = residual;
-            if !(has_equalities || end_active)
+            if !(has_equalities || update.end_active)
                 || satisfied
                 || (change < settings.outer_tolerance && !grow)
             {
@@ -467,33 +434,121 @@ impl StepSolver {
             }
         }
         if adaptive && !grew {
-            // No round of this step needed a larger mu: relax it toward the scene's for
-            // the next step (a large mu makes the inner problems stiffer), but not below
-            // |lambda| / (l/n) for the position rows. The shifted penalty
-            // mu/2 (C - lambda/mu)^2 pulls toward a point lambda/mu away from the target;
-            // with the large multiplier that holds a stiff ribbon (~1e3 N) and the
-            // scene's mu that point is ~1 m away, and the next step's first round ran off
-            // to it (a 0.97 m violation on a 1000 J ribbon). One element length keeps it
-            // on the ribbon's own scale.
-            let element = strip.length / strip.segments as f64;
-            let mut largest_force: f64 = 0.0;
-            for (eq, lambda) in objective_terms
-                .equalities
-                .iter()
-                .zip(&objective_terms.multipliers)
-            {
-                for (i, l) in lambda.iter().enumerate() {
-                    if !eq.is_rotation_row(i) {
-                        largest_force = largest_force.max(l.abs());
-                    }
-                }
-            }
-            let floor = (largest_force / element)
-                .min(MAX_PENALTY_GROWTH * settings.penalty)
-                .max(settings.penalty);
-            objective_terms.penalty = (objective_terms.penalty / PENALTY_GROWTH).max(floor);
+            // No round of this step needed a larger mu: relax it for the next step.
+            objective_terms.penalty = relaxed_penalty(strip, objective_terms, settings);
         }
         outcome
+    }
+
+    /// A round's start in z (q -> z) and its box: |z_k| <= Δc_max on the crease
+    /// differences k = 1..n-1 (dimensionless), the rest unbounded; the start is
+    /// clamped into the box so that it is feasible.
+    fn start_round(&mut self, layout: &Layout, q: &[f64], bound: f64) {
+        let nq = q.len();
+        self.z.resize(nq, 0.0);
+        q_to_z(layout, q, &mut self.z);
+        self.lower.clear();
+        self.upper.clear();
+        self.lower.resize(nq, f64::NEG_INFINITY);
+        self.upper.resize(nq, f64::INFINITY);
+        for k in 1..layout.segments {
+            self.lower[layout.c(k)] = -bound;
+            self.upper[layout.c(k)] = bound;
+        }
+        // keep the start feasible
+        for i in 0..nq {
+            self.z[i] = self.z[i].clamp(self.lower[i], self.upper[i]);
+        }
+    }
+
+    /// One round's inner problem in z from `self.z` (written back): our projected
+    /// Newton (dense or chain matrix) or L-BFGS-B, with the gradient tolerance relative
+    /// to the first round's start (`pg0`, set by the first round). Returns (iterations,
+    /// converged, final objective in J).
+    fn inner_solve(
+        &mut self,
+        objective: &Objective,
+        settings: &SolverSettings,
+        outer: u32,
+        pg0: &mut Option<f64>,
+    ) -> (u32, bool, f64) {
+        let nq = self.z.len();
+        self.q_scratch.resize(nq, 0.0);
+        self.gq_scratch.resize(nq, 0.0);
+        let mut problem = ZProblem {
+            objective,
+            workspace: &mut self.workspace,
+            q: std::mem::take(&mut self.q_scratch),
+            gq: std::mem::take(&mut self.gq_scratch),
+            mode: GradientMode::Adjoint,
+            second_order: false,
+        };
+        let result = match settings.kind {
+            SolverKind::GaussNewton | SolverKind::Chain => {
+                // relative gradient tolerance against the first round's start (the
+                // solver measures it at its first evaluation)
+                let opts = NewtonOptions {
+                    max_iterations: settings.max_iterations,
+                    pgtol: settings.tolerance * pg0.unwrap_or(0.0),
+                    ftol: FTOL,
+                    pgtol_relative_to_start: match pg0 {
+                        Some(_) => None,
+                        None => Some(settings.tolerance),
+                    },
+                    // a later round differs from the last one only by the multiplier
+                    // update: start with chord steps on its final factorization
+                    reuse_factorization: outer > 0,
+                };
+                problem.second_order = true;
+                let r = if settings.kind == SolverKind::Chain {
+                    self.chain.minimize(
+                        &mut ZChain(&mut problem),
+                        &mut self.z,
+                        &self.lower,
+                        &self.upper,
+                        &opts,
+                    )
+                } else {
+                    self.newton.minimize(
+                        &mut ZNewton(&mut problem),
+                        &mut self.z,
+                        &self.lower,
+                        &self.upper,
+                        &opts,
+                    )
+                };
+                pg0.get_or_insert(r.initial_projected_gradient_inf.max(1e-300));
+                (r.iterations, r.converged, r.f)
+            }
+            SolverKind::Lbfgsb => {
+                // relative gradient tolerance against the first round's start
+                let scale = *pg0.get_or_insert_with(|| {
+                    let mut g = vec![0.0; nq];
+                    problem.evaluate(&self.z, Some(&mut g));
+                    crate::optim::projected_gradient_inf(&self.z, &g, &self.lower, &self.upper)
+                        .max(1e-300)
+                });
+                let pgtol = settings.tolerance * scale;
+                let options = LbfgsbOptions {
+                    max_iterations: settings.max_iterations as usize,
+                    pgtol,
+                    ftol: FTOL,
+                    ..LbfgsbOptions::default()
+                };
+                if self.lbfgsb.as_ref().map(|(n, _)| *n) != Some(nq) {
+                    self.lbfgsb = Some((nq, Lbfgsb::new(nq, options)));
+                }
+                let (_, solver) = self.lbfgsb.as_mut().expect("created above");
+                *solver.options_mut() = options;
+                let r = solver.minimize(&mut self.z, &self.lower, &self.upper, |z, g| {
+                    problem.evaluate(z, Some(g))
+                });
+                (r.iterations as u32, r.converged(), r.f)
+            }
+        };
+        self.q_scratch = std::mem::take(&mut problem.q);
+        self.gq_scratch = std::mem::take(&mut problem.gq);
+        result
     }
 }
 
