@@ -7,7 +7,7 @@
 
 use nalgebra::{Matrix2, Matrix3, Vector2};
 
-use super::params::{Collider, PaperParams};
+use super::params::PaperParams;
 use super::physical::{signed_dihedral, PhysicalMesh};
 use super::sparse::BlockSpd;
 use crate::geometry::{Point3, Vector3};
@@ -316,17 +316,6 @@ fn add_block3(h: &mut BlockSpd, i: usize, j: usize, m: &Matrix3<f64>, diagonal: 
     } else {
         h.add_block(i, j, &a);
     }
-}
-
-/// Signed distance (m) of every vertex to every collider, the smallest.
-pub fn min_collider_distance(colliders: &[Collider], x: &[Point3]) -> f64 {
-    let mut d = f64::INFINITY;
-    for c in colliders {
-        for p in x {
-            d = d.min(c.distance(&p.coords).0);
-        }
-    }
-    d
 }
 
 /// One implicit-Euler step of `dt` s: new positions and velocities of `mesh`.

@@ -67,11 +67,6 @@ impl Pattern {
         (hi.x - lo.x).max(hi.y - lo.y)
     }
 
-    /// Area, m^2.
-    pub fn area(&self) -> f64 {
-        polygon_area(&self.corners)
-    }
-
     /// `s` wrapped into [0, perimeter).
     pub fn wrap(&self, s: f64) -> f64 {
         let p = self.perimeter();
@@ -105,13 +100,6 @@ impl Pattern {
             0.0
         };
         a + (b - a) * t
-    }
-
-    /// Unit tangent (counter-clockwise) of the side holding `s`.
-    pub fn tangent_at(&self, s: f64) -> Vector2<f64> {
-        let i = self.side_of(s);
-        let n = self.corners.len();
-        (self.corners[(i + 1) % n] - self.corners[i]).normalize()
     }
 
     /// Arc length of `p` when it lies on ∂S̄ within `tol` (m).
@@ -188,12 +176,6 @@ impl Pattern {
         Some([(s_lo, t_lo), (s_hi, t_hi)])
     }
 
-    /// Where the ray `origin + t dir`, t > 0, leaves the polygon (origin inside):
-    /// (arc length, t).
-    pub fn ray_exit(&self, origin: &Point2, dir: &Vector2<f64>) -> Option<(f64, f64)> {
-        let [_, (s, t)] = self.clip_line(origin, dir)?;
-        (t > 0.0).then_some((s, t))
-    }
 }
 
 /// Distance from `p` to the segment [a, b] and the parameter of the closest point.

@@ -202,9 +202,6 @@ impl PaperSim {
     pub fn geometric_layer(&self) -> &GeometricLayer {
         &self.layer
     }
-    pub fn geometric_mesh(&self) -> &GeometricMesh {
-        &self.gmesh
-    }
     pub fn physical_mesh(&self) -> &PhysicalMesh {
         &self.sp
     }

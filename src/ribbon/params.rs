@@ -150,8 +150,4 @@ impl RibbonParams {
     pub fn element_length(&self) -> f64 {
         self.length / self.segments as f64
     }
-    /// Total mass rho l w, kg.
-    pub fn mass(&self) -> f64 {
-        self.density * self.length * self.width
-    }
 }

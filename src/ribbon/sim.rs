@@ -306,9 +306,6 @@ impl RibbonSim {
     pub fn strip(&self) -> &Strip {
         &self.strip
     }
-    pub fn history(&self) -> &RimHistory {
-        &self.history
-    }
     pub fn mesh(&self) -> &SurfaceMesh {
         &self.mesh
     }
@@ -317,46 +314,6 @@ impl RibbonSim {
     }
     pub fn last_outcome(&self) -> &SolveOutcome {
         &self.last_outcome
-    }
-
-    /// Find a static equilibrium before t = 0: quasi-static steps (no inertia, no
-    /// gravity, no point forces) from the current shape until the constraints hold and
-    /// the shape stops changing, then zero velocities. Used to close loops from a ring
-    /// guess. Returns the number of steps taken.
-    pub fn settle(&mut self, handles: &[HandleSpec], targets: &[Pose], max_steps: usize) -> usize {
-        let (kinetic, gravity) = (self.params.kinetic, self.params.gravity);
-        let forces = std::mem::take(&mut self.terms.forces);
-        self.params.kinetic = KineticModel::QuasiStatic;
-        self.terms.kinetic = KineticModel::QuasiStatic;
-        self.terms.gravity = Vector3::zeros();
-        let mut taken = 0;
-        for _ in 0..max_steps {
-            let before = self.q.clone();
-            let report = self.step(1.0, 0.0, 0, handles, targets);
-            taken += 1;
-            let change = before
-                .iter()
-                .zip(&self.q)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max);
-            if report.kept_previous_state {
-                break;
-            }
-            if report.converged
-                && report.constraint_violation <= self.params.solver.constraint_tolerance
-                && change < 1e-9
-            {
-                break;
-            }
-        }
-        self.params.kinetic = kinetic;
-        self.terms.kinetic = kinetic;
-        self.terms.gravity = Vector3::from(gravity);
-        self.terms.forces = forces;
-        self.history =
-            RimHistory::at_rest(&self.strip, &self.coords.crease_direction, &self.frames);
-        self.q_delta.clear();
-        taken
     }
 
     /// Overwrite the previous-step velocities (m/s) with a rigid motion: angular
@@ -734,27 +691,6 @@ impl RibbonSim {
 
 #[doc(hidden)]
 impl RibbonSim {
-    /// Benchmark hook: one evaluation with the Hessian at the current state.
-    pub fn evaluate_hessian(&mut self) -> f64 {
-        let base = self.coords.base;
-        let mut q = self.q.clone();
-        self.layout.pack(&self.coords, &base, &mut q);
-        let objective = super::objective::Objective::new(
-            self.strip,
-            self.layout.floating,
-            &self.terms,
-            &self.history,
-            base,
-        );
-        let mut g = vec![0.0; q.len()];
-        let mut h = nalgebra::DMatrix::zeros(q.len(), q.len());
-        objective.evaluate(
-            &q,
-            &mut self.solver.workspace,
-            Some((&mut g, super::objective::GradientMode::Adjoint)),
-            Some(&mut h),
-        )
-    }
 }
 
 impl ContactBody for RibbonSim {
