@@ -44,7 +44,7 @@ use crate::geometry::{Point2, Point3, SurfaceMesh, Vector3, VertexRegion};
 use crate::metrics::world_at_material;
 use crate::paper::sparse::BlockSpd;
 use crate::ribbon::{BaseMode, RibbonSim};
-use crate::sim::{OrientationMode, Trajectory, World};
+use crate::sim::{HandleSpec, OrientationMode, Trajectory, World};
 
 /// Settings of the conforming FEM.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -160,57 +160,16 @@ impl ConformingFem {
         if rp.loop_closure.is_some() {
             return Err(BaselineError::Unsupported("loops"));
         }
-        let (na, nc) = (params.along.max(1), params.across.max(1));
-        let (l, w) = (rp.length, rp.width);
-        let index = |i: usize, j: usize| i * (nc + 1) + j;
-        let mut material = Vec::with_capacity((na + 1) * (nc + 1));
-        for i in 0..=na {
-            for j in 0..=nc {
-                material.push(Point2::new(
-                    l * i as f64 / na as f64,
-                    w * (j as f64 / nc as f64 - 0.5),
-                ));
-            }
-        }
-        let mut triangles = Vec::with_capacity(2 * na * nc);
-        for i in 0..na {
-            for j in 0..nc {
-                let (a, b, c, d) = (
-                    index(i, j),
-                    index(i + 1, j),
-                    index(i + 1, j + 1),
-                    index(i, j + 1),
-                );
-                triangles.push([a as u32, b as u32, c as u32]);
-                triangles.push([a as u32, c as u32, d as u32]);
-            }
-        }
-        // initial positions: the ribbon's surface at each material point (pulled a
-        // hair inside so boundary points resolve in the ribbon's remeshed pattern)
-        let ribbon_mesh = ribbon.mesh();
-        let mut vertices = Vec::with_capacity(material.len());
-        for m in &material {
-            let inside = Point2::new(
-                m.x.clamp(1e-9 * l, l * (1.0 - 1e-9)),
-                m.y.clamp(-0.5 * w * (1.0 - 1e-9), 0.5 * w * (1.0 - 1e-9)),
-            );
-            let p = world_at_material(ribbon_mesh, &inside).ok_or(BaselineError::Unsupported(
-                "a ribbon mesh not covering its strip",
-            ))?;
-            vertices.push(p);
-        }
+        let grid = Grid {
+            along: params.along.max(1),
+            across: params.across.max(1),
+            length: rp.length,
+            width: rp.width,
+        };
+        let (material, triangles) = grid.pattern();
+        let vertices = grid.initial_positions(ribbon.mesh(), &material)?;
         let n = vertices.len();
-        let mut mass = vec![0.0; n];
-        for t in &triangles {
-            let [a, b, c] = t.map(|i| i as usize);
-            let area = 0.5
-                * (material[b] - material[a])
-                    .perp(&(material[c] - material[a]))
-                    .abs();
-            for v in [a, b, c] {
-                mass[v] += rp.density * area / 3.0;
-            }
-        }
+        let mass = lumped_masses(&material, &triangles, rp.density);
         let mesh = SurfaceMesh {
             vertices,
             triangles,
@@ -231,78 +190,8 @@ impl ConformingFem {
         // handles -> held vertices
         let handles: Vec<_> = world.handles().iter().collect();
         let trajectories = handles.iter().map(|h| h.trajectory.clone()).collect();
-        let mut held: Vec<Held> = Vec::new();
-        let hold = |vertex: usize, axes: [bool; 3], driver: Driver, held: &mut Vec<Held>| {
-            held.push(Held {
-                vertex,
-                axes,
-                driver,
-                initial: mesh.vertices[vertex],
-            });
-        };
-        match &rp.base {
-            BaseMode::Prescribed { driven_by, .. } => {
-                let driver = match driven_by {
-                    Some(h) => Driver::Handle(*h),
-                    None => Driver::Fixed,
-                };
-                let element = rp.element_length();
-                for (v, m) in mesh.material.iter().enumerate() {
-                    if m.x <= element * (1.0 + 1e-9) {
-                        hold(v, [true; 3], driver.clone(), &mut held);
-                    }
-                }
-            }
-            BaseMode::Floating { .. } => {}
-        }
-        for (h_index, h) in handles.iter().enumerate() {
-            if matches!(rp.base, BaseMode::Prescribed { driven_by: Some(d), .. } if d == h_index) {
-                continue; // the base already follows it
-            }
-            let column = ((h.material_point.x / l) * na as f64)
-                .round()
-                .clamp(0.0, na as f64) as usize;
-            match h.orientation {
-                OrientationMode::Free => {
-                    let row = ((h.material_point.y / w + 0.5) * nc as f64)
-                        .round()
-                        .clamp(0.0, nc as f64) as usize;
-                    if h.position_axes.iter().any(|&a| a) {
-                        hold(
-                            index(column, row),
-                            h.position_axes,
-                            Driver::Handle(h_index),
-                            &mut held,
-                        );
-                    }
-                }
-                OrientationMode::Normal { .. } | OrientationMode::Full => {
-                    let axes = if h.orientation == OrientationMode::Full {
-                        [true; 3]
-                    } else {
-                        h.position_axes
-                    };
-                    if !axes.iter().any(|&a| a) {
-                        return Err(BaselineError::Unsupported(
-                            "a normal-guided handle that holds no position axis",
-                        ));
-                    }
-                    for row in 0..=nc {
-                        hold(index(column, row), axes, Driver::Handle(h_index), &mut held);
-                    }
-                }
-            }
-        }
-        // a vertex held twice keeps the first driver on the axes both hold (the base
-        // wins over a handle)
-        let mut fixed_dof = vec![false; 3 * n];
-        held.retain_mut(|hv| {
-            for a in 0..3 {
-                hv.axes[a] &= !fixed_dof[3 * hv.vertex + a];
-                fixed_dof[3 * hv.vertex + a] |= hv.axes[a];
-            }
-            hv.axes.iter().any(|&a| a)
-        });
+        let mut held = grid.held_vertices(&rp.base, &handles, &mesh, rp.element_length())?;
+        let fixed_dof = hold_each_dof_once(&mut held, n);
         let mut couplings = mesh
             .triangles
             .iter()
@@ -311,8 +200,8 @@ impl ConformingFem {
         let matrix = BlockSpd::new(n, 3, &mut couplings);
         Ok(ConformingFem {
             params: ConformingFemParams {
-                along: na,
-                across: nc,
+                along: grid.along,
+                across: grid.across,
                 ..params
             },
             velocity: vec![Vector3::zeros(); n],
@@ -591,6 +480,189 @@ fn hinge_vector(hinge: &Hinge, x: &[Point3]) -> Vector3 {
         s += x[*v].coords * kw;
     }
     s
+}
+
+/// The FEM's grid on the l x w strip: `along` x `across` quads, each split into two
+/// triangles; vertex (i, j) (i along, j across) is number i (across + 1) + j.
+struct Grid {
+    along: usize,
+    across: usize,
+    /// l, m.
+    length: f64,
+    /// w, m.
+    width: f64,
+}
+
+impl Grid {
+    /// The vertex at column i (along) and row j (across).
+    fn index(&self, i: usize, j: usize) -> usize {
+        i * (self.across + 1) + j
+    }
+
+    /// The material points (u, v) of the vertices, m (u in [0, l], v in [-w/2, w/2]),
+    /// and the triangles.
+    fn pattern(&self) -> (Vec<Point2>, Vec<[u32; 3]>) {
+        let (na, nc) = (self.along, self.across);
+        let (l, w) = (self.length, self.width);
+        let mut material = Vec::with_capacity((na + 1) * (nc + 1));
+        for i in 0..=na {
+            for j in 0..=nc {
+                material.push(Point2::new(
+                    l * i as f64 / na as f64,
+                    w * (j as f64 / nc as f64 - 0.5),
+                ));
+            }
+        }
+        let mut triangles = Vec::with_capacity(2 * na * nc);
+        for i in 0..na {
+            for j in 0..nc {
+                let (a, b, c, d) = (
+                    self.index(i, j),
+                    self.index(i + 1, j),
+                    self.index(i + 1, j + 1),
+                    self.index(i, j + 1),
+                );
+                triangles.push([a as u32, b as u32, c as u32]);
+                triangles.push([a as u32, c as u32, d as u32]);
+            }
+        }
+        (material, triangles)
+    }
+
+    /// Initial positions: the ribbon's surface at each material point, m (pulled a
+    /// hair inside so boundary points resolve in the ribbon's remeshed pattern).
+    fn initial_positions(
+        &self,
+        ribbon_mesh: &SurfaceMesh,
+        material: &[Point2],
+    ) -> Result<Vec<Point3>, BaselineError> {
+        let (l, w) = (self.length, self.width);
+        let mut vertices = Vec::with_capacity(material.len());
+        for m in material {
+            let inside = Point2::new(
+                m.x.clamp(1e-9 * l, l * (1.0 - 1e-9)),
+                m.y.clamp(-0.5 * w * (1.0 - 1e-9), 0.5 * w * (1.0 - 1e-9)),
+            );
+            let p = world_at_material(ribbon_mesh, &inside).ok_or(BaselineError::Unsupported(
+                "a ribbon mesh not covering its strip",
+            ))?;
+            vertices.push(p);
+        }
+        Ok(vertices)
+    }
+
+    /// The vertices the base and the handles hold (see the module doc), the base's
+    /// first; a vertex may appear twice (see [`hold_each_dof_once`]). `element`: the
+    /// ribbon's element length l/n, m.
+    fn held_vertices(
+        &self,
+        base: &BaseMode,
+        handles: &[&HandleSpec],
+        mesh: &SurfaceMesh,
+        element: f64,
+    ) -> Result<Vec<Held>, BaselineError> {
+        let mut held: Vec<Held> = Vec::new();
+        let hold = |vertex: usize, axes: [bool; 3], driver: Driver, held: &mut Vec<Held>| {
+            held.push(Held {
+                vertex,
+                axes,
+                driver,
+                initial: mesh.vertices[vertex],
+            });
+        };
+        match base {
+            BaseMode::Prescribed { driven_by, .. } => {
+                let driver = match driven_by {
+                    Some(h) => Driver::Handle(*h),
+                    None => Driver::Fixed,
+                };
+                for (v, m) in mesh.material.iter().enumerate() {
+                    if m.x <= element * (1.0 + 1e-9) {
+                        hold(v, [true; 3], driver.clone(), &mut held);
+                    }
+                }
+            }
+            BaseMode::Floating { .. } => {}
+        }
+        let (na, nc) = (self.along, self.across);
+        let (l, w) = (self.length, self.width);
+        for (h_index, h) in handles.iter().enumerate() {
+            if matches!(base, BaseMode::Prescribed { driven_by: Some(d), .. } if *d == h_index) {
+                continue; // the base already follows it
+            }
+            let column = ((h.material_point.x / l) * na as f64)
+                .round()
+                .clamp(0.0, na as f64) as usize;
+            match h.orientation {
+                OrientationMode::Free => {
+                    let row = ((h.material_point.y / w + 0.5) * nc as f64)
+                        .round()
+                        .clamp(0.0, nc as f64) as usize;
+                    if h.position_axes.iter().any(|&a| a) {
+                        hold(
+                            self.index(column, row),
+                            h.position_axes,
+                            Driver::Handle(h_index),
+                            &mut held,
+                        );
+                    }
+                }
+                OrientationMode::Normal { .. } | OrientationMode::Full => {
+                    let axes = if h.orientation == OrientationMode::Full {
+                        [true; 3]
+                    } else {
+                        h.position_axes
+                    };
+                    if !axes.iter().any(|&a| a) {
+                        return Err(BaselineError::Unsupported(
+                            "a normal-guided handle that holds no position axis",
+                        ));
+                    }
+                    for row in 0..=nc {
+                        hold(
+                            self.index(column, row),
+                            axes,
+                            Driver::Handle(h_index),
+                            &mut held,
+                        );
+                    }
+                }
+            }
+        }
+        Ok(held)
+    }
+}
+
+/// Lumped vertex masses, kg: rho (kg/m^2) times a third of each adjacent triangle's
+/// area in the flat pattern.
+fn lumped_masses(material: &[Point2], triangles: &[[u32; 3]], density: f64) -> Vec<f64> {
+    let mut mass = vec![0.0; material.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| i as usize);
+        let area = 0.5
+            * (material[b] - material[a])
+                .perp(&(material[c] - material[a]))
+                .abs();
+        for v in [a, b, c] {
+            mass[v] += density * area / 3.0;
+        }
+    }
+    mass
+}
+
+/// A vertex held twice keeps the first driver on the axes both hold (the base wins
+/// over a handle); entries left holding no axis are dropped. Returns the held degrees
+/// of freedom of the `n` vertices (3 per vertex).
+fn hold_each_dof_once(held: &mut Vec<Held>, n: usize) -> Vec<bool> {
+    let mut fixed_dof = vec![false; 3 * n];
+    held.retain_mut(|hv| {
+        for a in 0..3 {
+            hv.axes[a] &= !fixed_dof[3 * hv.vertex + a];
+            fixed_dof[3 * hv.vertex + a] |= hv.axes[a];
+        }
+        hv.axes.iter().any(|&a| a)
+    });
+    fixed_dof
 }
 
 /// The bending hinges of the interior edges of a flat pattern.

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
-use super::read::{mcap_files, BagEvent, McapStream, REINDEX_LIBRARY_SUFFIX};
+use super::read::{mcap_files, BagEvent, BagMessage, McapStream, REINDEX_LIBRARY_SUFFIX};
 use super::recorder::{SessionInfo, SESSION_RECORD};
 use super::RecordError;
 use crate::ros::cdr;
@@ -144,7 +144,6 @@ fn topic_entry<'a>(
 
 /// Replay the bag folder `dir`.
 pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, RecordError> {
-    let bag_err = |message: String| bag_error(dir, message);
     let start = std::time::Instant::now();
     let files = mcap_files(dir)?;
     let mut report = ReplayReport {
@@ -152,141 +151,31 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
         identical: true,
         ..ReplayReport::default()
     };
-    let mut session: Option<Session> = None;
-    let mut info: Option<SessionInfo> = None;
-    let mut routes: BTreeMap<String, Route> = BTreeMap::new();
-    let mut content = FrameContent {
-        markers: false,
-        singular_points: false,
-        status: true,
-    };
-    let mut current: Option<(u32, u64)> = None;
-    let mut frame: Option<Frame> = None;
-    let mut last_step: Option<(StepReport, f64)> = None;
-    let mut inputs_since_frame = false;
-    let mut per_topic: BTreeMap<String, TopicReport> = BTreeMap::new();
-    // the outputs recorded for the current state
-    let mut seen = std::collections::BTreeSet::new();
+    let mut replayed: Option<Replayed> = None;
     let mut truncated = false;
     for file in &files {
         let mut stream = McapStream::open(file)?;
         for event in stream.by_ref() {
             match event? {
                 BagEvent::Metadata { name, values } if name == SESSION_RECORD => {
-                    if session.is_some() {
+                    if replayed.is_some() {
                         continue;
                     }
-                    let (s, i) = start_session(
-                        (dir, file),
-                        &values,
-                        options,
-                        &mut report,
-                        (&mut routes, &mut content),
-                    )?;
-                    session = Some(s);
-                    info = Some(i);
+                    replayed = Some(Replayed::start((dir, file), &values, options, &mut report)?);
                 }
                 BagEvent::Metadata { .. } => {}
                 BagEvent::Message(m) => {
-                    let Some(s) = session.as_mut() else {
-                        return Err(bag_err(format!(
-                            "{}: a message comes before the {SESSION_RECORD} record: not a \
-                             developable_sim recording",
-                            file.display()
-                        )));
+                    let Some(r) = replayed.as_mut() else {
+                        return Err(bag_error(
+                            dir,
+                            format!(
+                                "{}: a message comes before the {SESSION_RECORD} record: not a \
+                                 developable_sim recording",
+                                file.display()
+                            ),
+                        ));
                     };
-                    let Some(route) = routes.get(&m.topic).copied() else {
-                        continue;
-                    };
-                    let decode_err = |e: cdr::CdrError| {
-                        bag_err(format!("{} message on {}: {e}", m.type_name, m.topic))
-                    };
-                    match route {
-                        Route::Input(h) => {
-                            let pose: PoseStamped = cdr::decode(&m.data).map_err(decode_err)?;
-                            // the node judged the stamp against the arrival time it recorded as the
-                            // message's log time
-                            let _ = s.offer(h, &pose, m.log_time);
-                            report.inputs += 1;
-                            inputs_since_frame = true;
-                        }
-                        Route::TfFailure(h) => {
-                            // the node looked the handle's frame up and found no transform
-                            let _: PoseStamped = cdr::decode(&m.data).map_err(decode_err)?;
-                            s.reject_tf(h);
-                            report.inputs += 1;
-                            inputs_since_frame = true;
-                        }
-                        Route::Output(out) => {
-                            let recorded = match out {
-                                Output::Clock => {
-                                    to_value(&cdr::decode::<Clock>(&m.data).map_err(decode_err)?)
-                                }
-                                Output::Markers(_) | Output::Colliders => to_value(
-                                    &cdr::decode::<MarkerArray>(&m.data).map_err(decode_err)?,
-                                ),
-                                Output::Singular(_) => to_value(
-                                    &cdr::decode::<SingularPoints>(&m.data).map_err(decode_err)?,
-                                ),
-                                Output::Status(_) => {
-                                    let st: SimStatus = cdr::decode(&m.data).map_err(decode_err)?;
-                                    let key = (st.episode, st.step);
-                                    if current != Some(key) {
-                                        if let (Some(f), Some((_, step))) = (&frame, current) {
-                                            count_missing(f, step, &routes, &seen, &mut per_topic);
-                                        }
-                                        seen.clear();
-                                        advance(
-                                            s,
-                                            current,
-                                            key,
-                                            content,
-                                            &mut frame,
-                                            &mut last_step,
-                                            &mut report,
-                                        )
-                                        .map_err(|e| {
-                                            bag_err(format!("{} at {}: {e}", m.topic, key.1))
-                                        })?;
-                                        current = Some(key);
-                                        inputs_since_frame = false;
-                                    } else if inputs_since_frame {
-                                        // the same state published again (pause toggled):
-                                        // its status carries the inputs taken since
-                                        frame = Some(s.frame(
-                                            last_step.as_ref().map(|(r, _)| r),
-                                            last_step.as_ref().map_or(0.0, |(_, d)| *d),
-                                            content,
-                                        ));
-                                        inputs_since_frame = false;
-                                    }
-                                    to_value(&st)
-                                }
-                            }
-                            .map_err(|e| bag_err(e.to_string()))?;
-                            let Some(f) = &frame else {
-                                return Err(bag_err(format!(
-                                    "{}: output before the first status",
-                                    m.topic
-                                )));
-                            };
-                            let computed = match out {
-                                Output::Clock => Some(to_value(&f.clock)),
-                                Output::Markers(o) => f.objects[o].markers.as_ref().map(to_value),
-                                Output::Singular(o) => {
-                                    f.objects[o].singular_points.as_ref().map(to_value)
-                                }
-                                Output::Status(o) => f.objects[o].status.as_ref().map(to_value),
-                                Output::Colliders => f.colliders.as_ref().map(to_value),
-                            }
-                            .transpose()
-                            .map_err(|e| bag_err(e.to_string()))?;
-                            seen.insert(out);
-                            let entry = topic_entry(&mut per_topic, &m.topic, &m.type_name);
-                            let step = current.map(|c| c.1).unwrap_or(0);
-                            tally(entry, step, out, recorded, computed);
-                        }
-                    }
+                    r.message(dir, &m, &mut report)?;
                 }
             }
         }
@@ -300,16 +189,13 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                 .as_deref()
                 .is_some_and(|l| l.ends_with(REINDEX_LIBRARY_SUFFIX));
     }
-    // the last state: complete unless the bag was cut short in it
-    if let (Some(f), Some((_, step)), false) = (&frame, current, truncated) {
-        count_missing(f, step, &routes, &seen, &mut per_topic);
-    }
-    if info.is_none() {
-        return Err(bag_err(format!(
-            "no {SESSION_RECORD} metadata record: not a developable_sim recording"
-        )));
-    }
-    report.topics = per_topic.into_values().collect();
+    let Some(replayed) = replayed else {
+        return Err(bag_error(
+            dir,
+            format!("no {SESSION_RECORD} metadata record: not a developable_sim recording"),
+        ));
+    };
+    report.topics = replayed.finish(truncated);
     report.max_abs_difference = report
         .topics
         .iter()
@@ -321,6 +207,190 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
         .all(|t| t.differing == 0 && t.missing == 0 && t.structural.is_none());
     report.wall_s = start.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// The re-simulated session and its comparison with the bag so far.
+struct Replayed {
+    session: Session,
+    /// What each recorded topic is to the replay.
+    routes: BTreeMap<String, Route>,
+    /// The outputs the bag recorded (the replay's frames make only these).
+    content: FrameContent,
+    /// The recorded state being compared: (episode, step).
+    current: Option<(u32, u64)>,
+    /// The replay's outputs for it.
+    frame: Option<Frame>,
+    /// The last step's report and its duration, s.
+    last_step: Option<(StepReport, f64)>,
+    /// Inputs were fed since `frame` was made.
+    inputs_since_frame: bool,
+    per_topic: BTreeMap<String, TopicReport>,
+    /// The outputs recorded for the current state.
+    seen: std::collections::BTreeSet<Output>,
+}
+
+impl Replayed {
+    /// The session the bag's SESSION_RECORD `values` describe (see [`start_session`]).
+    fn start(
+        (dir, file): (&Path, &Path),
+        values: &BTreeMap<String, String>,
+        options: &ReplayOptions,
+        report: &mut ReplayReport,
+    ) -> Result<Self, RecordError> {
+        let mut routes = BTreeMap::new();
+        let mut content = FrameContent {
+            markers: false,
+            singular_points: false,
+            status: true,
+        };
+        let (session, _info) = start_session(
+            (dir, file),
+            values,
+            options,
+            report,
+            (&mut routes, &mut content),
+        )?;
+        Ok(Replayed {
+            session,
+            routes,
+            content,
+            current: None,
+            frame: None,
+            last_step: None,
+            inputs_since_frame: false,
+            per_topic: BTreeMap::new(),
+            seen: std::collections::BTreeSet::new(),
+        })
+    }
+
+    /// Feed a recorded input to the session, or compare a recorded output; messages on
+    /// other topics are skipped.
+    fn message(
+        &mut self,
+        dir: &Path,
+        m: &BagMessage,
+        report: &mut ReplayReport,
+    ) -> Result<(), RecordError> {
+        let Some(route) = self.routes.get(&m.topic).copied() else {
+            return Ok(());
+        };
+        match route {
+            Route::Input(h) => {
+                let pose: PoseStamped = decode(dir, m)?;
+                // the node judged the stamp against the arrival time it recorded as the
+                // message's log time
+                let _ = self.session.offer(h, &pose, m.log_time);
+                report.inputs += 1;
+                self.inputs_since_frame = true;
+            }
+            Route::TfFailure(h) => {
+                // the node looked the handle's frame up and found no transform
+                let _: PoseStamped = decode(dir, m)?;
+                self.session.reject_tf(h);
+                report.inputs += 1;
+                self.inputs_since_frame = true;
+            }
+            Route::Output(out) => self.output(dir, m, out, report)?,
+        }
+        Ok(())
+    }
+
+    /// Compare the recorded output `m` with the replay's for the current state.
+    fn output(
+        &mut self,
+        dir: &Path,
+        m: &BagMessage,
+        out: Output,
+        report: &mut ReplayReport,
+    ) -> Result<(), RecordError> {
+        let recorded = match out {
+            Output::Clock => to_value(&decode::<Clock>(dir, m)?),
+            Output::Markers(_) | Output::Colliders => to_value(&decode::<MarkerArray>(dir, m)?),
+            Output::Singular(_) => to_value(&decode::<SingularPoints>(dir, m)?),
+            Output::Status(_) => {
+                let st: SimStatus = decode(dir, m)?;
+                self.status(dir, &m.topic, &st, report)?;
+                to_value(&st)
+            }
+        }
+        .map_err(|e| bag_error(dir, e.to_string()))?;
+        let Some(f) = &self.frame else {
+            return Err(bag_error(
+                dir,
+                format!("{}: output before the first status", m.topic),
+            ));
+        };
+        let computed = match out {
+            Output::Clock => Some(to_value(&f.clock)),
+            Output::Markers(o) => f.objects[o].markers.as_ref().map(to_value),
+            Output::Singular(o) => f.objects[o].singular_points.as_ref().map(to_value),
+            Output::Status(o) => f.objects[o].status.as_ref().map(to_value),
+            Output::Colliders => f.colliders.as_ref().map(to_value),
+        }
+        .transpose()
+        .map_err(|e| bag_error(dir, e.to_string()))?;
+        self.seen.insert(out);
+        let entry = topic_entry(&mut self.per_topic, &m.topic, &m.type_name);
+        let step = self.current.map(|c| c.1).unwrap_or(0);
+        tally(entry, step, out, recorded, computed);
+        Ok(())
+    }
+
+    /// A status names the recorded state it belongs to: a new state closes the current
+    /// one (counting the outputs the bag lacks) and brings the session to it; the same
+    /// state published again (pause toggled) carries the inputs taken since its frame.
+    fn status(
+        &mut self,
+        dir: &Path,
+        topic: &str,
+        st: &SimStatus,
+        report: &mut ReplayReport,
+    ) -> Result<(), RecordError> {
+        let key = (st.episode, st.step);
+        if self.current != Some(key) {
+            if let (Some(f), Some((_, step))) = (&self.frame, self.current) {
+                count_missing(f, step, &self.routes, &self.seen, &mut self.per_topic);
+            }
+            self.seen.clear();
+            advance(
+                &mut self.session,
+                self.current,
+                key,
+                self.content,
+                &mut self.frame,
+                &mut self.last_step,
+                report,
+            )
+            .map_err(|e| bag_error(dir, format!("{topic} at {}: {e}", key.1)))?;
+            self.current = Some(key);
+            self.inputs_since_frame = false;
+        } else if self.inputs_since_frame {
+            // the same state published again (pause toggled):
+            // its status carries the inputs taken since
+            self.frame = Some(self.session.frame(
+                self.last_step.as_ref().map(|(r, _)| r),
+                self.last_step.as_ref().map_or(0.0, |(_, d)| *d),
+                self.content,
+            ));
+            self.inputs_since_frame = false;
+        }
+        Ok(())
+    }
+
+    /// The comparison per topic, the last state's missing outputs counted unless the bag
+    /// was `truncated` in it.
+    fn finish(mut self, truncated: bool) -> Vec<TopicReport> {
+        if let (Some(f), Some((_, step)), false) = (&self.frame, self.current, truncated) {
+            count_missing(f, step, &self.routes, &self.seen, &mut self.per_topic);
+        }
+        self.per_topic.into_values().collect()
+    }
+}
+
+/// The CDR payload of the recorded message `m`, decoded.
+fn decode<M: serde::de::DeserializeOwned>(dir: &Path, m: &BagMessage) -> Result<M, RecordError> {
+    cdr::decode(&m.data)
+        .map_err(|e| bag_error(dir, format!("{} message on {}: {e}", m.type_name, m.topic)))
 }
 
 fn bag_error(dir: &Path, message: String) -> RecordError {

@@ -34,7 +34,7 @@ use std::time::Instant;
 use crate::geometry::Point2;
 use crate::metrics::grid_samples;
 use crate::ribbon::RibbonSim;
-use errors::{error_against, log_log_slope};
+use errors::{error_against, log_log_slope, RunError};
 use exact_run::ExactSceneReport;
 use output::{Row, SceneReport};
 use plan::{Method, SceneKind, Sweep};
@@ -290,41 +290,82 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> Result<Repo
     }
     let mut plans = Vec::new();
     for file in &files {
-        let stem = file
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("scene")
-            .to_string();
-        let known = DEFAULT_SCENES.iter().find(|s| s.name == stem);
-        let defaults = exec::scene_defaults(file, None)?;
-        let duration = if opts.quick {
-            known.map_or(0.4, |s| s.quick_duration)
-        } else {
-            known
-                .and_then(|s| s.full_duration)
-                .unwrap_or(defaults.duration)
-        }
-        .min(defaults.duration);
-        let defaults = plan::SceneDefaults {
-            duration,
-            ..defaults
-        };
-        plans.push((
-            file.clone(),
-            stem,
-            plan::plan(
-                defaults,
-                opts.quick,
-                known.map(|s| s.reference_divisor),
-                known.map(|s| s.reference_refinement),
-            ),
-        ));
+        plans.push(plan_scene(file, opts.quick)?);
     }
-    // every run plus the reference and its 2 dt and 4 dt checks, and the exact runs
-    let total: usize = plans
-        .iter()
-        .map(|(_, _, p)| p.runs.len() + 3)
-        .sum::<usize>()
+    let bar = progress_bar(opts, &plans, &exact_files);
+    let mut reports = Vec::new();
+    for scene in plans {
+        reports.push(compare_scene(scene, &bar)?);
+    }
+    let exact_reports = run_exact_scenes(exact_files, opts.quick, &bar)?;
+    bar.finish_and_clear();
+    write_outputs(
+        opts,
+        command,
+        &reports,
+        &exact_reports,
+        (started, cpu_started),
+    )?;
+    Ok(Report {
+        scenes: reports,
+        exact: exact_reports,
+    })
+}
+
+/// A scene's name in the report: its file stem.
+fn scene_name(file: &Path) -> String {
+    file.file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("scene")
+        .to_string()
+}
+
+/// A scene compared with its own reference run: its file, its name and what to run.
+struct PlannedScene {
+    file: PathBuf,
+    name: String,
+    plan: plan::ScenePlan,
+}
+
+/// The plan of the scene in `file`: its defaults over the report's duration (a known
+/// scene's quick or full duration, 0.4 s for another scene's quick run, never longer
+/// than the scene's own), s.
+fn plan_scene(file: &Path, quick: bool) -> Result<PlannedScene, ReportError> {
+    let stem = scene_name(file);
+    let known = DEFAULT_SCENES.iter().find(|s| s.name == stem);
+    let defaults = exec::scene_defaults(file, None)?;
+    let duration = if quick {
+        known.map_or(0.4, |s| s.quick_duration)
+    } else {
+        known
+            .and_then(|s| s.full_duration)
+            .unwrap_or(defaults.duration)
+    }
+    .min(defaults.duration);
+    let defaults = plan::SceneDefaults {
+        duration,
+        ..defaults
+    };
+    Ok(PlannedScene {
+        file: file.to_path_buf(),
+        name: stem,
+        plan: plan::plan(
+            defaults,
+            quick,
+            known.map(|s| s.reference_divisor),
+            known.map(|s| s.reference_refinement),
+        ),
+    })
+}
+
+/// The progress bar (hidden unless `opts.progress`), one tick per run: every planned
+/// run plus the reference and its 2 dt and 4 dt checks, and the exact-solution runs.
+fn progress_bar(
+    opts: &ReportOptions,
+    plans: &[PlannedScene],
+    exact_files: &[(PathBuf, exact::ExactProblem)],
+) -> indicatif::ProgressBar {
+    let total: usize = plans.iter().map(|s| s.plan.runs.len() + 3).sum::<usize>()
         + exact_files
             .iter()
             .map(|(_, p)| exact::exact_plan(p, opts.quick, 0.0, 0.0, 1.0, "").len())
@@ -338,117 +379,194 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> Result<Repo
         indicatif::ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let mut reports = Vec::new();
-    for (file, name, plan) in plans {
-        let kind = plan.defaults.kind;
-        let duration = plan.defaults.duration;
-        let points = material_points(&file)?;
-        let describe = |r: &plan::RunSpec| {
-            format!(
-                "{name}: {} {} dt={} res={}",
-                r.method.name(),
-                r.sweep.name(),
-                r.dt,
-                r.resolution
-            )
-        };
-        bar.set_message(describe(&plan.reference));
-        let reference = exec::execute(&file, kind, duration, &plan.reference, &plan.sample_times)?;
-        bar.inc(1);
-        if !(reference.samples.len() == plan.sample_times.len() && reference.finite) {
+    bar
+}
+
+/// One scene's runs: the scene file, its plan, the material points every run is
+/// compared at, and the progress bar they tick.
+struct SceneRuns<'a> {
+    file: &'a Path,
+    name: &'a str,
+    plan: &'a plan::ScenePlan,
+    /// Material points (u, v) compared at each sample time, m.
+    points: &'a [Point2],
+    bar: &'a indicatif::ProgressBar,
+}
+
+impl SceneRuns<'_> {
+    /// The run's line on the progress bar and in errors.
+    fn describe(&self, r: &plan::RunSpec) -> String {
+        format!(
+            "{}: {} {} dt={} res={}",
+            self.name,
+            r.method.name(),
+            r.sweep.name(),
+            r.dt,
+            r.resolution
+        )
+    }
+
+    /// Simulate `spec` over the plan's duration, sampled at its sample times.
+    fn execute(&self, spec: &plan::RunSpec) -> Result<exec::RunOutput, ReportError> {
+        let d = &self.plan.defaults;
+        exec::execute(self.file, d.kind, d.duration, spec, &self.plan.sample_times)
+    }
+
+    /// The reference run; an error unless it is finite and has every sample.
+    fn reference(&self) -> Result<exec::RunOutput, ReportError> {
+        self.bar.set_message(self.describe(&self.plan.reference));
+        let reference = self.execute(&self.plan.reference)?;
+        self.bar.inc(1);
+        if !(reference.samples.len() == self.plan.sample_times.len() && reference.finite) {
             return Err(ReportError::Invalid(format!(
-                "{name}: the reference run did not produce every sample"
+                "{}: the reference run did not produce every sample",
+                self.name
             )));
         }
-        // the reference at 2 dt and 4 dt: each against the reference, and the 4 dt run
-        // against the 2 dt one (the reference's own successive halvings)
-        let mut checks = Vec::new();
-        for spec in [&plan.reference_check, &plan.reference_check_coarse] {
-            bar.set_message(describe(spec));
-            let run = exec::execute(&file, kind, duration, spec, &plan.sample_times)
-                .map_err(|e| ReportError::in_run(describe(spec), e))?;
-            bar.inc(1);
-            let error = error_against(&run.samples, &reference.samples, &points);
-            checks.push(Row { run, error });
-        }
-        let mut reference_check_coarse = checks.pop().expect("two checks");
-        let mut reference_check = checks.pop().expect("two checks");
+        Ok(reference)
+    }
+
+    /// The reference at 2 dt and at 4 dt, each compared with the reference, and the
+    /// 4 dt run's distance to the 2 dt one (the reference's own successive halvings);
+    /// their samples are dropped.
+    fn reference_checks(
+        &self,
+        reference: &exec::RunOutput,
+    ) -> Result<(Row, Row, Option<RunError>), ReportError> {
+        let check = |spec: &plan::RunSpec| -> Result<Row, ReportError> {
+            self.bar.set_message(self.describe(spec));
+            let run = self
+                .execute(spec)
+                .map_err(|e| ReportError::in_run(self.describe(spec), e))?;
+            self.bar.inc(1);
+            let error = error_against(&run.samples, &reference.samples, self.points);
+            Ok(Row { run, error })
+        };
+        let mut reference_check = check(&self.plan.reference_check)?;
+        let mut reference_check_coarse = check(&self.plan.reference_check_coarse)?;
         let reference_halving = error_against(
             &reference_check_coarse.run.samples,
             &reference_check.run.samples,
-            &points,
+            self.points,
         );
         reference_check.run.samples = Vec::new();
         reference_check_coarse.run.samples = Vec::new();
-        let mut rows = Vec::new();
-        for spec in &plan.runs {
-            bar.set_message(describe(spec));
-            let run = exec::execute(&file, kind, duration, spec, &plan.sample_times)
-                .map_err(|e| ReportError::in_run(describe(spec), e))?;
-            let error = error_against(&run.samples, &reference.samples, &points);
-            rows.push(Row { run, error });
-            bar.inc(1);
-        }
-        // order from successive halvings of the fast method's dt sweep
-        let fast = match kind {
-            SceneKind::Ribbon => Method::GaussNewton,
-            SceneKind::Paper => Method::Paper,
-        };
-        let mut sweep: Vec<&Row> = rows
-            .iter()
-            .filter(|r| r.run.spec.method == fast && r.run.spec.sweep == Sweep::TimeStep)
-            .collect();
-        sweep.sort_by(|a, b| b.run.spec.dt.total_cmp(&a.run.spec.dt));
-        let differences: Vec<(f64, f64)> = sweep
-            .windows(2)
-            .filter_map(|w| {
-                error_against(&w[0].run.samples, &w[1].run.samples, &points)
-                    .map(|e| (w[0].run.spec.dt, e.rms_over_time))
-            })
-            .collect();
-        let self_convergence_order = log_log_slope(&differences);
-        let successive_differences = differences;
-        // the samples are not needed any more: keep memory flat on long reports
-        for r in &mut rows {
-            r.run.samples = Vec::new();
-        }
-        let mut reference = Row {
-            run: reference,
-            error: None,
-        };
-        reference.run.samples = Vec::new();
-        let why = DEFAULT_SCENES
-            .iter()
-            .find(|s| s.name == name)
-            .filter(|s| !s.why.is_empty())
-            .map(|s| s.why.to_string());
-        let reference_note = DEFAULT_SCENES
-            .iter()
-            .find(|s| s.name == name)
-            .filter(|s| !s.reference_note.is_empty())
-            .map(|s| s.reference_note.to_string());
-        reports.push(SceneReport {
-            name,
-            plan,
-            reference,
-            reference_check,
-            reference_check_coarse,
-            reference_halving,
-            duration_note: why,
-            reference_note,
-            rows,
-            points_total: points.len(),
-            self_convergence_order,
-            successive_differences,
-        });
+        Ok((reference_check, reference_check_coarse, reference_halving))
     }
+
+    /// Every planned sweep run with its error against the reference (samples kept:
+    /// the successive halvings need them).
+    fn sweeps(&self, reference: &exec::RunOutput) -> Result<Vec<Row>, ReportError> {
+        let mut rows = Vec::new();
+        for spec in &self.plan.runs {
+            self.bar.set_message(self.describe(spec));
+            let run = self
+                .execute(spec)
+                .map_err(|e| ReportError::in_run(self.describe(spec), e))?;
+            let error = error_against(&run.samples, &reference.samples, self.points);
+            rows.push(Row { run, error });
+            self.bar.inc(1);
+        }
+        Ok(rows)
+    }
+}
+
+/// The order in time from successive halvings of the fast method's dt sweep, and the
+/// halvings themselves: (dt, RMS over time of the distance to the run at dt / 2, m),
+/// coarse to fine.
+fn self_convergence(
+    rows: &[Row],
+    kind: SceneKind,
+    points: &[Point2],
+) -> (Option<f64>, Vec<(f64, f64)>) {
+    let fast = match kind {
+        SceneKind::Ribbon => Method::GaussNewton,
+        SceneKind::Paper => Method::Paper,
+    };
+    let mut sweep: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.run.spec.method == fast && r.run.spec.sweep == Sweep::TimeStep)
+        .collect();
+    sweep.sort_by(|a, b| b.run.spec.dt.total_cmp(&a.run.spec.dt));
+    let differences: Vec<(f64, f64)> = sweep
+        .windows(2)
+        .filter_map(|w| {
+            error_against(&w[0].run.samples, &w[1].run.samples, points)
+                .map(|e| (w[0].run.spec.dt, e.rms_over_time))
+        })
+        .collect();
+    (log_log_slope(&differences), differences)
+}
+
+/// A default scene's notes for summary.md: why its duration is shorter, and why its
+/// reference does not converge in dt (None where empty or not a default scene).
+fn scene_notes(name: &str) -> (Option<String>, Option<String>) {
+    let known = DEFAULT_SCENES.iter().find(|s| s.name == name);
+    let why = known
+        .filter(|s| !s.why.is_empty())
+        .map(|s| s.why.to_string());
+    let reference_note = known
+        .filter(|s| !s.reference_note.is_empty())
+        .map(|s| s.reference_note.to_string());
+    (why, reference_note)
+}
+
+/// Run one scene's reference, its 2 dt and 4 dt checks and its sweeps, and compare
+/// them at matched material points; the samples are dropped once compared.
+fn compare_scene(
+    scene: PlannedScene,
+    bar: &indicatif::ProgressBar,
+) -> Result<SceneReport, ReportError> {
+    let PlannedScene { file, name, plan } = scene;
+    let points = material_points(&file)?;
+    let runs = SceneRuns {
+        file: &file,
+        name: &name,
+        plan: &plan,
+        points: &points,
+        bar,
+    };
+    let reference = runs.reference()?;
+    let (reference_check, reference_check_coarse, reference_halving) =
+        runs.reference_checks(&reference)?;
+    let mut rows = runs.sweeps(&reference)?;
+    let (self_convergence_order, successive_differences) =
+        self_convergence(&rows, plan.defaults.kind, &points);
+    // the samples are not needed any more: keep memory flat on long reports
+    for r in &mut rows {
+        r.run.samples = Vec::new();
+    }
+    let mut reference = Row {
+        run: reference,
+        error: None,
+    };
+    reference.run.samples = Vec::new();
+    let (duration_note, reference_note) = scene_notes(&name);
+    Ok(SceneReport {
+        name,
+        plan,
+        reference,
+        reference_check,
+        reference_check_coarse,
+        reference_halving,
+        duration_note,
+        reference_note,
+        rows,
+        points_total: points.len(),
+        self_convergence_order,
+        successive_differences,
+    })
+}
+
+/// Run every exact-solution scene's plan, one bar tick per run.
+fn run_exact_scenes(
+    exact_files: Vec<(PathBuf, exact::ExactProblem)>,
+    quick: bool,
+    bar: &indicatif::ProgressBar,
+) -> Result<Vec<ExactSceneReport>, ReportError> {
     let mut exact_reports = Vec::new();
     for (file, problem) in exact_files {
-        let name = file
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("scene")
-            .to_string();
+        let name = scene_name(&file);
         let mut on_run = |what: String| {
             bar.set_message(what);
             bar.inc(1);
@@ -457,23 +575,35 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> Result<Repo
             &file,
             &name,
             problem,
-            opts.quick,
+            quick,
             &mut on_run,
         )?);
     }
-    bar.finish_and_clear();
-    output::write_csv(&opts.out.join("report.csv"), &reports)?;
-    for s in &reports {
+    Ok(exact_reports)
+}
+
+/// Write report.csv, a plot per scene, exact.csv and the exact scenes' plots, then
+/// summary.md with the exact scenes' section appended. `(started, cpu_started)`: the
+/// report's start (wall clock) and the process CPU time then, s.
+fn write_outputs(
+    opts: &ReportOptions,
+    command: &str,
+    reports: &[SceneReport],
+    exact_reports: &[ExactSceneReport],
+    (started, cpu_started): (Instant, f64),
+) -> Result<(), ReportError> {
+    output::write_csv(&opts.out.join("report.csv"), reports)?;
+    for s in reports {
         output::write_plot(&opts.out.join(format!("{}.png", s.name)), s)?;
     }
-    exact_output::write_exact_csv(&opts.out.join("exact.csv"), &exact_reports)?;
-    for s in &exact_reports {
+    exact_output::write_exact_csv(&opts.out.join("exact.csv"), exact_reports)?;
+    for s in exact_reports {
         exact_output::write_exact_plots(&opts.out, s)?;
     }
     let summary = opts.out.join("summary.md");
     output::write_summary(
         &summary,
-        &reports,
+        reports,
         opts.quick,
         command,
         started.elapsed().as_secs_f64(),
@@ -483,13 +613,10 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> Result<Repo
         let mut md =
             std::fs::read_to_string(&summary).map_err(report_error::io("cannot read", &summary))?;
         md.push('\n');
-        md.push_str(&exact_output::exact_summary(&exact_reports)?);
+        md.push_str(&exact_output::exact_summary(exact_reports)?);
         std::fs::write(&summary, md).map_err(report_error::io("cannot write", &summary))?;
     }
-    Ok(Report {
-        scenes: reports,
-        exact: exact_reports,
-    })
+    Ok(())
 }
 
 #[cfg(test)]

@@ -359,6 +359,14 @@ fn summary_header(
 
 /// A scene's heading and its reference: the run, its own error, warnings.
 fn scene_reference(md: &mut String, s: &SceneReport) -> Result<(), ReportError> {
+    reference_run(md, s)?;
+    reference_error(md, s)?;
+    reference_warnings(md, s)
+}
+
+/// The scene's heading, why it is compared over a shorter duration (if it is), and
+/// the reference run: dt (s), resolution, tolerance, CPU time (s), unconverged steps.
+fn reference_run(md: &mut String, s: &SceneReport) -> Result<(), ReportError> {
     let d = &s.plan.defaults;
     let r = &s.reference.run.spec;
     writeln!(md, "## {}\n", s.name)?;
@@ -395,6 +403,13 @@ fn scene_reference(md: &mut String, s: &SceneReport) -> Result<(), ReportError> 
         s.reference.run.steps,
         s.reference.run.stuck_steps,
     )?;
+    Ok(())
+}
+
+/// The reference's own error, estimated from its 2 dt and 4 dt runs (m), what it
+/// resolves, and the measured note on why it does not converge in dt where this run's
+/// halvings agree.
+fn reference_error(md: &mut String, s: &SceneReport) -> Result<(), ReportError> {
     if let Some(e) = s.reference_error_estimate() {
         write!(
             md,
@@ -449,6 +464,13 @@ fn scene_reference(md: &mut String, s: &SceneReport) -> Result<(), ReportError> 
             "**Why the reference does not converge in dt**: {note}.\n"
         )?;
     }
+    Ok(())
+}
+
+/// Warnings: steps stuck at their start in the reference runs, and for paper the
+/// material points a remeshed pattern left out.
+fn reference_warnings(md: &mut String, s: &SceneReport) -> Result<(), ReportError> {
+    let d = &s.plan.defaults;
     let stuck: Vec<usize> = s
         .reference_rows()
         .iter()

@@ -159,143 +159,196 @@ pub fn plan(
     let samples = if quick { 5 } else { 10 };
     let interval = defaults.duration / samples as f64;
     let sample_times = (1..=samples).map(|k| interval * k as f64).collect();
-    let d = defaults;
-    let spec = |method, sweep, dt, resolution, tolerance| RunSpec {
+    let sweep = SweepSettings {
+        interval,
+        quick,
+        reference_divisor,
+        refine,
+    };
+    let (runs, reference) = match defaults.kind {
+        SceneKind::Ribbon => ribbon_runs(defaults, &sweep),
+        SceneKind::Paper => paper_runs(defaults, &sweep),
+    };
+    ScenePlan::new(defaults, sample_times, reference, runs)
+}
+
+/// What a scene's sweeps are derived from besides its defaults.
+struct SweepSettings {
+    /// The sample interval, s.
+    interval: f64,
+    quick: bool,
+    /// The reference's dt is `interval` divided by this (default per kind).
+    reference_divisor: Option<u32>,
+    /// The reference's resolution over the scene's.
+    refine: f64,
+}
+
+/// A run of `method` in `sweep` at time step `dt` (s), `resolution` and `tolerance`.
+fn spec(method: Method, sweep: Sweep, dt: f64, resolution: f64, tolerance: f64) -> RunSpec {
+    RunSpec {
         method,
         sweep,
         dt,
         resolution,
         tolerance,
+    }
+}
+
+/// The divisors of the sample interval a ribbon scene's dt sweeps use, per method,
+/// and its reference's divisor and resolution (elements).
+struct RibbonDivisors {
+    main: Vec<u32>,
+    lbfgsb: Vec<u32>,
+    fem: Vec<u32>,
+    reference: u32,
+    reference_resolution: f64,
+}
+
+/// Quick: 2, 4, 8 for the fast solver, 4 for the others, a reference at interval / 32
+/// and the scene's resolution. Full: every swept dt at least 4x the reference's (so
+/// its 2 dt check run is still finer than every run).
+fn ribbon_divisors(d: SceneDefaults, sweep: &SweepSettings) -> RibbonDivisors {
+    if sweep.quick {
+        return RibbonDivisors {
+            main: vec![2, 4, 8],
+            lbfgsb: vec![4],
+            fem: vec![4],
+            reference: 32,
+            reference_resolution: d.resolution,
+        };
+    }
+    // the 5 finest of interval / 1 .. 32
+    let reference_div = sweep.reference_divisor.unwrap_or(64);
+    let upto = |ks: &[u32], keep: usize| -> Vec<u32> {
+        let v: Vec<u32> = ks
+            .iter()
+            .copied()
+            .filter(|k| 4 * k <= reference_div)
+            .collect();
+        v[v.len().saturating_sub(keep)..].to_vec()
     };
+    RibbonDivisors {
+        main: upto(&[1, 2, 4, 8, 16, 32], 5),
+        lbfgsb: upto(&[1, 2, 4, 8, 16], 4),
+        fem: upto(&[2, 4, 8], 3),
+        reference: reference_div,
+        reference_resolution: (sweep.refine * d.resolution).round(),
+    }
+}
+
+/// A ribbon scene's runs (dt sweeps of every method; full: resolution and tolerance
+/// sweeps of the fast solver at its middle dt) and its reference.
+fn ribbon_runs(d: SceneDefaults, sweep: &SweepSettings) -> (Vec<RunSpec>, RunSpec) {
+    let (interval, quick) = (sweep.interval, sweep.quick);
+    let k = ribbon_divisors(d, sweep);
     let mut runs = Vec::new();
-    match d.kind {
-        SceneKind::Ribbon => {
-            let (main, lbfgsb, fem, reference_div, ref_resolution) = if quick {
-                (vec![2, 4, 8], vec![4], vec![4], 32, d.resolution)
-            } else {
-                // every swept dt at least 4x the reference's (so its 2 dt check run is
-                // still finer than every run): the 5 finest of interval / 1 .. 32
-                let reference_div = reference_divisor.unwrap_or(64);
-                let upto = |ks: &[u32], keep: usize| -> Vec<u32> {
-                    let v: Vec<u32> = ks
-                        .iter()
-                        .copied()
-                        .filter(|k| 4 * k <= reference_div)
-                        .collect();
-                    v[v.len().saturating_sub(keep)..].to_vec()
-                };
-                (
-                    upto(&[1, 2, 4, 8, 16, 32], 5),
-                    upto(&[1, 2, 4, 8, 16], 4),
-                    upto(&[2, 4, 8], 3),
-                    reference_div,
-                    (refine * d.resolution).round(),
-                )
-            };
-            for dt in dts(interval, &main) {
-                runs.push(spec(
-                    Method::GaussNewton,
-                    Sweep::TimeStep,
-                    dt,
-                    d.resolution,
-                    d.tolerance,
-                ));
-            }
-            for dt in dts(interval, &lbfgsb) {
-                runs.push(spec(
-                    Method::Lbfgsb,
-                    Sweep::TimeStep,
-                    dt,
-                    d.resolution,
-                    d.tolerance,
-                ));
-            }
-            for dt in dts(interval, if quick { &lbfgsb } else { &main }) {
-                runs.push(spec(
-                    Method::Lumped,
-                    Sweep::TimeStep,
-                    dt,
-                    d.resolution,
-                    d.tolerance,
-                ));
-            }
-            for dt in dts(interval, &fem) {
-                runs.push(spec(
-                    Method::ConformingFem,
-                    Sweep::TimeStep,
-                    dt,
-                    d.resolution,
-                    1e-6,
-                ));
-            }
-            if !quick {
-                let dt = interval / main[main.len() / 2] as f64;
-                for r in [0.5 * d.resolution, 2.0 * d.resolution] {
-                    runs.push(spec(
-                        Method::GaussNewton,
-                        Sweep::Resolution,
-                        dt,
-                        r.round(),
-                        d.tolerance,
-                    ));
-                }
-                for tol in [1e-3, 1e-9] {
-                    runs.push(spec(
-                        Method::GaussNewton,
-                        Sweep::Tolerance,
-                        dt,
-                        d.resolution,
-                        tol,
-                    ));
-                }
-            }
-            let reference = spec(
+    for dt in dts(interval, &k.main) {
+        runs.push(spec(
+            Method::GaussNewton,
+            Sweep::TimeStep,
+            dt,
+            d.resolution,
+            d.tolerance,
+        ));
+    }
+    for dt in dts(interval, &k.lbfgsb) {
+        runs.push(spec(
+            Method::Lbfgsb,
+            Sweep::TimeStep,
+            dt,
+            d.resolution,
+            d.tolerance,
+        ));
+    }
+    for dt in dts(interval, if quick { &k.lbfgsb } else { &k.main }) {
+        runs.push(spec(
+            Method::Lumped,
+            Sweep::TimeStep,
+            dt,
+            d.resolution,
+            d.tolerance,
+        ));
+    }
+    for dt in dts(interval, &k.fem) {
+        runs.push(spec(
+            Method::ConformingFem,
+            Sweep::TimeStep,
+            dt,
+            d.resolution,
+            1e-6,
+        ));
+    }
+    if !quick {
+        let dt = interval / k.main[k.main.len() / 2] as f64;
+        for r in [0.5 * d.resolution, 2.0 * d.resolution] {
+            runs.push(spec(
                 Method::GaussNewton,
-                Sweep::Reference,
-                interval / reference_div as f64,
-                ref_resolution,
-                1e-10,
-            );
-            ScenePlan::new(defaults, sample_times, reference, runs)
+                Sweep::Resolution,
+                dt,
+                r.round(),
+                d.tolerance,
+            ));
         }
-        SceneKind::Paper => {
-            let (main, reference_div, ref_resolution) = if quick {
-                (vec![2, 4, 8], 32, d.resolution)
-            } else {
-                (
-                    vec![3, 6, 9, 18],
-                    reference_divisor.unwrap_or(72),
-                    refine * d.resolution,
-                )
-            };
-            for dt in dts(interval, &main) {
-                runs.push(spec(
-                    Method::Paper,
-                    Sweep::TimeStep,
-                    dt,
-                    d.resolution,
-                    d.tolerance,
-                ));
-            }
-            if !quick {
-                let dt = interval / 9.0;
-                for r in [0.5 * d.resolution, 2.0 * d.resolution] {
-                    runs.push(spec(Method::Paper, Sweep::Resolution, dt, r, d.tolerance));
-                }
-                for tol in [1e-4, 1e-8] {
-                    runs.push(spec(Method::Paper, Sweep::Tolerance, dt, d.resolution, tol));
-                }
-            }
-            let reference = spec(
-                Method::Paper,
-                Sweep::Reference,
-                interval / reference_div as f64,
-                ref_resolution,
-                d.tolerance * 1e-2,
-            );
-            ScenePlan::new(defaults, sample_times, reference, runs)
+        for tol in [1e-3, 1e-9] {
+            runs.push(spec(
+                Method::GaussNewton,
+                Sweep::Tolerance,
+                dt,
+                d.resolution,
+                tol,
+            ));
         }
     }
+    let reference = spec(
+        Method::GaussNewton,
+        Sweep::Reference,
+        interval / k.reference as f64,
+        k.reference_resolution,
+        1e-10,
+    );
+    (runs, reference)
+}
+
+/// A paper scene's runs (a dt sweep; full: resolution and tolerance sweeps at
+/// interval / 9) and its reference (default interval / 72, tolerance / 100).
+fn paper_runs(d: SceneDefaults, sweep: &SweepSettings) -> (Vec<RunSpec>, RunSpec) {
+    let (interval, quick) = (sweep.interval, sweep.quick);
+    let (main, reference_div, ref_resolution) = if quick {
+        (vec![2, 4, 8], 32, d.resolution)
+    } else {
+        (
+            vec![3, 6, 9, 18],
+            sweep.reference_divisor.unwrap_or(72),
+            sweep.refine * d.resolution,
+        )
+    };
+    let mut runs = Vec::new();
+    for dt in dts(interval, &main) {
+        runs.push(spec(
+            Method::Paper,
+            Sweep::TimeStep,
+            dt,
+            d.resolution,
+            d.tolerance,
+        ));
+    }
+    if !quick {
+        let dt = interval / 9.0;
+        for r in [0.5 * d.resolution, 2.0 * d.resolution] {
+            runs.push(spec(Method::Paper, Sweep::Resolution, dt, r, d.tolerance));
+        }
+        for tol in [1e-4, 1e-8] {
+            runs.push(spec(Method::Paper, Sweep::Tolerance, dt, d.resolution, tol));
+        }
+    }
+    let reference = spec(
+        Method::Paper,
+        Sweep::Reference,
+        interval / reference_div as f64,
+        ref_resolution,
+        d.tolerance * 1e-2,
+    );
+    (runs, reference)
 }
 
 /// The `--set` overrides that turn a scene file into `run` (the FEM reads the ribbon

@@ -11,9 +11,12 @@ use super::handle_file::{parse_handle, ForceFile, HandleFile};
 use super::paper_file::{build_paper, PaperFile, PaperScene};
 use super::ribbon_file::{ribbon_entries, ribbon_params, RibbonFile};
 use super::{Outputs, Scene, SceneError};
-use crate::geometry::Point2;
-use crate::ribbon::{Imperfection, RibbonForce, RibbonSim, SolverKind, SolverSettings};
-use crate::sim::{ObjectSim, World};
+use crate::geometry::{Point2, Pose, Vector3};
+use crate::ribbon::{
+    Imperfection, RibbonForce, RibbonInitialShape, RibbonParams, RibbonSim, SolverKind,
+    SolverSettings,
+};
+use crate::sim::{HandleSpec, ObjectSim, World};
 
 fn d_frame() -> String {
     "world".into()
@@ -183,6 +186,68 @@ impl SceneFile {
     /// Validate and build the world.
     pub fn build(self, file: &Path) -> Result<Scene, SceneError> {
         let ck = Check { file };
+        let (duration, dt, gravity) = self.time_and_frame(&ck)?;
+        let solver = self.solver_settings(&ck)?;
+        if self.paper.is_some() {
+            if self.ribbon.is_some() || !self.ribbons.is_empty() {
+                return Err(ck.fail(
+                    "paper",
+                    "a scene holds either ribbons (`ribbon:` or `ribbons:`) or one `paper:` sheet, not both",
+                ));
+            }
+            let (world, topics) = build_paper(self.paper_scene(), &ck, dt, gravity)?;
+            return Ok(self.into_scene(file, duration, world, topics));
+        }
+        let (entries, object_names) = ribbon_entries(&ck, &self.ribbon, &self.ribbons)?;
+        let names = ObjectNames {
+            ck: &ck,
+            names: &object_names,
+        };
+        // handles (validated before the ribbon: a driven base names one)
+        let (specs, topics) = self.ribbon_handles(&ck, &names, &entries)?;
+
+        // the ribbons: parameters first (a probe of each places default handle targets)
+        let mut setups = Vec::new();
+        for (rk, ribbon) in &entries {
+            let (params, initial) = ribbon_params(&ck, rk, ribbon, gravity, solver, &specs)?;
+            let imperfection = Imperfection {
+                amplitude: ck.non_negative(
+                    &format!("{rk}.initial_shape.imperfection"),
+                    ribbon.initial_shape.imperfection,
+                )?,
+                seed: self.seed,
+            };
+            setups.push(RibbonSetup {
+                params,
+                initial,
+                imperfection,
+            });
+        }
+        for (i, f) in self.forces.iter().enumerate() {
+            let key = format!("forces.{i}");
+            names.index(&format!("{key}.object"), &f.object)?;
+        }
+        let handles = default_handle_targets(specs, &setups);
+        let mut objects = Vec::new();
+        for (index, ((rk, ribbon), setup)) in entries.iter().zip(setups).enumerate() {
+            let forces = self.ribbon_forces(&ck, &names, index)?;
+            let sim = ribbon_sim(&ck, (rk, ribbon), setup, &forces, index, &handles)?;
+            objects.push((
+                object_names[index].clone(),
+                Box::new(sim) as Box<dyn ObjectSim>,
+            ));
+        }
+        let mut world = World::new(objects, handles, dt);
+        if let Some(stage) = build_stage(&self.colliders, self.contact.as_ref(), &ck, file, &world)?
+        {
+            world = world.with_contact(stage);
+        }
+        Ok(self.into_scene(file, duration, world, topics))
+    }
+
+    /// The duration and the time step h (s, h <= duration), gravity (m/s^2), and the
+    /// frame and marker rate checked.
+    fn time_and_frame(&self, ck: &Check) -> Result<(f64, f64, Vector3), SceneError> {
         let duration = ck.positive("duration", self.duration)?;
         let dt = ck.positive("dt", self.dt)?;
         if dt > duration {
@@ -198,48 +263,26 @@ impl SceneFile {
         if let Some(rate) = self.outputs.markers_rate {
             ck.positive("outputs.markers_rate", rate)?;
         }
-        let solver = self.solver_settings(&ck)?;
-        if self.paper.is_some() {
-            if self.ribbon.is_some() || !self.ribbons.is_empty() {
-                return Err(ck.fail(
-                    "paper",
-                    "a scene holds either ribbons (`ribbon:` or `ribbons:`) or one `paper:` sheet, not both",
-                ));
-            }
-            let (world, topics) = build_paper(self.paper_scene(), &ck, dt, gravity)?;
-            return Ok(self.into_scene(file, duration, world, topics));
-        }
-        let (entries, object_names) = ribbon_entries(&ck, &self.ribbon, &self.ribbons)?;
-        let object_of = |key: &str, name: &Option<String>| -> Result<usize, SceneError> {
-            match name {
-                None if object_names.len() == 1 => Ok(0),
-                None => Err(ck.fail(
-                    key,
-                    format!(
-                        "the scene has several objects: name one ({})",
-                        object_names.join(", ")
-                    ),
-                )),
-                Some(n) => object_names.iter().position(|o| o == n).ok_or_else(|| {
-                    ck.fail(
-                        key,
-                        format!(
-                            "no object named `{n}` (objects: {})",
-                            object_names.join(", ")
-                        ),
-                    )
-                }),
-            }
-        };
+        Ok((duration, dt, gravity))
+    }
 
-        // handles (validated before the ribbon: a driven base names one)
-        let mut names = std::collections::BTreeSet::new();
+    /// The handles of a ribbon scene, each on a ribbon's strip, with their topics; the
+    /// targets without an initial pose are placed later
+    /// ([`default_handle_targets`]).
+    #[allow(clippy::type_complexity)]
+    fn ribbon_handles(
+        &self,
+        ck: &Check,
+        names: &ObjectNames,
+        entries: &[(String, &RibbonFile)],
+    ) -> Result<(Vec<(HandleSpec, Option<Pose>)>, Vec<String>), SceneError> {
+        let mut handle_names = std::collections::BTreeSet::new();
         let mut specs = Vec::new();
         let mut topics = Vec::new();
         for (i, h) in self.handles.iter().enumerate() {
             let key = format!("handles.{i}");
-            let object = object_of(&format!("{key}.object"), &h.object)?;
-            let (spec, initial, topic) = parse_handle(&ck, &key, h, object, &mut names)?;
+            let object = names.index(&format!("{key}.object"), &h.object)?;
+            let (spec, initial, topic) = parse_handle(ck, &key, h, object, &mut handle_names)?;
             let ribbon = entries[object].1;
             let point = spec.material_point;
             if point.x < 0.0
@@ -267,77 +310,31 @@ impl SceneFile {
             topics.push(topic);
             specs.push((spec, initial));
         }
+        Ok((specs, topics))
+    }
 
-        // the ribbons: parameters first (a probe of each places default handle targets)
-        let mut setups = Vec::new();
-        for (rk, ribbon) in &entries {
-            let (params, initial) = ribbon_params(&ck, rk, ribbon, gravity, solver, &specs)?;
-            let imperfection = Imperfection {
-                amplitude: ck.non_negative(
-                    &format!("{rk}.initial_shape.imperfection"),
-                    ribbon.initial_shape.imperfection,
-                )?,
-                seed: self.seed,
-            };
-            setups.push((params, initial, imperfection));
-        }
+    /// The point forces on ribbon `index`: material point (m) and force (N).
+    fn ribbon_forces(
+        &self,
+        ck: &Check,
+        names: &ObjectNames,
+        index: usize,
+    ) -> Result<Vec<RibbonForce>, SceneError> {
+        let mut forces = Vec::new();
         for (i, f) in self.forces.iter().enumerate() {
             let key = format!("forces.{i}");
-            object_of(&format!("{key}.object"), &f.object)?;
-        }
-
-        // default handle targets: the grasp point where the initial shape puts it
-        let probes: Vec<RibbonSim> = setups
-            .iter()
-            .map(|(params, initial, imperfection)| {
-                RibbonSim::new(params.clone(), initial, *imperfection, &[], 0, &[])
-            })
-            .collect();
-        let mut handles = Vec::new();
-        for (mut spec, initial_pose) in specs {
-            spec.trajectory.initial = initial_pose
-                .unwrap_or_else(|| probes[spec.object].material_pose(&spec.material_point));
-            handles.push(spec);
-        }
-        drop(probes);
-        let mut objects = Vec::new();
-        for (index, ((rk, ribbon), (params, initial, imperfection))) in
-            entries.iter().zip(setups).enumerate()
-        {
-            let mut forces = Vec::new();
-            for (i, f) in self.forces.iter().enumerate() {
-                let key = format!("forces.{i}");
-                if object_of(&format!("{key}.object"), &f.object)? != index {
-                    continue;
-                }
-                forces.push(RibbonForce {
-                    material_point: Point2::new(
-                        ck.finite(&format!("{key}.point.0"), f.point[0])?,
-                        ck.finite(&format!("{key}.point.1"), f.point[1])?,
-                    ),
-                    force: ck.vec3(&format!("{key}.force"), f.force)?,
-                });
+            if names.index(&format!("{key}.object"), &f.object)? != index {
+                continue;
             }
-            let mut sim = RibbonSim::new(params, &initial, imperfection, &forces, index, &handles);
-            if let Some(v) = &ribbon.initial_velocity {
-                sim.set_rigid_velocity(
-                    ck.vec3(&format!("{rk}.initial_velocity.angular"), v.angular)?,
-                    ck.vec3(&format!("{rk}.initial_velocity.center"), v.center)?
-                        .into(),
-                    ck.vec3(&format!("{rk}.initial_velocity.linear"), v.linear)?,
-                );
-            }
-            objects.push((
-                object_names[index].clone(),
-                Box::new(sim) as Box<dyn ObjectSim>,
-            ));
+            forces.push(RibbonForce {
+                material_point: Point2::new(
+                    ck.finite(&format!("{key}.point.0"), f.point[0])?,
+                    ck.finite(&format!("{key}.point.1"), f.point[1])?,
+                ),
+                force: ck.vec3(&format!("{key}.force"), f.force)?,
+            });
         }
-        let mut world = World::new(objects, handles, dt);
-        if let Some(stage) = build_stage(&self.colliders, self.contact.as_ref(), &ck, file, &world)?
-        {
-            world = world.with_contact(stage);
-        }
-        Ok(self.into_scene(file, duration, world, topics))
+        Ok(forces)
     }
 
     fn solver_settings(&self, ck: &Check) -> Result<SolverSettings, SceneError> {
@@ -423,4 +420,91 @@ impl SceneFile {
             source: self,
         }
     }
+}
+
+/// The object names of a ribbon scene, for the `object:` keys of handles and forces.
+struct ObjectNames<'a> {
+    ck: &'a Check<'a>,
+    names: &'a [String],
+}
+
+impl ObjectNames<'_> {
+    /// The object `name` (under `key`) refers to: required when the scene has several.
+    fn index(&self, key: &str, name: &Option<String>) -> Result<usize, SceneError> {
+        let (ck, object_names) = (self.ck, self.names);
+        match name {
+            None if object_names.len() == 1 => Ok(0),
+            None => Err(ck.fail(
+                key,
+                format!(
+                    "the scene has several objects: name one ({})",
+                    object_names.join(", ")
+                ),
+            )),
+            Some(n) => object_names.iter().position(|o| o == n).ok_or_else(|| {
+                ck.fail(
+                    key,
+                    format!(
+                        "no object named `{n}` (objects: {})",
+                        object_names.join(", ")
+                    ),
+                )
+            }),
+        }
+    }
+}
+
+/// One ribbon's validated parameters, initial shape and imperfection.
+struct RibbonSetup {
+    params: RibbonParams,
+    initial: RibbonInitialShape,
+    imperfection: Imperfection,
+}
+
+/// The handles with their initial targets: the pose given, or the grasp point where the
+/// initial shape puts it (a probe of each ribbon, built without handles).
+fn default_handle_targets(
+    specs: Vec<(HandleSpec, Option<Pose>)>,
+    setups: &[RibbonSetup],
+) -> Vec<HandleSpec> {
+    let probes: Vec<RibbonSim> = setups
+        .iter()
+        .map(|s| RibbonSim::new(s.params.clone(), &s.initial, s.imperfection, &[], 0, &[]))
+        .collect();
+    let mut handles = Vec::new();
+    for (mut spec, initial_pose) in specs {
+        spec.trajectory.initial =
+            initial_pose.unwrap_or_else(|| probes[spec.object].material_pose(&spec.material_point));
+        handles.push(spec);
+    }
+    handles
+}
+
+/// Build ribbon `index` (keys under `rk`) with its forces and handles, and give it its
+/// initial rigid velocity (rad/s about a centre m, m/s) if the file sets one.
+fn ribbon_sim(
+    ck: &Check,
+    (rk, ribbon): (&str, &RibbonFile),
+    setup: RibbonSetup,
+    forces: &[RibbonForce],
+    index: usize,
+    handles: &[HandleSpec],
+) -> Result<RibbonSim, SceneError> {
+    let mut sim = RibbonSim::new(
+        setup.params,
+        &setup.initial,
+        setup.imperfection,
+        forces,
+        index,
+        handles,
+    );
+    if let Some(v) = &ribbon.initial_velocity {
+        sim.set_rigid_velocity(
+            ck.vec3(&format!("{rk}.initial_velocity.angular"), v.angular)?,
+            ck.vec3(&format!("{rk}.initial_velocity.center"), v.center)?
+                .into(),
+            ck.vec3(&format!("{rk}.initial_velocity.linear"), v.linear)?,
+        );
+    }
+    Ok(sim)
 }

@@ -8,7 +8,7 @@ use super::handle_file::{parse_handle, HandleFile, PoseFile};
 use super::SceneError;
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::paper::{Collider, PaperParams, PaperSim, PresetCrease};
-use crate::sim::World;
+use crate::sim::{HandleSpec, World};
 
 /// A sheet of paper. Every key is optional; defaults in parentheses.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -226,8 +226,90 @@ pub(super) fn build_paper(
             "the contact stage acts on ribbons; a paper sheet collides through `paper.colliders`",
         ));
     }
-    let pk = "paper";
-    let key = |k: &str| format!("{pk}.{k}");
+    let sheet = sheet(ck, paper)?;
+    let thresholds = thresholds(ck, paper)?;
+    let colliders = paper_colliders(ck, &paper.colliders)?;
+    let preset_creases = preset_creases(ck, &sheet, &paper.creases)?;
+    let PaperHandles {
+        handles,
+        topics,
+        releases,
+    } = paper_handles(ck, &sheet, scene.handles)?;
+    if scene.has_forces {
+        return Err(ck.fail("forces", "point forces are not supported on paper objects"));
+    }
+    let m = material(ck, paper)?;
+    let params = PaperParams {
+        width: sheet.width,
+        height: sheet.height,
+        placement: sheet.placement,
+        density: m.density,
+        stretch_stiffness: m.stretch_stiffness,
+        poisson_ratio: thresholds.poisson_ratio,
+        bending_stiffness: m.bending_stiffness,
+        damping: m.damping,
+        gravity,
+        boundary_density: m.boundary_density,
+        interior_density: m.interior_density,
+        flat_angle: thresholds.flat_angle,
+        split_flat_regions_at_folds: paper.split_flat_regions_at_folds,
+        conflict_angle: m.conflict_angle,
+        junction_low_angle: thresholds.junction_low_angle,
+        junction_high_angle: thresholds.junction_high_angle,
+        compression_threshold: thresholds.compression_threshold,
+        singularity_sigma: m.singularity_sigma,
+        blaschke_tolerance: m.blaschke_tolerance,
+        plastic_angle: m.plastic_angle,
+        newton_max_iterations: paper.newton_max_iterations,
+        newton_tolerance: m.newton_tolerance,
+        isometry_max_iterations: paper.isometry_max_iterations,
+        collision_stiffness: m.collision_stiffness,
+        collision_thickness: m.collision_thickness,
+        colliders,
+        preset_creases,
+        imperfection: m.imperfection,
+        seed: scene.seed,
+        handle_releases: releases,
+        initial_shape: crate::paper::PaperInitialShape::Flat,
+    };
+    let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(PK, e.to_string()))?;
+    let world = World::new(vec![("paper".to_string(), Box::new(sim) as _)], handles, dt);
+    Ok((world, topics))
+}
+
+/// The key prefix of the section.
+const PK: &str = "paper";
+
+/// `paper.<k>`.
+fn key(k: &str) -> String {
+    format!("{PK}.{k}")
+}
+
+/// The pattern rectangle [0, width] x [0, height] (m) and where it sits at t = 0.
+struct Sheet {
+    width: f64,
+    height: f64,
+    /// `world_from_pattern` at t = 0.
+    placement: Pose,
+}
+
+impl Sheet {
+    /// Whether the pattern point `p` (m) lies on the rectangle's boundary (within 1e-9 m
+    /// of an edge, 1e-12 m outside at most).
+    fn on_boundary(&self, p: &Point2) -> bool {
+        let (width, height) = (self.width, self.height);
+        let inside =
+            p.x >= -1e-12 && p.x <= width + 1e-12 && p.y >= -1e-12 && p.y <= height + 1e-12;
+        let edge = p.x.abs() < 1e-9
+            || (p.x - width).abs() < 1e-9
+            || p.y.abs() < 1e-9
+            || (p.y - height).abs() < 1e-9;
+        inside && edge
+    }
+}
+
+/// Validate the size and the placement.
+fn sheet(ck: &Check, paper: &PaperFile) -> Result<Sheet, SceneError> {
     let width = ck.positive(&key("size.0"), paper.size[0])?;
     let height = ck.positive(&key("size.1"), paper.size[1])?;
     let placement = match &paper.placement {
@@ -237,7 +319,31 @@ pub(super) fn build_paper(
         ),
         None => Pose::identity(),
     };
-    let defaults = PaperParams::default();
+    Ok(Sheet {
+        width,
+        height,
+        placement,
+    })
+}
+
+/// The thresholds validated before the colliders: coplanarity and junction angles,
+/// the Poisson ratio and the compression threshold.
+struct Thresholds {
+    /// theta_0, rad.
+    flat_angle: f64,
+    /// theta_low, rad (<= theta_high).
+    junction_low_angle: f64,
+    /// theta_high, rad.
+    junction_high_angle: f64,
+    /// In (-1, 0.5).
+    poisson_ratio: f64,
+    /// epsilon_c, in (0, 1).
+    compression_threshold: f64,
+}
+
+/// Validate theta_0, theta_low <= theta_high (defaults theta_0 / 10 and theta_0), the
+/// Poisson ratio, epsilon_c and the Newton iteration limit.
+fn thresholds(ck: &Check, paper: &PaperFile) -> Result<Thresholds, SceneError> {
     let theta0 = ck.positive(&key("flat_angle"), paper.flat_angle)?;
     let low = match paper.junction_low_angle {
         Some(v) => ck.non_negative(&key("junction_low_angle"), v)?,
@@ -270,9 +376,20 @@ pub(super) fn build_paper(
     if paper.newton_max_iterations == 0 {
         return Err(ck.fail(&key("newton_max_iterations"), "must be at least 1"));
     }
+    Ok(Thresholds {
+        flat_angle: theta0,
+        junction_low_angle: low,
+        junction_high_angle: high,
+        poisson_ratio: poisson,
+        compression_threshold: eps_c,
+    })
+}
+
+/// The static colliders (plane with a normalized normal, or sphere).
+fn paper_colliders(ck: &Check, files: &[PaperColliderFile]) -> Result<Vec<Collider>, SceneError> {
     let mut colliders = Vec::new();
-    for (i, c) in paper.colliders.iter().enumerate() {
-        let ckey = format!("{pk}.colliders.{i}");
+    for (i, c) in files.iter().enumerate() {
+        let ckey = format!("{PK}.colliders.{i}");
         colliders.push(
             match ck.choice(&format!("{ckey}.kind"), &c.kind, &["plane", "sphere"])? {
                 "plane" => {
@@ -292,18 +409,19 @@ pub(super) fn build_paper(
             },
         );
     }
-    let on_boundary = |p: &Point2| {
-        let inside =
-            p.x >= -1e-12 && p.x <= width + 1e-12 && p.y >= -1e-12 && p.y <= height + 1e-12;
-        let edge = p.x.abs() < 1e-9
-            || (p.x - width).abs() < 1e-9
-            || p.y.abs() < 1e-9
-            || (p.y - height).abs() < 1e-9;
-        inside && edge
-    };
+    Ok(colliders)
+}
+
+/// The pre-set creases, each from boundary to boundary of the sheet.
+fn preset_creases(
+    ck: &Check,
+    sheet: &Sheet,
+    files: &[CreaseFile],
+) -> Result<Vec<PresetCrease>, SceneError> {
+    let (width, height) = (sheet.width, sheet.height);
     let mut preset_creases = Vec::new();
-    for (i, c) in paper.creases.iter().enumerate() {
-        let ckey = format!("{pk}.creases.{i}");
+    for (i, c) in files.iter().enumerate() {
+        let ckey = format!("{PK}.creases.{i}");
         let from = Point2::new(
             ck.finite(&format!("{ckey}.from.0"), c.from[0])?,
             ck.finite(&format!("{ckey}.from.1"), c.from[1])?,
@@ -313,7 +431,7 @@ pub(super) fn build_paper(
             ck.finite(&format!("{ckey}.to.1"), c.to[1])?,
         );
         for (k, p) in [("from", from), ("to", to)] {
-            if !on_boundary(&p) {
+            if !sheet.on_boundary(&p) {
                 return Err(ck.fail(
                     &format!("{ckey}.{k}"),
                     format!(
@@ -329,13 +447,30 @@ pub(super) fn build_paper(
             rest_angle: ck.finite(&format!("{ckey}.rest_angle"), c.rest_angle)?,
         });
     }
+    Ok(preset_creases)
+}
 
-    // handles: the only object is `paper`
+/// The sheet's handles with their topics and releases.
+struct PaperHandles {
+    handles: Vec<HandleSpec>,
+    topics: Vec<String>,
+    /// (handle index, release time s).
+    releases: Vec<(usize, f64)>,
+}
+
+/// Validate the handles (the only object is `paper`; each holds a boundary point) and
+/// place a handle without an initial pose at its point on the placed sheet.
+fn paper_handles(
+    ck: &Check,
+    sheet: &Sheet,
+    files: &[HandleFile],
+) -> Result<PaperHandles, SceneError> {
+    let (width, height) = (sheet.width, sheet.height);
     let mut names = std::collections::BTreeSet::new();
     let mut handles = Vec::new();
     let mut topics = Vec::new();
     let mut releases = Vec::new();
-    for (i, h) in scene.handles.iter().enumerate() {
+    for (i, h) in files.iter().enumerate() {
         let hkey = format!("handles.{i}");
         if let Some(o) = &h.object {
             if o != "paper" {
@@ -347,7 +482,7 @@ pub(super) fn build_paper(
         }
         let (mut spec, initial, topic) = parse_handle(ck, &hkey, h, 0, &mut names)?;
         let p = spec.material_point;
-        if !on_boundary(&p) {
+        if !sheet.on_boundary(&p) {
             return Err(ck.fail(
                     &format!("{hkey}.point"),
                     format!(
@@ -360,52 +495,71 @@ pub(super) fn build_paper(
             releases.push((i, ck.non_negative(&format!("{hkey}.release_at"), t)?));
         }
         spec.trajectory.initial =
-            initial.unwrap_or_else(|| placement * Pose::translation(p.x, p.y, 0.0));
+            initial.unwrap_or_else(|| sheet.placement * Pose::translation(p.x, p.y, 0.0));
         topics.push(topic);
         handles.push(spec);
     }
-    if scene.has_forces {
-        return Err(ck.fail("forces", "point forces are not supported on paper objects"));
-    }
+    Ok(PaperHandles {
+        handles,
+        topics,
+        releases,
+    })
+}
 
-    let params = PaperParams {
-        width,
-        height,
-        placement,
+/// The keys validated after the handles: density, stiffnesses, damping, sampling,
+/// fitting and collision settings.
+struct Material {
+    /// kg/m^2.
+    density: f64,
+    /// Y t, N/m.
+    stretch_stiffness: f64,
+    /// k_b, J.
+    bending_stiffness: f64,
+    /// 1/s.
+    damping: f64,
+    /// rho_bound, samples/m.
+    boundary_density: f64,
+    /// rho_int, samples/m^2.
+    interior_density: f64,
+    /// rad.
+    conflict_angle: f64,
+    /// sigma, m.
+    singularity_sigma: f64,
+    /// epsilon_Blaschke / L_paper.
+    blaschke_tolerance: f64,
+    /// rad.
+    plastic_angle: f64,
+    /// m.
+    newton_tolerance: f64,
+    /// N/m.
+    collision_stiffness: f64,
+    /// m.
+    collision_thickness: f64,
+    /// m.
+    imperfection: f64,
+}
+
+/// Validate the material keys, in the order of [`PaperParams`]' fields.
+fn material(ck: &Check, paper: &PaperFile) -> Result<Material, SceneError> {
+    let defaults = PaperParams::default();
+    Ok(Material {
         density: ck.positive(&key("density"), paper.density)?,
         stretch_stiffness: ck.positive(&key("stretch_stiffness"), paper.stretch_stiffness)?,
-        poisson_ratio: poisson,
         bending_stiffness: ck.non_negative(&key("bending_stiffness"), paper.bending_stiffness)?,
         damping: ck.non_negative(&key("damping"), paper.damping)?,
-        gravity,
         boundary_density: ck.positive(&key("boundary_density"), paper.boundary_density)?,
         interior_density: match paper.interior_density {
             Some(v) => ck.positive(&key("interior_density"), v)?,
             None => defaults.interior_density,
         },
-        flat_angle: theta0,
-        split_flat_regions_at_folds: paper.split_flat_regions_at_folds,
         conflict_angle: ck.non_negative(&key("conflict_angle"), paper.conflict_angle)?,
-        junction_low_angle: low,
-        junction_high_angle: high,
-        compression_threshold: eps_c,
         singularity_sigma: ck.positive(&key("singularity_sigma"), paper.singularity_sigma)?,
         blaschke_tolerance: ck.positive(&key("blaschke_tolerance"), paper.blaschke_tolerance)?,
         plastic_angle: ck.non_negative(&key("plastic_angle"), paper.plastic_angle)?,
-        newton_max_iterations: paper.newton_max_iterations,
         newton_tolerance: ck.positive(&key("newton_tolerance"), paper.newton_tolerance)?,
-        isometry_max_iterations: paper.isometry_max_iterations,
         collision_stiffness: ck
             .non_negative(&key("collision_stiffness"), paper.collision_stiffness)?,
         collision_thickness: ck.positive(&key("collision_thickness"), paper.collision_thickness)?,
-        colliders,
-        preset_creases,
         imperfection: ck.non_negative(&key("imperfection"), paper.imperfection)?,
-        seed: scene.seed,
-        handle_releases: releases,
-        initial_shape: crate::paper::PaperInitialShape::Flat,
-    };
-    let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(pk, e.to_string()))?;
-    let world = World::new(vec![("paper".to_string(), Box::new(sim) as _)], handles, dt);
-    Ok((world, topics))
+    })
 }

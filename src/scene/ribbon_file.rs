@@ -239,6 +239,62 @@ pub(super) fn ribbon_params(
     solver: SolverSettings,
     specs: &[(HandleSpec, Option<Pose>)],
 ) -> Result<(RibbonParams, RibbonInitialShape), SceneError> {
+    let strip = strip_params(ck, rk, ribbon)?;
+    let (kinetic, clamp, loop_closure) = models(ck, rk, ribbon)?;
+    let base = base_mode(ck, rk, &ribbon.base, specs)?;
+    let initial = initial_shape(ck, rk, ribbon)?;
+    let params = RibbonParams {
+        length: strip.length,
+        width: strip.width,
+        segments: ribbon.segments,
+        density: strip.density,
+        bending_stiffness: strip.bending_stiffness,
+        crease_regularizer: strip.crease_regularizer,
+        clamp,
+        gravity: gravity.into(),
+        kinetic,
+        base,
+        loop_closure,
+        crease_bound_factor: strip.crease_bound_factor,
+        solver,
+    };
+    if let RibbonInitialShape::Helix {
+        crease_direction, ..
+    } = initial
+    {
+        if crease_direction.abs() > params.crease_bound() {
+            return Err(ck.fail(
+                &format!("{rk}.initial_shape.crease_direction"),
+                format!(
+                    "|c| = {} exceeds the crease bound 0.95*2l/(wn) = {}",
+                    crease_direction.abs(),
+                    params.crease_bound()
+                ),
+            ));
+        }
+    }
+    Ok((params, initial))
+}
+
+/// The strip and its material, validated (`segments` too, kept in the file).
+struct StripParams {
+    /// l, m.
+    length: f64,
+    /// w, m (< l).
+    width: f64,
+    /// rho, kg/m^2.
+    density: f64,
+    /// alpha, J.
+    bending_stiffness: f64,
+    /// beta, J.
+    crease_regularizer: f64,
+    /// Safety factor of the crease bound, in (0, 1].
+    crease_bound_factor: f64,
+}
+
+/// Validate the strip's size, element count, density, stiffnesses and crease bound
+/// factor.
+fn strip_params(ck: &Check, rk: &str, ribbon: &RibbonFile) -> Result<StripParams, SceneError> {
     let length = ck.positive(&format!("{rk}.length"), ribbon.length)?;
     let width = ck.positive(&format!("{rk}.width"), ribbon.width)?;
     if width >= length {
@@ -272,6 +328,22 @@ pub(super) fn ribbon_params(
             format!("must be in (0, 1], got {factor}"),
         ));
     }
+    Ok(StripParams {
+        length,
+        width,
+        density,
+        bending_stiffness: alpha,
+        crease_regularizer: beta,
+        crease_bound_factor: factor,
+    })
+}
+
+/// The kinetic model, the clamp rule and the loop closure, from their names.
+fn models(
+    ck: &Check,
+    rk: &str,
+    ribbon: &RibbonFile,
+) -> Result<(KineticModel, ClampRule, Option<LoopKind>), SceneError> {
     let kinetic = match ck.choice(
         &format!("{rk}.kinetic"),
         &ribbon.kinetic,
@@ -299,13 +371,24 @@ pub(super) fn ribbon_params(
         "non_orientable" => Some(LoopKind::NonOrientable),
         _ => None,
     };
+    Ok((kinetic, clamp, loop_closure))
+}
+
+/// How the first element E_0 is held: at the base pose (m, rad), free from it, or
+/// driven by the handle it names in `specs`.
+fn base_mode(
+    ck: &Check,
+    rk: &str,
+    base: &BaseFile,
+    specs: &[(HandleSpec, Option<Pose>)],
+) -> Result<BaseMode, SceneError> {
     let base_pose = pose_from(
-        ck.vec3(&format!("{rk}.base.position"), ribbon.base.position)?,
-        ck.vec3(&format!("{rk}.base.rotation"), ribbon.base.rotation)?,
+        ck.vec3(&format!("{rk}.base.position"), base.position)?,
+        ck.vec3(&format!("{rk}.base.rotation"), base.rotation)?,
     );
-    let base = match ck.choice(
+    let mode = match ck.choice(
         &format!("{rk}.base.mode"),
-        &ribbon.base.mode,
+        &base.mode,
         &["fixed", "floating", "driven"],
     )? {
         "fixed" => BaseMode::Prescribed {
@@ -314,7 +397,7 @@ pub(super) fn ribbon_params(
         },
         "floating" => BaseMode::Floating { initial: base_pose },
         _ => {
-            let Some(name) = &ribbon.base.handle else {
+            let Some(name) = &base.handle else {
                 return Err(ck.fail(
                     &format!("{rk}.base.handle"),
                     "a driven base names the handle that drives it",
@@ -335,57 +418,54 @@ pub(super) fn ribbon_params(
             }
         }
     };
-    if let Some(v) = &ribbon.base.handle {
-        if ribbon.base.mode != "driven" {
+    if let Some(v) = &base.handle {
+        if base.mode != "driven" {
             return Err(ck.fail(
                 &format!("{rk}.base.handle"),
                 format!("`{v}` is only used with mode: driven"),
             ));
         }
     }
-    let initial = match ribbon.initial_shape.kind.as_deref().unwrap_or("flat") {
+    Ok(mode)
+}
+
+/// The initial shape (flat, ring, helix with one c and psi, or explicit lists), and no
+/// explicit list where the kind is not `explicit`.
+fn initial_shape(
+    ck: &Check,
+    rk: &str,
+    ribbon: &RibbonFile,
+) -> Result<RibbonInitialShape, SceneError> {
+    let shape = &ribbon.initial_shape;
+    let initial = match shape.kind.as_deref().unwrap_or("flat") {
         "flat" => RibbonInitialShape::Flat,
         "ring" => RibbonInitialShape::Ring,
         "helix" => RibbonInitialShape::Helix {
             crease_direction: ck.finite(
                 &format!("{rk}.initial_shape.crease_direction"),
-                ribbon.initial_shape.crease_direction,
+                shape.crease_direction,
             )?,
             bending_angle: ck.finite(
                 &format!("{rk}.initial_shape.bending_angle"),
-                ribbon.initial_shape.bending_angle,
+                shape.bending_angle,
             )?,
         },
-        "explicit" => {
-            let n = ribbon.segments;
-            let list = |name: &str, v: &Option<Vec<f64>>| -> Result<Vec<f64>, SceneError> {
-                let key = format!("{rk}.initial_shape.{name}");
-                let v = v
-                    .as_ref()
-                    .ok_or_else(|| ck.fail(&key, "required for kind `explicit` (n - 1 values)"))?;
-                if v.len() + 1 != n {
-                    return Err(ck.fail(
-                        &key,
-                        format!(
-                            "{} values for {n} segments: expected n - 1 = {}",
-                            v.len(),
-                            n.saturating_sub(1)
-                        ),
-                    ));
-                }
-                for (i, x) in v.iter().enumerate() {
-                    ck.finite(&format!("{key}.{i}"), *x)?;
-                }
-                Ok(v.clone())
-            };
-            RibbonInitialShape::Explicit {
-                crease_direction: list(
-                    "crease_directions",
-                    &ribbon.initial_shape.crease_directions,
-                )?,
-                bending_angle: list("bending_angles", &ribbon.initial_shape.bending_angles)?,
-            }
-        }
+        "explicit" => RibbonInitialShape::Explicit {
+            crease_direction: explicit_list(
+                ck,
+                rk,
+                ribbon.segments,
+                "crease_directions",
+                &shape.crease_directions,
+            )?,
+            bending_angle: explicit_list(
+                ck,
+                rk,
+                ribbon.segments,
+                "bending_angles",
+                &shape.bending_angles,
+            )?,
+        },
         other => {
             return Err(ck.fail(
                 &format!("{rk}.initial_shape.kind"),
@@ -395,14 +475,8 @@ pub(super) fn ribbon_params(
     };
     if initial_kind_is_not_explicit(ribbon) {
         for (name, present) in [
-            (
-                "crease_directions",
-                ribbon.initial_shape.crease_directions.is_some(),
-            ),
-            (
-                "bending_angles",
-                ribbon.initial_shape.bending_angles.is_some(),
-            ),
+            ("crease_directions", shape.crease_directions.is_some()),
+            ("bending_angles", shape.bending_angles.is_some()),
         ] {
             if present {
                 return Err(ck.fail(
@@ -412,35 +486,34 @@ pub(super) fn ribbon_params(
             }
         }
     }
-    let params = RibbonParams {
-        length,
-        width,
-        segments: ribbon.segments,
-        density,
-        bending_stiffness: alpha,
-        crease_regularizer: beta,
-        clamp,
-        gravity: gravity.into(),
-        kinetic,
-        base,
-        loop_closure,
-        crease_bound_factor: factor,
-        solver,
-    };
-    if let RibbonInitialShape::Helix {
-        crease_direction, ..
-    } = initial
-    {
-        if crease_direction.abs() > params.crease_bound() {
-            return Err(ck.fail(
-                &format!("{rk}.initial_shape.crease_direction"),
-                format!(
-                    "|c| = {} exceeds the crease bound 0.95*2l/(wn) = {}",
-                    crease_direction.abs(),
-                    params.crease_bound()
-                ),
-            ));
-        }
+    Ok(initial)
+}
+
+/// An explicit per-crease list `initial_shape.<name>`: required, n - 1 finite values
+/// for `n` segments (c dimensionless, psi rad).
+fn explicit_list(
+    ck: &Check,
+    rk: &str,
+    n: usize,
+    name: &str,
+    v: &Option<Vec<f64>>,
+) -> Result<Vec<f64>, SceneError> {
+    let key = format!("{rk}.initial_shape.{name}");
+    let v = v
+        .as_ref()
+        .ok_or_else(|| ck.fail(&key, "required for kind `explicit` (n - 1 values)"))?;
+    if v.len() + 1 != n {
+        return Err(ck.fail(
+            &key,
+            format!(
+                "{} values for {n} segments: expected n - 1 = {}",
+                v.len(),
+                n.saturating_sub(1)
+            ),
+        ));
     }
-    Ok((params, initial))
+    for (i, x) in v.iter().enumerate() {
+        ck.finite(&format!("{key}.{i}"), *x)?;
+    }
+    Ok(v.clone())
 }

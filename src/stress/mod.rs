@@ -140,7 +140,18 @@ fn none(_: f64, _: f64) -> Vec<String> {
 /// apart beyond the ribbon's length, a 500-element ribbon, heavy paper crumpling and
 /// 50 % paper compression.
 pub fn cases() -> Vec<StressCase> {
-    const ALL: &[f64] = &TIME_STEPS;
+    let mut cases = bending_cases();
+    cases.extend(loading_cases());
+    cases.push(resolution_case());
+    cases.extend(paper_cases());
+    cases
+}
+
+/// Every time step of a full run (the quick runs of most cases use them all).
+const ALL: &[f64] = &TIME_STEPS;
+
+/// Ribbon bending stiffness alpha far from the default 0.1 J: x1e4 and x1e-4.
+fn bending_cases() -> Vec<StressCase> {
     vec![
         StressCase {
             name: "bending_x1e4",
@@ -170,6 +181,14 @@ pub fn cases() -> Vec<StressCase> {
             energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
             allowance: DEFAULT_ALLOWANCE,
         },
+    ]
+}
+
+/// Ribbons loaded hard by their handles or a force: an 8 pi twist, a drag of 400 x the
+/// loop's weight, a 0.5 m handle jump within one tick, handles pulled apart beyond the
+/// ribbon's length.
+fn loading_cases() -> Vec<StressCase> {
+    vec![
         StressCase {
             name: "twist_8pi",
             description: "one end twisted by 8 pi over the run",
@@ -207,7 +226,8 @@ pub fn cases() -> Vec<StressCase> {
             allowance: Allowance {
                 unconverged_fraction: 0.1,
                 rejected_steps: 0,
-                reason: "at dt 0.001 s the 20 N drag on the closed loop leaves 3 of 40 quick steps \
+                reason:
+                    "at dt 0.001 s the 20 N drag on the closed loop leaves 3 of 40 quick steps \
                          (10, 18, 19; 2026-12-02) with one augmented-Lagrangian round on the \
                          200-iteration inner limit short of the 1e-6 gradient reduction, the loop \
                          closed to 1e-6 m and the energy bound met",
@@ -256,21 +276,31 @@ pub fn cases() -> Vec<StressCase> {
             energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
             allowance: DEFAULT_ALLOWANCE,
         },
-        StressCase {
-            name: "segments_500",
-            description: "two grippers, 500 elements",
-            scene: "scenes/ribbon_two_grippers.yaml",
-            overrides: |_, _| vec!["ribbon.segments=500".into()],
-            duration: 1.0,
-            quick_duration: 0.3,
-            max_steps: 200,
-            // about 1 s per step at dt 0.1 (dense Newton on 1000 unknowns)
-            quick_max_steps: 3,
-            quick_dts: &[0.001, 0.1],
-            expectation: Expectation::Stable,
-            energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
-            allowance: DEFAULT_ALLOWANCE,
-        },
+    ]
+}
+
+/// A fine ribbon: 500 elements.
+fn resolution_case() -> StressCase {
+    StressCase {
+        name: "segments_500",
+        description: "two grippers, 500 elements",
+        scene: "scenes/ribbon_two_grippers.yaml",
+        overrides: |_, _| vec!["ribbon.segments=500".into()],
+        duration: 1.0,
+        quick_duration: 0.3,
+        max_steps: 200,
+        // about 1 s per step at dt 0.1 (dense Newton on 1000 unknowns)
+        quick_max_steps: 3,
+        quick_dts: &[0.001, 0.1],
+        expectation: Expectation::Stable,
+        energy_tolerance: ENERGY_RELATIVE_TOLERANCE,
+        allowance: DEFAULT_ALLOWANCE,
+    }
+}
+
+/// Paper: heavy crumpling and 50 % compression.
+fn paper_cases() -> Vec<StressCase> {
+    vec![
         StressCase {
             name: "paper_crumple",
             description: "paper, heavy crumpling (Schreck et al. fig. 22)",
