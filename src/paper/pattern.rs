@@ -175,7 +175,6 @@ impl Pattern {
         let s_hi = self.arc_of(&p_hi, 1e-7)?;
         Some([(s_lo, t_lo), (s_hi, t_hi)])
     }
-
 }
 
 /// Distance from `p` to the segment [a, b] and the parameter of the closest point.

@@ -689,10 +689,6 @@ impl RibbonSim {
     }
 }
 
-#[doc(hidden)]
-impl RibbonSim {
-}
-
 impl ContactBody for RibbonSim {
     /// The contact mesh: one contact vertex per rim point, the two end pairs welded
     /// when the ribbon is a loop (x_n on x_0 and y_n on y_0; crossed for a Moebius
