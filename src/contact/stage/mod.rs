@@ -224,18 +224,7 @@ impl ContactStage {
             })
             .collect();
         self.gather(&inputs, targets, targets);
-        let input = DetectInput {
-            x0: &self.x0,
-            x1: &self.x,
-            unknowns: self.unknowns,
-            bodies: &self.meshes,
-            colliders: &self.geometry,
-            poses0: &self.poses0,
-            poses1: &self.poses1,
-            half_thickness: 0.5 * self.settings.thickness,
-            crossing_eps: 1e-8,
-        };
-        self.detector.detect(&input, &mut self.detected);
+        self.detect();
         let mut worst = (0.0, String::new());
         for c in &self.detected {
             let o = c.distance - c.gap(&self.x);
@@ -382,23 +371,29 @@ impl ContactStage {
 
     /// Rounds of detection and response from `self.target`; returns the largest
     /// overlap of the first detection (the prediction's penetration).
+    /// Contacts between the motion x0 -> x (this round's positions) and the colliders'
+    /// poses0 -> poses1, into `self.detected`.
+    fn detect(&mut self) {
+        let input = DetectInput {
+            x0: &self.x0,
+            x1: &self.x,
+            unknowns: self.unknowns,
+            bodies: &self.meshes,
+            colliders: &self.geometry,
+            poses0: &self.poses0,
+            poses1: &self.poses1,
+            half_thickness: 0.5 * self.settings.thickness,
+            crossing_eps: 1e-8,
+        };
+        self.detector.detect(&input, &mut self.detected);
+    }
+
     fn project(&mut self, report: &mut ContactReport, first_call: bool) -> f64 {
         let tol = self.settings.tolerance;
         let mut first_overlap = 0.0;
         report.resolved = false;
         for round in 0..self.settings.max_iterations.max(1) {
-            let input = DetectInput {
-                x0: &self.x0,
-                x1: &self.x,
-                unknowns: self.unknowns,
-                bodies: &self.meshes,
-                colliders: &self.geometry,
-                poses0: &self.poses0,
-                poses1: &self.poses1,
-                half_thickness: 0.5 * self.settings.thickness,
-                crossing_eps: 1e-8,
-            };
-            self.detector.detect(&input, &mut self.detected);
+            self.detect();
             let mut overlap: f64 = 0.0;
             for c in &self.detected {
                 overlap = overlap.max(c.distance - c.gap(&self.x));
