@@ -204,7 +204,7 @@ impl SceneFile {
             names: &object_names,
         };
         // handles (validated before the ribbon: a driven base names one)
-        let (specs, topics) = self.ribbon_handles(&ck, &names, &entries)?;
+        let RibbonHandles { specs, topics } = self.ribbon_handles(&ck, &names, &entries)?;
 
         // the ribbons: parameters first (a probe of each places default handle targets)
         let mut setups = Vec::new();
@@ -269,13 +269,12 @@ impl SceneFile {
     /// The handles of a ribbon scene, each on a ribbon's strip, with their topics; the
     /// targets without an initial pose are placed later
     /// ([`default_handle_targets`]).
-    #[allow(clippy::type_complexity)]
     fn ribbon_handles(
         &self,
         ck: &Check,
         names: &ObjectNames,
         entries: &[(String, &RibbonFile)],
-    ) -> Result<(Vec<(HandleSpec, Option<Pose>)>, Vec<String>), SceneError> {
+    ) -> Result<RibbonHandles, SceneError> {
         let mut handle_names = std::collections::BTreeSet::new();
         let mut specs = Vec::new();
         let mut topics = Vec::new();
@@ -310,7 +309,7 @@ impl SceneFile {
             topics.push(topic);
             specs.push((spec, initial));
         }
-        Ok((specs, topics))
+        Ok(RibbonHandles { specs, topics })
     }
 
     /// The point forces on ribbon `index`: material point (m) and force (N).
@@ -507,4 +506,11 @@ fn ribbon_sim(
         );
     }
     Ok(sim)
+}
+
+/// The handles of a ribbon scene as [`SceneFile`] validated them: each with its initial
+/// target pose, if the file gives one, and its topic (same order).
+struct RibbonHandles {
+    specs: Vec<(HandleSpec, Option<Pose>)>,
+    topics: Vec<String>,
 }
