@@ -153,19 +153,34 @@ struct Potential<'a> {
     clamp_stress: std::cell::Cell<bool>,
 }
 
+/// Where [`Potential::evaluate`] accumulates the gradient (J/m) and the Hessian, if
+/// asked for them.
+type GradHess<'b> = Option<(&'b mut [Vector3], &'b mut BlockSpd)>;
+
 impl Potential<'_> {
     /// Value, J; with `grad`, also the gradient (J/m) and the Gauss-Newton Hessian.
-    fn evaluate(
-        &self,
-        x: &[Vector3],
-        mut out: Option<(&mut [Vector3], &mut BlockSpd)>,
-        parts: &mut FemEnergies,
-    ) -> f64 {
+    fn evaluate(&self, x: &[Vector3], mut out: GradHess<'_>, parts: &mut FemEnergies) -> f64 {
         *parts = FemEnergies::default();
         if let Some((g, h)) = out.as_mut() {
             g.iter_mut().for_each(|v| *v = Vector3::zeros());
             h.clear();
         }
+        let inertia = self.add_inertia_and_gravity(x, &mut out, parts);
+        for (t, rest) in self.mesh.triangles.iter().zip(self.rest) {
+            self.add_stretching(t, rest, x, &mut out, parts);
+        }
+        self.add_bending(x, &mut out, parts);
+        self.add_collisions_and_springs(x, &mut out, parts);
+        inertia + parts.stretching + parts.bending + parts.gravity + parts.collision + parts.springs
+    }
+
+    /// The inertia term (m / 2h^2) |x - x~|^2 (returned, J) and gravity's potential.
+    fn add_inertia_and_gravity(
+        &self,
+        x: &[Vector3],
+        out: &mut GradHess<'_>,
+        parts: &mut FemEnergies,
+    ) -> f64 {
         let mesh = self.mesh;
         let mut inertia = 0.0;
         for i in 0..x.len() {
@@ -179,91 +194,118 @@ impl Potential<'_> {
                 h.add_block(i, i, &[k, 0.0, 0.0, 0.0, k, 0.0, 0.0, 0.0, k]);
             }
         }
-        // stretching: St Venant-Kirchhoff on the Green strain
+        inertia
+    }
+
+    /// Stretching of one triangle: St Venant-Kirchhoff on the Green strain.
+    fn add_stretching(
+        &self,
+        t: &[u32; 3],
+        rest: &TriangleRest,
+        x: &[Vector3],
+        out: &mut GradHess<'_>,
+        parts: &mut FemEnergies,
+    ) {
         let (mu, lambda) = (self.mu, self.lambda);
-        for (t, rest) in mesh.triangles.iter().zip(self.rest) {
-            let xs = t.map(|i| x[i as usize]);
-            let b = &rest.b;
-            let f0 = xs[0] * b[0].x + xs[1] * b[1].x + xs[2] * b[2].x;
-            let f1 = xs[0] * b[0].y + xs[1] * b[1].y + xs[2] * b[2].y;
-            let e00 = 0.5 * (f0.dot(&f0) - 1.0);
-            let e11 = 0.5 * (f1.dot(&f1) - 1.0);
-            let e01 = 0.5 * f0.dot(&f1);
-            let tr = e00 + e11;
-            let a = rest.area;
-            parts.stretching +=
-                a * (mu * (e00 * e00 + e11 * e11 + 2.0 * e01 * e01) + 0.5 * lambda * tr * tr);
-            let Some((g, h)) = out.as_mut() else { continue };
-            let s00 = 2.0 * mu * e00 + lambda * tr;
-            let s11 = 2.0 * mu * e11 + lambda * tr;
-            let s01 = 2.0 * mu * e01;
-            // Voigt rows J_k,v (k = 00, 11, 01) and the material tangent C
-            let mut jac = [[Vector3::zeros(); 3]; 3];
-            for v in 0..3 {
-                jac[0][v] = f0 * b[v].x;
-                jac[1][v] = f1 * b[v].y;
-                jac[2][v] = 0.5 * (f1 * b[v].x + f0 * b[v].y);
-                g[t[v] as usize] +=
-                    a * (s00 * b[v].x * f0 + s01 * (b[v].x * f1 + b[v].y * f0) + s11 * b[v].y * f1);
-            }
-            let c = [
-                [a * (2.0 * mu + lambda), a * lambda, 0.0],
-                [a * lambda, a * (2.0 * mu + lambda), 0.0],
-                [0.0, 0.0, a * 4.0 * mu],
-            ];
-            // geometric stiffness with the positive part of the stress
-            let s = Matrix2::new(s00, s01, s01, s11);
-            let eig = s.symmetric_eigen();
-            let mut splus = Matrix2::zeros();
-            let clamp = self.clamp_stress.get();
-            for k in 0..2 {
-                let l = if clamp {
-                    eig.eigenvalues[k].max(0.0)
-                } else {
-                    eig.eigenvalues[k]
-                };
-                let v = eig.eigenvectors.column(k);
-                splus += l * v * v.transpose();
-            }
-            for v in 0..3 {
-                for w in 0..=v {
-                    let mut blk = Matrix3::zeros();
-                    for k in 0..3 {
-                        for l in 0..3 {
-                            if c[k][l] != 0.0 {
-                                blk += c[k][l] * jac[k][v] * jac[l][w].transpose();
-                            }
+        let xs = t.map(|i| x[i as usize]);
+        let b = &rest.b;
+        let f0 = xs[0] * b[0].x + xs[1] * b[1].x + xs[2] * b[2].x;
+        let f1 = xs[0] * b[0].y + xs[1] * b[1].y + xs[2] * b[2].y;
+        let e00 = 0.5 * (f0.dot(&f0) - 1.0);
+        let e11 = 0.5 * (f1.dot(&f1) - 1.0);
+        let e01 = 0.5 * f0.dot(&f1);
+        let tr = e00 + e11;
+        let a = rest.area;
+        parts.stretching +=
+            a * (mu * (e00 * e00 + e11 * e11 + 2.0 * e01 * e01) + 0.5 * lambda * tr * tr);
+        let Some((g, h)) = out.as_mut() else { return };
+        let s00 = 2.0 * mu * e00 + lambda * tr;
+        let s11 = 2.0 * mu * e11 + lambda * tr;
+        let s01 = 2.0 * mu * e01;
+        // Voigt rows J_k,v (k = 00, 11, 01) and the material tangent C
+        let mut jac = [[Vector3::zeros(); 3]; 3];
+        for v in 0..3 {
+            jac[0][v] = f0 * b[v].x;
+            jac[1][v] = f1 * b[v].y;
+            jac[2][v] = 0.5 * (f1 * b[v].x + f0 * b[v].y);
+            g[t[v] as usize] +=
+                a * (s00 * b[v].x * f0 + s01 * (b[v].x * f1 + b[v].y * f0) + s11 * b[v].y * f1);
+        }
+        let c = [
+            [a * (2.0 * mu + lambda), a * lambda, 0.0],
+            [a * lambda, a * (2.0 * mu + lambda), 0.0],
+            [0.0, 0.0, a * 4.0 * mu],
+        ];
+        let splus = self.stress_for_geometric_stiffness(Matrix2::new(s00, s01, s01, s11));
+        for v in 0..3 {
+            for w in 0..=v {
+                let mut blk = Matrix3::zeros();
+                for k in 0..3 {
+                    for l in 0..3 {
+                        if c[k][l] != 0.0 {
+                            blk += c[k][l] * jac[k][v] * jac[l][w].transpose();
                         }
                     }
-                    let geo = a * (b[v].transpose() * splus * b[w])[(0, 0)];
-                    blk += Matrix3::identity() * geo;
-                    add_block3(h, t[v] as usize, t[w] as usize, &blk, v == w);
                 }
+                let geo = a * (b[v].transpose() * splus * b[w])[(0, 0)];
+                blk += Matrix3::identity() * geo;
+                add_block3(h, t[v] as usize, t[w] as usize, &blk, v == w);
             }
         }
-        // bending: (k_b / 2) w (theta - theta_rest)^2 per hinge
+    }
+
+    /// The second Piola-Kirchhoff stress `s` (N/m) as the geometric stiffness uses it:
+    /// rebuilt from its eigen-decomposition, with only the positive part when
+    /// `clamp_stress` is set.
+    fn stress_for_geometric_stiffness(&self, s: Matrix2<f64>) -> Matrix2<f64> {
+        let eig = s.symmetric_eigen();
+        let mut splus = Matrix2::zeros();
+        let clamp = self.clamp_stress.get();
+        for k in 0..2 {
+            let l = if clamp {
+                eig.eigenvalues[k].max(0.0)
+            } else {
+                eig.eigenvalues[k]
+            };
+            let v = eig.eigenvectors.column(k);
+            splus += l * v * v.transpose();
+        }
+        splus
+    }
+
+    /// Bending: (k_b / 2) w (theta - theta_rest)^2 per hinge.
+    fn add_bending(&self, x: &[Vector3], out: &mut GradHess<'_>, parts: &mut FemEnergies) {
         let kb = self.params.bending_stiffness;
-        if kb > 0.0 {
-            for hinge in &mesh.hinges {
-                let xs = hinge.v.map(|i| x[i as usize]);
-                let theta = signed_dihedral(&xs);
-                let d = theta - hinge.rest_angle;
-                let k = kb * hinge.weight;
-                parts.bending += 0.5 * k * d * d;
-                let Some((g, h)) = out.as_mut() else { continue };
-                let grad = dihedral_gradient(&xs);
-                for v in 0..4 {
-                    g[hinge.v[v] as usize] += k * d * grad[v];
-                }
-                for v in 0..4 {
-                    for w in 0..=v {
-                        let blk = k * grad[v] * grad[w].transpose();
-                        add_block3(h, hinge.v[v] as usize, hinge.v[w] as usize, &blk, v == w);
-                    }
+        if kb <= 0.0 {
+            return;
+        }
+        for hinge in &self.mesh.hinges {
+            let xs = hinge.v.map(|i| x[i as usize]);
+            let theta = signed_dihedral(&xs);
+            let d = theta - hinge.rest_angle;
+            let k = kb * hinge.weight;
+            parts.bending += 0.5 * k * d * d;
+            let Some((g, h)) = out.as_mut() else { continue };
+            let grad = dihedral_gradient(&xs);
+            for v in 0..4 {
+                g[hinge.v[v] as usize] += k * d * grad[v];
+            }
+            for v in 0..4 {
+                for w in 0..=v {
+                    let blk = k * grad[v] * grad[w].transpose();
+                    add_block3(h, hinge.v[v] as usize, hinge.v[w] as usize, &blk, v == w);
                 }
             }
         }
-        // collisions: one-sided repulsion springs
+    }
+
+    /// Collisions (one-sided repulsion springs) and the handles' soft springs.
+    fn add_collisions_and_springs(
+        &self,
+        x: &[Vector3],
+        out: &mut GradHess<'_>,
+        parts: &mut FemEnergies,
+    ) {
         let kc = self.params.collision_stiffness;
         let thick = self.params.collision_thickness;
         for col in &self.params.colliders {
@@ -291,7 +333,6 @@ impl Potential<'_> {
                 h.add_block(i, i, &[k, 0.0, 0.0, 0.0, k, 0.0, 0.0, 0.0, k]);
             }
         }
-        inertia + parts.stretching + parts.bending + parts.gravity + parts.collision + parts.springs
     }
 }
 
@@ -318,6 +359,102 @@ fn add_block3(h: &mut BlockSpd, i: usize, j: usize, m: &Matrix3<f64>, diagonal: 
     }
 }
 
+/// A Newton direction (in `rhs`) at `x` and what the line search needs.
+struct NewtonDirection {
+    /// The incremental potential at `x`, J.
+    phi: f64,
+    /// Its directional derivative along the direction, J.
+    slope: f64,
+    /// The direction's largest coordinate, m.
+    step_max: f64,
+}
+
+/// Solve H d = -g at `x` into `rhs` with the full geometric stiffness; if that Hessian
+/// is not positive definite (or gives no descent), with the positive-stress one. None
+/// when neither gives a descent direction. Leaves `grad` and `parts` at `x`.
+fn newton_direction(
+    potential: &Potential,
+    matrix: &mut BlockSpd,
+    x: &[Vector3],
+    fixed: &[bool],
+    grad: &mut [Vector3],
+    parts: &mut FemEnergies,
+    rhs: &mut faer::Mat<f64>,
+) -> Option<NewtonDirection> {
+    let n = x.len();
+    for clamp in [false, true] {
+        potential.clamp_stress.set(clamp);
+        let phi = potential.evaluate(x, Some((&mut *grad, &mut *matrix)), parts);
+        matrix.fix_all(fixed);
+        for i in 0..n {
+            for a in 0..3 {
+                rhs[(3 * i + a, 0)] = if fixed[3 * i + a] { 0.0 } else { -grad[i][a] };
+            }
+        }
+        if matrix.solve_in_place(rhs.as_mut()).is_err() {
+            continue;
+        }
+        let mut slope = 0.0;
+        let mut step_max: f64 = 0.0;
+        for i in 0..n {
+            for a in 0..3 {
+                slope += grad[i][a] * rhs[(3 * i + a, 0)];
+                step_max = step_max.max(rhs[(3 * i + a, 0)].abs());
+            }
+        }
+        if slope < 0.0 || step_max == 0.0 {
+            return Some(NewtonDirection {
+                phi,
+                slope,
+                step_max,
+            });
+        }
+    }
+    None
+}
+
+/// Backtracking (Armijo) line search from `x` along the direction in `rhs`: the step
+/// length accepted, with the point in `trial`; None after 30 halvings.
+fn armijo_step(
+    potential: &Potential,
+    x: &[Vector3],
+    rhs: &faer::Mat<f64>,
+    dir: &NewtonDirection,
+    trial: &mut [Vector3],
+) -> Option<f64> {
+    let mut alpha = 1.0;
+    let mut scratch = FemEnergies::default();
+    for _ in 0..30 {
+        for i in 0..x.len() {
+            for a in 0..3 {
+                trial[i][a] = x[i][a] + alpha * rhs[(3 * i + a, 0)];
+            }
+        }
+        let phi_t = potential.evaluate(trial, None, &mut scratch);
+        if phi_t.is_finite() && phi_t <= dir.phi + 1e-4 * alpha * dir.slope {
+            return Some(alpha);
+        }
+        alpha *= 0.5;
+    }
+    None
+}
+
+/// Newton's start: the inertial prediction x~ with the Dirichlet coordinates at their
+/// values, and which of the 3n coordinates those are.
+fn start_point(x_tilde: &[Vector3], dirichlet: &[Dirichlet]) -> (Vec<Vector3>, Vec<bool>) {
+    let n = x_tilde.len();
+    let mut fixed = vec![false; 3 * n];
+    let mut x = x_tilde.to_vec();
+    for d in dirichlet {
+        let i = d.vertex as usize;
+        if i < n && d.axis < 3 {
+            fixed[3 * i + d.axis] = true;
+            x[i][d.axis] = d.value;
+        }
+    }
+    (x, fixed)
+}
+
 /// One implicit-Euler step of `dt` s: new positions and velocities of `mesh`.
 pub fn implicit_step(
     system: &mut FemSystem,
@@ -334,15 +471,7 @@ pub fn implicit_step(
         .zip(&mesh.velocity)
         .map(|(x, v)| x + dt * v)
         .collect();
-    let mut fixed = vec![false; 3 * n];
-    let mut x = x_tilde.clone();
-    for d in dirichlet {
-        let i = d.vertex as usize;
-        if i < n && d.axis < 3 {
-            fixed[3 * i + d.axis] = true;
-            x[i][d.axis] = d.value;
-        }
-    }
+    let (mut x, fixed) = start_point(&x_tilde, dirichlet);
     let (mu, lambda) = lame(params);
     let potential = Potential {
         mesh,
@@ -362,41 +491,19 @@ pub fn implicit_step(
     let mut trial = x.clone();
     for it in 0..params.newton_max_iterations {
         report.iterations = it + 1;
-        // Newton direction with the full geometric stiffness; if that Hessian is not
-        // positive definite (or gives no descent), the positive-stress one
-        let mut phi = 0.0;
-        let mut slope = 0.0;
-        let mut step_max: f64 = 0.0;
-        let mut solved = false;
-        for clamp in [false, true] {
-            potential.clamp_stress.set(clamp);
-            phi = potential.evaluate(&x, Some((&mut grad, &mut system.matrix)), &mut parts);
-            system.matrix.fix_all(&fixed);
-            for i in 0..n {
-                for a in 0..3 {
-                    rhs[(3 * i + a, 0)] = if fixed[3 * i + a] { 0.0 } else { -grad[i][a] };
-                }
-            }
-            if system.matrix.solve_in_place(rhs.as_mut()).is_err() {
-                continue;
-            }
-            slope = 0.0;
-            step_max = 0.0;
-            for i in 0..n {
-                for a in 0..3 {
-                    slope += grad[i][a] * rhs[(3 * i + a, 0)];
-                    step_max = step_max.max(rhs[(3 * i + a, 0)].abs());
-                }
-            }
-            if slope < 0.0 || step_max == 0.0 {
-                solved = true;
-                break;
-            }
-        }
-        if !solved {
+        let Some(dir) = newton_direction(
+            &potential,
+            &mut system.matrix,
+            &x,
+            &fixed,
+            &mut grad,
+            &mut parts,
+            &mut rhs,
+        ) else {
             report.failed = true;
             break;
-        }
+        };
+        let step_max = dir.step_max;
         if !step_max.is_finite() {
             report.failed = true;
             break;
@@ -405,28 +512,11 @@ pub fn implicit_step(
             report.converged = true;
             break;
         }
-        // backtracking (Armijo) line search
-        let mut alpha = 1.0;
-        let mut accepted = false;
-        let mut scratch = FemEnergies::default();
-        for _ in 0..30 {
-            for i in 0..n {
-                for a in 0..3 {
-                    trial[i][a] = x[i][a] + alpha * rhs[(3 * i + a, 0)];
-                }
-            }
-            let phi_t = potential.evaluate(&trial, None, &mut scratch);
-            if phi_t.is_finite() && phi_t <= phi + 1e-4 * alpha * slope {
-                accepted = true;
-                break;
-            }
-            alpha *= 0.5;
-        }
-        if !accepted {
+        let Some(alpha) = armijo_step(&potential, &x, &rhs, &dir, &mut trial) else {
             // no descent left at round-off level: the current point is the minimizer
             report.converged = step_max < 1e3 * params.newton_tolerance;
             break;
-        }
+        };
         std::mem::swap(&mut x, &mut trial);
         if alpha * step_max < params.newton_tolerance {
             report.converged = true;

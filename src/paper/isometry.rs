@@ -39,149 +39,182 @@ pub fn restore_lengths(
     fixed: &[bool],
     max_iterations: u32,
 ) -> IsometryReport {
-    let ne = mesh.edges.len();
-    let nt = mesh.triangles.len();
     let mut report = IsometryReport {
         length_error_before: mean_length_error(mesh),
         ..Default::default()
     };
-    if ne == 0 || nt == 0 {
+    if mesh.edges.is_empty() || mesh.triangles.is_empty() {
         return report;
     }
-    // edge index lookup and rest lengths
-    let rest: Vec<f64> = mesh
-        .edges
-        .iter()
-        .map(|[a, b]| (mesh.material[*a as usize] - mesh.material[*b as usize]).norm())
-        .collect();
-    let find = |a: u32, b: u32| -> (usize, f64) {
-        let key = if a < b { [a, b] } else { [b, a] };
-        let i = mesh.edges.binary_search(&key).unwrap_or(0);
-        (i, if a < b { 1.0 } else { -1.0 })
-    };
-    // each triangle: three (edge, sign) with the traversal i -> j -> k -> i
-    let tri_edges: Vec<[(usize, f64); 3]> = mesh
-        .triangles
-        .iter()
-        .map(|t| [find(t[0], t[1]), find(t[1], t[2]), find(t[2], t[0])])
-        .collect();
-    // u^o: current unit directions (edge a -> b, a < b)
-    let u0: Vec<Vector3> = mesh
-        .edges
-        .iter()
-        .map(|[a, b]| {
-            let d = mesh.position[*b as usize] - mesh.position[*a as usize];
-            let n = d.norm();
-            if n > 1e-300 {
-                d / n
-            } else {
-                Vector3::x()
-            }
-        })
-        .collect();
-    let mut u = u0.clone();
-    let closure = |u: &[Vector3]| -> (f64, Vec<Vector3>) {
+    let problem = EdgeDirections::new(mesh);
+    let u = problem.phase_one(max_iterations, &mut report);
+    place_vertices(mesh, fixed, &problem.rest, &u);
+    report.length_error_after = mean_length_error(mesh);
+    report
+}
+
+/// Phase I's unknowns and data: the edges' rest lengths, each triangle's three edges
+/// with their traversal signs, and the current unit directions u^o.
+struct EdgeDirections {
+    /// Pattern length of each edge of `mesh.edges`, m.
+    rest: Vec<f64>,
+    /// Each triangle: three (edge, sign) with the traversal i -> j -> k -> i.
+    tri_edges: Vec<[(usize, f64); 3]>,
+    /// u^o: current unit directions (edge a -> b, a < b).
+    u0: Vec<Vector3>,
+}
+
+impl EdgeDirections {
+    fn new(mesh: &PhysicalMesh) -> EdgeDirections {
+        let rest: Vec<f64> = mesh
+            .edges
+            .iter()
+            .map(|[a, b]| (mesh.material[*a as usize] - mesh.material[*b as usize]).norm())
+            .collect();
+        let find = |a: u32, b: u32| -> (usize, f64) {
+            let key = if a < b { [a, b] } else { [b, a] };
+            let i = mesh.edges.binary_search(&key).unwrap_or(0);
+            (i, if a < b { 1.0 } else { -1.0 })
+        };
+        let tri_edges = mesh
+            .triangles
+            .iter()
+            .map(|t| [find(t[0], t[1]), find(t[1], t[2]), find(t[2], t[0])])
+            .collect();
+        let u0 = mesh
+            .edges
+            .iter()
+            .map(|[a, b]| {
+                let d = mesh.position[*b as usize] - mesh.position[*a as usize];
+                let n = d.norm();
+                if n > 1e-300 {
+                    d / n
+                } else {
+                    Vector3::x()
+                }
+            })
+            .collect();
+        EdgeDirections {
+            rest,
+            tri_edges,
+            u0,
+        }
+    }
+
+    /// C_closed of the directions `u` and each triangle's closure residual
+    /// l_ij u_ij + l_jk u_jk + l_ki u_ki, m.
+    fn closure(&self, u: &[Vector3]) -> (f64, Vec<Vector3>) {
         let mut c = 0.0;
-        let mut r = Vec::with_capacity(nt);
-        for te in &tri_edges {
+        let mut r = Vec::with_capacity(self.tri_edges.len());
+        for te in &self.tri_edges {
             let mut v = Vector3::zeros();
             for &(e, s) in te {
-                v += s * rest[e] * u[e];
+                v += s * self.rest[e] * u[e];
             }
             c += v.norm_squared();
             r.push(v);
         }
         (c, r)
-    };
-    let (c2_start, _) = closure(&u);
-    report.closure_before = (c2_start / nt as f64).sqrt();
-    // phase I: iterate eq. (6)
-    let (mut lambda1, mut lambda2) = (0.0, 0.0);
-    let mut best = (c2_start, u.clone());
-    let mut g1 = vec![Vector3::zeros(); ne];
-    let mut g2 = vec![Vector3::zeros(); ne];
-    let mut bx = vec![Vector3::zeros(); ne];
-    let mut since_best = 0;
-    let tiny_closure = 1e-24 * rest.iter().map(|l| l * l).sum::<f64>();
-    for it in 0..max_iterations {
-        let (c2, resid) = closure(&u);
-        let c1: f64 = u.iter().map(|v| (v.norm_squared() - 1.0).powi(2)).sum();
-        // the best iterate, judged on unit directions (what phase II receives)
-        let unit: Vec<Vector3> = u.iter().map(|v| v / v.norm().max(1e-300)).collect();
-        let (c2_unit, _) = closure(&unit);
-        if c2_unit < best.0 {
-            best = (c2_unit, unit);
-            since_best = 0;
-        } else {
-            since_best += 1;
-            // the iteration stagnates once L is near zero (sec. 6.3: "does not
-            // guarantee theoretical convergence"); stop early, keep the best
-            if since_best > 25 {
+    }
+
+    /// Phase I: iterate eq. (6) from u^o; returns the best unit directions found
+    /// (judged on C_closed of the normalized directions, what phase II receives).
+    fn phase_one(&self, max_iterations: u32, report: &mut IsometryReport) -> Vec<Vector3> {
+        let (ne, nt) = (self.rest.len(), self.tri_edges.len());
+        let mut u = self.u0.clone();
+        let (c2_start, _) = self.closure(&u);
+        report.closure_before = (c2_start / nt as f64).sqrt();
+        let (mut lambda1, mut lambda2) = (0.0, 0.0);
+        let mut best = (c2_start, u.clone());
+        let mut g1 = vec![Vector3::zeros(); ne];
+        let mut g2 = vec![Vector3::zeros(); ne];
+        let mut bx = vec![Vector3::zeros(); ne];
+        let mut since_best = 0;
+        let tiny_closure = 1e-24 * self.rest.iter().map(|l| l * l).sum::<f64>();
+        for it in 0..max_iterations {
+            let (c2, resid) = self.closure(&u);
+            let c1: f64 = u.iter().map(|v| (v.norm_squared() - 1.0).powi(2)).sum();
+            let unit: Vec<Vector3> = u.iter().map(|v| v / v.norm().max(1e-300)).collect();
+            let (c2_unit, _) = self.closure(&unit);
+            if c2_unit < best.0 {
+                best = (c2_unit, unit);
+                since_best = 0;
+            } else {
+                since_best += 1;
+                // the iteration stagnates once L is near zero (sec. 6.3: "does not
+                // guarantee theoretical convergence"); stop early, keep the best
+                if since_best > 25 {
+                    break;
+                }
+            }
+            report.iterations = it + 1;
+            if c2 <= tiny_closure {
+                break;
+            }
+            // gradients of the constraints
+            for (e, v) in u.iter().enumerate() {
+                g1[e] = 4.0 * (v.norm_squared() - 1.0) * v;
+                g2[e] = Vector3::zeros();
+            }
+            for (te, r) in self.tri_edges.iter().zip(&resid) {
+                for &(e, s) in te {
+                    g2[e] += 2.0 * s * self.rest[e] * r;
+                }
+            }
+            // b_x = -grad E - lambda1 grad C1 - lambda2 grad C2, b_lambda = -C
+            let (mut l11, mut l12, mut l22, mut r1, mut r2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+            for e in 0..ne {
+                bx[e] = -(u[e] - self.u0[e]) - lambda1 * g1[e] - lambda2 * g2[e];
+                l11 += g1[e].norm_squared();
+                l12 += g1[e].dot(&g2[e]);
+                l22 += g2[e].norm_squared();
+                r1 += g1[e].dot(&bx[e]);
+                r2 += g2[e].dot(&bx[e]);
+            }
+            // L^T L dlambda = L^T b_x - b_lambda
+            r1 += c1;
+            r2 += c2;
+            let det = l11 * l22 - l12 * l12;
+            let (d1, d2) = if det.abs() > 1e-14 * (l11 * l22).max(1e-300) {
+                ((l22 * r1 - l12 * r2) / det, (l11 * r2 - l12 * r1) / det)
+            } else if l22 > 1e-300 {
+                // C_unit is satisfied exactly (its gradient vanishes): one multiplier
+                (0.0, r2 / l22)
+            } else {
+                break;
+            };
+            let mut finite = true;
+            for e in 0..ne {
+                let dx = bx[e] - d1 * g1[e] - d2 * g2[e];
+                u[e] += dx;
+                finite &= u[e].iter().all(|c| c.is_finite());
+            }
+            lambda1 += d1;
+            lambda2 += d2;
+            if !finite || !lambda1.is_finite() || !lambda2.is_finite() {
                 break;
             }
         }
-        report.iterations = it + 1;
-        if c2 <= tiny_closure {
-            break;
-        }
-        // gradients of the constraints
-        for (e, v) in u.iter().enumerate() {
-            g1[e] = 4.0 * (v.norm_squared() - 1.0) * v;
-            g2[e] = Vector3::zeros();
-        }
-        for (te, r) in tri_edges.iter().zip(&resid) {
-            for &(e, s) in te {
-                g2[e] += 2.0 * s * rest[e] * r;
+        let (c2_end, mut u) = (best.0, best.1);
+        report.closure_after = (c2_end / nt as f64).sqrt();
+        for v in u.iter_mut() {
+            let n = v.norm();
+            if n > 1e-300 {
+                *v /= n;
             }
         }
-        // b_x = -grad E - lambda1 grad C1 - lambda2 grad C2, b_lambda = -C
-        let (mut l11, mut l12, mut l22, mut r1, mut r2) = (0.0, 0.0, 0.0, 0.0, 0.0);
-        for e in 0..ne {
-            bx[e] = -(u[e] - u0[e]) - lambda1 * g1[e] - lambda2 * g2[e];
-            l11 += g1[e].norm_squared();
-            l12 += g1[e].dot(&g2[e]);
-            l22 += g2[e].norm_squared();
-            r1 += g1[e].dot(&bx[e]);
-            r2 += g2[e].dot(&bx[e]);
-        }
-        // L^T L dlambda = L^T b_x - b_lambda
-        r1 += c1;
-        r2 += c2;
-        let det = l11 * l22 - l12 * l12;
-        let (d1, d2) = if det.abs() > 1e-14 * (l11 * l22).max(1e-300) {
-            ((l22 * r1 - l12 * r2) / det, (l11 * r2 - l12 * r1) / det)
-        } else if l22 > 1e-300 {
-            // C_unit is satisfied exactly (its gradient vanishes): one multiplier
-            (0.0, r2 / l22)
-        } else {
-            break;
-        };
-        let mut finite = true;
-        for e in 0..ne {
-            let dx = bx[e] - d1 * g1[e] - d2 * g2[e];
-            u[e] += dx;
-            finite &= u[e].iter().all(|c| c.is_finite());
-        }
-        lambda1 += d1;
-        lambda2 += d2;
-        if !finite || !lambda1.is_finite() || !lambda2.is_finite() {
-            break;
-        }
+        u
     }
-    let (c2_end, mut u) = (best.0, best.1);
-    report.closure_after = (c2_end / nt as f64).sqrt();
-    for v in u.iter_mut() {
-        let n = v.norm();
-        if n > 1e-300 {
-            *v /= n;
-        }
-    }
-    // phase II: least squares on positions, handle vertices fixed, plus a tiny pull to
-    // the current positions so that parts without a handle stay determined
+}
+
+/// Phase II: least squares on positions, (p_j - p_i) - l_ij u_ij (eq. 7), handle
+/// vertices fixed, plus a tiny pull (1e-8) to the current positions so that parts
+/// without a handle stay determined. Keeps the positions if the solve fails or is not
+/// finite.
+fn place_vertices(mesh: &mut PhysicalMesh, fixed: &[bool], rest: &[f64], u: &[Vector3]) {
     let n = mesh.material.len();
     let mut groups = mesh.edges.iter().map(|e| e.to_vec());
     let mut a = BlockSpd::new(n, 1, &mut groups);
-    let mean_rest = rest.iter().sum::<f64>() / ne as f64;
     let eps = 1e-8;
     let mut rhs = faer::Mat::<f64>::zeros(n, 3);
     for v in 0..n {
@@ -223,7 +256,6 @@ pub fn restore_lengths(
         }
     }
     a.fix_all(&fixed_dofs);
-    let _ = mean_rest;
     if a.solve_in_place(rhs.as_mut()).is_ok() {
         let ok = (0..n).all(|v| (0..3).all(|c| rhs[(v, c)].is_finite()));
         if ok {
@@ -234,8 +266,6 @@ pub fn restore_lengths(
             }
         }
     }
-    report.length_error_after = mean_length_error(mesh);
-    report
 }
 
 #[cfg(test)]
