@@ -56,77 +56,29 @@ pub fn update_junctions(
         let Some(cur) = layer.regions.iter().position(|r| r.id == *id) else {
             continue;
         };
-        let angles: Vec<f64> = rv.iter().map(|&[a, b]| dihedral(a, b)).collect();
-        if angles.iter().all(|&t| t < params.junction_low_angle) {
+        let junctions = RegionJunctions {
+            ctx,
+            gmesh,
+            rv,
+            angles: rv.iter().map(|&[a, b]| dihedral(a, b)).collect(),
+        };
+        if junctions
+            .angles
+            .iter()
+            .all(|&t| t < params.junction_low_angle)
+        {
             layer.regions.remove(cur);
             report.flattened += 1;
             continue;
         }
         let mut rulings = layer.regions[cur].rulings.clone();
-        // shrink from both ends while the border ruling is flatter than theta_low
-        let mut lo = 0usize;
-        let mut hi = rulings.len();
-        while hi - lo > 2 && angles[lo] < params.junction_low_angle && border_is_flat(gmesh, rv[lo])
-        {
-            lo += 1;
-            report.shrunk += 1;
-        }
-        while hi - lo > 2
-            && angles[hi - 1] < params.junction_low_angle
-            && border_is_flat(gmesh, rv[hi - 1])
-        {
-            hi -= 1;
-            report.shrunk += 1;
-        }
+        let (lo, hi) = junctions.shrink(rulings.len(), &mut report);
         rulings = rulings[lo..hi].to_vec();
         // expand at an end sharper than theta_high
         for front in [true, false] {
-            let (k, k_in) = if front {
-                (lo, lo + 1)
-            } else {
-                (hi - 1, hi - 2)
-            };
-            if k_in >= rv.len() || !border_is_flat(gmesh, rv[k]) {
-                continue;
-            }
-            let theta = angles[k];
-            if theta <= params.junction_high_angle {
-                continue;
-            }
-            if theta <= opposite_angle(gmesh, rv[k]) {
-                continue;
-            }
-            let (r, r_in) = if front {
-                (rulings[0], rulings[1])
-            } else {
-                (rulings[rulings.len() - 1], rulings[rulings.len() - 2])
-            };
-            let spacing = params.boundary_spacing();
-            let out = |e: Endpoint, inner: Endpoint| match (e, inner) {
-                (Endpoint::Boundary(s), Endpoint::Boundary(si)) => {
-                    Some(Endpoint::Boundary(snap_to_vertex(
-                        ctx,
-                        gmesh,
-                        step_out(ctx.pattern, s, si, spacing),
-                        params.min_boundary_spacing(),
-                        &[],
-                    )))
-                }
-                (Endpoint::Singular(id), _) => Some(Endpoint::Singular(id)),
-                _ => None,
-            };
-            let (Some(a), Some(b)) = (out(r.a, r_in.a), out(r.b, r_in.b)) else {
+            let Some(new) = junctions.expansion(layer, &rulings, lo, hi, front) else {
                 continue;
             };
-            if a == r.a && b == r.b {
-                continue;
-            }
-            let new = Ruling { a, b };
-            let p = layer.endpoint_material(ctx.pattern, &a);
-            let q = layer.endpoint_material(ctx.pattern, &b);
-            if !segment_is_free(ctx, layer, gmesh, &p, &q, &[]) {
-                continue;
-            }
             if front {
                 rulings.insert(0, new);
             } else {
@@ -146,6 +98,99 @@ pub fn update_junctions(
         None => None,
     };
     (report, mesh)
+}
+
+/// A curved region's border rulings in S_G while sec. 6.1 moves its junctions.
+struct RegionJunctions<'r, 'a> {
+    ctx: &'r CrumpleContext<'a>,
+    gmesh: &'r GeometricMesh,
+    /// The S_G vertices [a, b] of each ruling.
+    rv: &'r [[u32; 2]],
+    /// The dihedral angle theta along each ruling (rad; 0 where it has no two faces).
+    angles: Vec<f64>,
+}
+
+impl RegionJunctions<'_, '_> {
+    /// Shrink the region's `n` rulings from both ends while the border ruling is
+    /// flatter than theta_low next to a flat region, keeping at least 2 (each removal
+    /// counted in `report.shrunk`). Returns the kept range lo..hi.
+    fn shrink(&self, n: usize, report: &mut JunctionReport) -> (usize, usize) {
+        let (gmesh, rv, angles) = (self.gmesh, self.rv, &self.angles);
+        let low = self.ctx.params.junction_low_angle;
+        let mut lo = 0usize;
+        let mut hi = n;
+        while hi - lo > 2 && angles[lo] < low && border_is_flat(gmesh, rv[lo]) {
+            lo += 1;
+            report.shrunk += 1;
+        }
+        while hi - lo > 2 && angles[hi - 1] < low && border_is_flat(gmesh, rv[hi - 1]) {
+            hi -= 1;
+            report.shrunk += 1;
+        }
+        (lo, hi)
+    }
+
+    /// The ruling one boundary spacing into F beyond the `front` (else back) border
+    /// ruling of the kept `rulings` (range lo..hi of the original ones), when that
+    /// border is next to a flat region, sharper than theta_high and than theta_opp of
+    /// the other borders at its junction (fig. 13), and the new ruling is free.
+    fn expansion(
+        &self,
+        layer: &GeometricLayer,
+        rulings: &[Ruling],
+        lo: usize,
+        hi: usize,
+        front: bool,
+    ) -> Option<Ruling> {
+        let (ctx, gmesh, rv) = (self.ctx, self.gmesh, self.rv);
+        let params = ctx.params;
+        let (k, k_in) = if front {
+            (lo, lo + 1)
+        } else {
+            (hi - 1, hi - 2)
+        };
+        if k_in >= rv.len() || !border_is_flat(gmesh, rv[k]) {
+            return None;
+        }
+        let theta = self.angles[k];
+        if theta <= params.junction_high_angle {
+            return None;
+        }
+        if theta <= opposite_angle(gmesh, rv[k]) {
+            return None;
+        }
+        let (r, r_in) = if front {
+            (rulings[0], rulings[1])
+        } else {
+            (rulings[rulings.len() - 1], rulings[rulings.len() - 2])
+        };
+        let spacing = params.boundary_spacing();
+        let out = |e: Endpoint, inner: Endpoint| match (e, inner) {
+            (Endpoint::Boundary(s), Endpoint::Boundary(si)) => {
+                Some(Endpoint::Boundary(snap_to_vertex(
+                    ctx,
+                    gmesh,
+                    step_out(ctx.pattern, s, si, spacing),
+                    params.min_boundary_spacing(),
+                    &[],
+                )))
+            }
+            (Endpoint::Singular(id), _) => Some(Endpoint::Singular(id)),
+            _ => None,
+        };
+        let (Some(a), Some(b)) = (out(r.a, r_in.a), out(r.b, r_in.b)) else {
+            return None;
+        };
+        if a == r.a && b == r.b {
+            return None;
+        }
+        let p = layer.endpoint_material(ctx.pattern, &a);
+        let q = layer.endpoint_material(ctx.pattern, &b);
+        if !segment_is_free(ctx, layer, gmesh, &p, &q, &[]) {
+            return None;
+        }
+        Some(Ruling { a, b })
+    }
 }
 
 /// Replace the rulings of regions (by id) and keep the result if S_G still meshes;
