@@ -12,7 +12,7 @@
 use nalgebra::Vector2;
 use rand::Rng;
 
-use super::compression::TriangleStrain;
+use super::compression::{flat_regions, triangle_strain, TriangleStrain};
 use super::geometric::{
     Crease, CreaseKind, EdgeKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
     Ruling,
@@ -196,7 +196,7 @@ fn compression_band(
 }
 
 /// The centroid of face `f` in the pattern (m).
-fn face_center(g: &GeometricMesh, f: usize) -> Point2 {
+pub(crate) fn face_center(g: &GeometricMesh, f: usize) -> Point2 {
     let vs = &g.faces[f].vertices;
     Point2::from(
         vs.iter()
@@ -389,6 +389,90 @@ impl Attempt<'_, '_> {
         }
         Some(())
     }
+}
+
+/// The flat regions of one frame's S_G before step 2 changes it: each is remeshed at
+/// most once (sec. 5.1: "it is applied to each flat region F"); the flat regions of
+/// later meshes map back to them by position.
+pub struct FrameFlatRegions {
+    /// S_G at the start of the frame.
+    original: GeometricMesh,
+    /// Its flat-region label per face (`usize::MAX`: not flat).
+    labels: Vec<usize>,
+    /// The labels of the regions already remeshed.
+    processed: Vec<usize>,
+}
+
+impl FrameFlatRegions {
+    /// The flat regions of `gmesh`, split at folds sharper than `fold` (rad) if given.
+    pub fn new(gmesh: &GeometricMesh, fold: Option<f64>) -> Self {
+        let original = gmesh.clone();
+        let labels = flat_regions(&original, fold);
+        FrameFlatRegions {
+            original,
+            labels,
+            processed: Vec::new(),
+        }
+    }
+
+    /// The frame's flat region under the centroid of `strain`'s face of `gmesh`.
+    fn origin_of(&self, gmesh: &GeometricMesh, strain: &TriangleStrain) -> Option<usize> {
+        let c = face_center(gmesh, strain.face);
+        self.original.face_at(&c).map(|f| self.labels[f])
+    }
+
+    /// T_comp of the next region to remesh: among the most compressed triangles of
+    /// the flat regions `labels` of `gmesh` (one per region), the most compressed one
+    /// above `threshold` whose frame region is not remeshed yet; that region is then
+    /// marked remeshed.
+    pub fn next_compressed(
+        &mut self,
+        gmesh: &GeometricMesh,
+        labels: &[usize],
+        threshold: f64,
+    ) -> Option<TriangleStrain> {
+        let worst = most_compressed_per_region(gmesh, labels);
+        let candidate = worst
+            .iter()
+            .flatten()
+            .filter(|w| w.compression > threshold)
+            .filter(|w| {
+                self.origin_of(gmesh, w)
+                    .is_some_and(|o| o != usize::MAX && !self.processed.contains(&o))
+            })
+            .max_by(|a, b| a.compression.total_cmp(&b.compression))
+            .copied();
+        let strain = candidate?;
+        if let Some(o) = self.origin_of(gmesh, &strain) {
+            self.processed.push(o);
+        }
+        Some(strain)
+    }
+}
+
+/// The most compressed triangle of each flat region `labels` of `gmesh` (indexed by
+/// label; the first of equals).
+fn most_compressed_per_region(
+    gmesh: &GeometricMesh,
+    labels: &[usize],
+) -> Vec<Option<TriangleStrain>> {
+    let n_labels = labels
+        .iter()
+        .filter(|&&l| l != usize::MAX)
+        .max()
+        .map_or(0, |m| m + 1);
+    let mut worst: Vec<Option<TriangleStrain>> = vec![None; n_labels];
+    for (f, &l) in labels.iter().enumerate() {
+        if l == usize::MAX {
+            continue;
+        }
+        if let Some(s) = triangle_strain(gmesh, f) {
+            if worst[l].is_none_or(|w| s.compression > w.compression) {
+                worst[l] = Some(s);
+            }
+        }
+    }
+    worst
 }
 
 /// Snap a boundary arc length to an existing S_G boundary vertex within a third of
