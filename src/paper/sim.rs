@@ -187,12 +187,6 @@ impl PaperSim {
         Ok(sim)
     }
 
-    /// `world_from_material_point`: the pose of pattern point `m` on the flat sheet at
-    /// its placement (the default handle target).
-    pub fn material_pose(&self, m: &Point2) -> Pose {
-        self.params.placement * Pose::translation(m.x, m.y, 0.0)
-    }
-
     /// The displayed mesh: S_P (sec. 4: "S_P ... as the visual representation"), its
     /// S_G rulings and creases as index pairs, regions per vertex, pattern coordinates.
     pub fn mesh(&self) -> &SurfaceMesh {
@@ -622,8 +616,10 @@ impl ObjectSim for PaperSim {
     fn energies(&self) -> Energies {
         PaperSim::energies(self)
     }
+    /// `world_from_material_point`: the pose of pattern point `m` on the flat sheet at
+    /// its placement (the default handle target).
     fn material_pose(&self, m: &Point2) -> Pose {
-        PaperSim::material_pose(self, m)
+        self.params.placement * Pose::translation(m.x, m.y, 0.0)
     }
     fn compression_stats(&self) -> Option<CompressionStats> {
         let f = &self.frame;
