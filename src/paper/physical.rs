@@ -610,6 +610,24 @@ impl PhysicalMesh {
         gmesh: &GeometricMesh,
         params: &PaperParams,
     ) {
+        let edge_tris = self.edge_triangles();
+        self.edges = edge_tris.keys().map(|&(a, b)| [a, b]).collect();
+        let theta = self.singular_rest_angles(params);
+        let preset = preset_creases(layer, gmesh);
+        self.hinges.clear();
+        for (&(a, b), tris) in &edge_tris {
+            if tris.len() != 2 {
+                continue;
+            }
+            let hinge = self.hinge(a, b, tris, &theta, &preset);
+            self.hinges.push(hinge);
+        }
+        self.lump_masses(params);
+    }
+
+    /// Every edge (sorted vertex pair) with its triangles, each with the vertex
+    /// opposite the edge.
+    fn edge_triangles(&self) -> BTreeMap<(u32, u32), Vec<(usize, u32)>> {
         let mut edge_tris: BTreeMap<(u32, u32), Vec<(usize, u32)>> = BTreeMap::new();
         for (ti, t) in self.triangles.iter().enumerate() {
             for k in 0..3 {
@@ -620,14 +638,18 @@ impl PhysicalMesh {
                     .push((ti, c));
             }
         }
-        self.edges = edge_tris.keys().map(|&(a, b)| [a, b]).collect();
+        edge_tris
+    }
+
+    /// Eq. 1: the share theta_i = plastic_angle / N_i (rad) of a singular vertex's
+    /// plastic angle in the rest angle of each of its N_i edges; 0 elsewhere.
+    fn singular_rest_angles(&self, params: &PaperParams) -> Vec<f64> {
         let mut valence = vec![0usize; self.material.len()];
         for [a, b] in &self.edges {
             valence[*a as usize] += 1;
             valence[*b as usize] += 1;
         }
-        // eq. 1: theta_i = plastic_angle / N_i at singular vertices
-        let theta: Vec<f64> = (0..self.material.len())
+        (0..self.material.len())
             .map(|v| {
                 if self.region[v] == VertexRegion::Singular && valence[v] > 0 {
                     params.plastic_angle / valence[v] as f64
@@ -635,79 +657,97 @@ impl PhysicalMesh {
                     0.0
                 }
             })
-            .collect();
-        let area = |t: &[u32; 3]| {
-            let [a, b, c] = t.map(|i| self.material[i as usize]);
-            0.5 * orient(&a, &b, &c).abs()
+            .collect()
+    }
+
+    /// The pattern area of triangle `t` (m^2).
+    fn triangle_area(&self, t: &[u32; 3]) -> f64 {
+        let [a, b, c] = t.map(|i| self.material[i as usize]);
+        0.5 * orient(&a, &b, &c).abs()
+    }
+
+    /// The hinge of interior edge (a, b) between the two triangles `tris` (each with
+    /// its opposite vertex), oriented as in the first one: its rest angle is a preset
+    /// crease's when the edge lies on one, else the singular shares `theta` of its
+    /// ends with the sign of the current fold; its weight is 3 |e|^2 / (A_1 + A_2).
+    fn hinge(
+        &self,
+        a: u32,
+        b: u32,
+        tris: &[(usize, u32)],
+        theta: &[f64],
+        preset: &[([Point2; 2], f64)],
+    ) -> Hinge {
+        // orient (v0, v1) as in the first triangle
+        let t0 = &self.triangles[tris[0].0];
+        let k = (0..3).find(|&k| t0[k] == a || t0[k] == b).unwrap_or(0);
+        let (v0, v1) = if t0[k] == a && t0[(k + 1) % 3] == b || t0[(k + 2) % 3] == a && t0[k] == b {
+            (a, b)
+        } else {
+            (b, a)
         };
-        // preset creases, as pattern segments
-        let preset: Vec<([Point2; 2], f64)> = layer
-            .creases
-            .iter()
-            .zip(&gmesh.crease_vertices)
-            .filter_map(|(c, [a, b])| match c.kind {
-                super::geometric::CreaseKind::Preset { rest_angle } => Some((
-                    [
-                        gmesh.vertices[*a as usize].material,
-                        gmesh.vertices[*b as usize].material,
-                    ],
-                    rest_angle,
-                )),
-                _ => None,
-            })
-            .collect();
-        self.hinges.clear();
-        for (&(a, b), tris) in &edge_tris {
-            if tris.len() != 2 {
-                continue;
+        let (v2, v3) = (tris[0].1, tris[1].1);
+        let e2 = (self.material[a as usize] - self.material[b as usize]).norm_squared();
+        let areas = self.triangle_area(&self.triangles[tris[0].0])
+            + self.triangle_area(&self.triangles[tris[1].0]);
+        let mut rest = theta[a as usize] + theta[b as usize];
+        let ma = self.material[a as usize];
+        let mb = self.material[b as usize];
+        let mut preset_rest = None;
+        for (seg, angle) in preset {
+            if point_segment(&ma, &seg[0], &seg[1]).0 < 1e-9
+                && point_segment(&mb, &seg[0], &seg[1]).0 < 1e-9
+            {
+                preset_rest = Some(*angle);
             }
-            // orient (v0, v1) as in the first triangle
-            let t0 = &self.triangles[tris[0].0];
-            let k = (0..3).find(|&k| t0[k] == a || t0[k] == b).unwrap_or(0);
-            let (v0, v1) =
-                if t0[k] == a && t0[(k + 1) % 3] == b || t0[(k + 2) % 3] == a && t0[k] == b {
-                    (a, b)
-                } else {
-                    (b, a)
-                };
-            let (v2, v3) = (tris[0].1, tris[1].1);
-            let e2 = (self.material[a as usize] - self.material[b as usize]).norm_squared();
-            let areas = area(&self.triangles[tris[0].0]) + area(&self.triangles[tris[1].0]);
-            let mut rest = theta[a as usize] + theta[b as usize];
-            let ma = self.material[a as usize];
-            let mb = self.material[b as usize];
-            let mut preset_rest = None;
-            for (seg, angle) in &preset {
-                if point_segment(&ma, &seg[0], &seg[1]).0 < 1e-9
-                    && point_segment(&mb, &seg[0], &seg[1]).0 < 1e-9
-                {
-                    preset_rest = Some(*angle);
-                }
-            }
-            let hinge_v = [v0, v1, v2, v3];
-            if let Some(angle) = preset_rest {
-                rest = angle;
-            } else if rest != 0.0 {
-                // the plastic fold keeps the side it is bent to
-                let current = signed_dihedral(&hinge_v.map(|i| self.position[i as usize].coords));
-                if current < 0.0 {
-                    rest = -rest;
-                }
-            }
-            self.hinges.push(Hinge {
-                v: hinge_v,
-                rest_angle: rest,
-                weight: 3.0 * e2 / areas.max(1e-18),
-            });
         }
+        let hinge_v = [v0, v1, v2, v3];
+        if let Some(angle) = preset_rest {
+            rest = angle;
+        } else if rest != 0.0 {
+            // the plastic fold keeps the side it is bent to
+            let current = signed_dihedral(&hinge_v.map(|i| self.position[i as usize].coords));
+            if current < 0.0 {
+                rest = -rest;
+            }
+        }
+        Hinge {
+            v: hinge_v,
+            rest_angle: rest,
+            weight: 3.0 * e2 / areas.max(1e-18),
+        }
+    }
+
+    /// Lumped masses (kg): a third of each triangle's density x area to each corner.
+    fn lump_masses(&mut self, params: &PaperParams) {
         self.mass = vec![0.0; self.material.len()];
-        for t in &self.triangles {
-            let m = params.density * area(t) / 3.0;
-            for &v in t {
+        for ti in 0..self.triangles.len() {
+            let t = self.triangles[ti];
+            let m = params.density * self.triangle_area(&t) / 3.0;
+            for &v in &t {
                 self.mass[v as usize] += m;
             }
         }
     }
+}
+
+/// The preset creases of S_G (pattern segments, m) with their rest angles (rad).
+fn preset_creases(layer: &GeometricLayer, gmesh: &GeometricMesh) -> Vec<([Point2; 2], f64)> {
+    layer
+        .creases
+        .iter()
+        .zip(&gmesh.crease_vertices)
+        .filter_map(|(c, [a, b])| match c.kind {
+            super::geometric::CreaseKind::Preset { rest_angle } => Some((
+                [
+                    gmesh.vertices[*a as usize].material,
+                    gmesh.vertices[*b as usize].material,
+                ],
+                rest_angle,
+            )),
+            _ => None,
+        })
+        .collect()
 }
 
 /// Signed dihedral angle of hinge (x0, x1; x2 left, x3 right), rad: 0 flat, > 0 when

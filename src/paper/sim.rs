@@ -10,8 +10,10 @@
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
-use super::compression::{flat_regions, triangle_strain};
-use super::crumpling::{crumple_flat_region, CrumpleContext, CrumpleEvent};
+use super::compression::flat_regions;
+use super::crumpling::{
+    crumple_flat_region, face_center, CrumpleContext, CrumpleEvent, FrameFlatRegions,
+};
 use super::fem::{implicit_step, Dirichlet, FemReport, FemSystem, Spring};
 use super::geometric::{
     Crease, CreaseKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
@@ -183,12 +185,6 @@ impl PaperSim {
         };
         sim.rebuild_outputs();
         Ok(sim)
-    }
-
-    /// `world_from_material_point`: the pose of pattern point `m` on the flat sheet at
-    /// its placement (the default handle target).
-    pub fn material_pose(&self, m: &Point2) -> Pose {
-        self.params.placement * Pose::translation(m.x, m.y, 0.0)
     }
 
     /// The displayed mesh: S_P (sec. 4: "S_P ... as the visual representation"), its
@@ -416,62 +412,18 @@ impl PaperSim {
         let fold = params
             .split_flat_regions_at_folds
             .then_some(params.flat_angle);
-        let original = gmesh.clone();
-        let original_labels = flat_regions(&original, fold);
-        let mut processed: Vec<usize> = Vec::new();
+        let mut regions = FrameFlatRegions::new(&gmesh, fold);
         for _ in 0..8 {
             let labels = flat_regions(&gmesh, fold);
-            let n_labels = labels
-                .iter()
-                .filter(|&&l| l != usize::MAX)
-                .max()
-                .map_or(0, |m| m + 1);
-            let mut worst: Vec<Option<super::compression::TriangleStrain>> = vec![None; n_labels];
-            for (f, &l) in labels.iter().enumerate() {
-                if l == usize::MAX {
-                    continue;
-                }
-                if let Some(s) = triangle_strain(&gmesh, f) {
-                    if worst[l].is_none_or(|w| s.compression > w.compression) {
-                        worst[l] = Some(s);
-                    }
-                }
-            }
-            let origin_of = |strain: &super::compression::TriangleStrain| {
-                let face = &gmesh.faces[strain.face];
-                let c = Point2::from(
-                    face.vertices
-                        .iter()
-                        .map(|&v| gmesh.vertices[v as usize].material.coords)
-                        .sum::<nalgebra::Vector2<f64>>()
-                        / face.vertices.len() as f64,
-                );
-                original.face_at(&c).map(|f| original_labels[f])
+            let Some(strain) =
+                regions.next_compressed(&gmesh, &labels, params.compression_threshold)
+            else {
+                break;
             };
-            let candidate = worst
-                .iter()
-                .flatten()
-                .filter(|w| w.compression > params.compression_threshold)
-                .filter(|w| {
-                    origin_of(w).is_some_and(|o| o != usize::MAX && !processed.contains(&o))
-                })
-                .max_by(|a, b| a.compression.total_cmp(&b.compression))
-                .copied();
-            let Some(strain) = candidate else { break };
-            if let Some(o) = origin_of(&strain) {
-                processed.push(o);
-            }
             let events = crumple_flat_region(&ctx, layer, &gmesh, &labels, &strain, rng);
-            let face = &gmesh.faces[strain.face];
             frame.crumple_attempts.push(CrumpleAttempt {
                 compression: strain.compression,
-                centroid: Point2::from(
-                    face.vertices
-                        .iter()
-                        .map(|&v| gmesh.vertices[v as usize].material.coords)
-                        .sum::<nalgebra::Vector2<f64>>()
-                        / face.vertices.len() as f64,
-                ),
+                centroid: face_center(&gmesh, strain.face),
                 ruling_direction: strain.ruling_direction,
                 changed: !events.is_empty(),
             });
@@ -664,8 +616,10 @@ impl ObjectSim for PaperSim {
     fn energies(&self) -> Energies {
         PaperSim::energies(self)
     }
+    /// `world_from_material_point`: the pose of pattern point `m` on the flat sheet at
+    /// its placement (the default handle target).
     fn material_pose(&self, m: &Point2) -> Pose {
-        PaperSim::material_pose(self, m)
+        self.params.placement * Pose::translation(m.x, m.y, 0.0)
     }
     fn compression_stats(&self) -> Option<CompressionStats> {
         let f = &self.frame;

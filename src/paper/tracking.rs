@@ -56,77 +56,29 @@ pub fn update_junctions(
         let Some(cur) = layer.regions.iter().position(|r| r.id == *id) else {
             continue;
         };
-        let angles: Vec<f64> = rv.iter().map(|&[a, b]| dihedral(a, b)).collect();
-        if angles.iter().all(|&t| t < params.junction_low_angle) {
+        let junctions = RegionJunctions {
+            ctx,
+            gmesh,
+            rv,
+            angles: rv.iter().map(|&[a, b]| dihedral(a, b)).collect(),
+        };
+        if junctions
+            .angles
+            .iter()
+            .all(|&t| t < params.junction_low_angle)
+        {
             layer.regions.remove(cur);
             report.flattened += 1;
             continue;
         }
         let mut rulings = layer.regions[cur].rulings.clone();
-        // shrink from both ends while the border ruling is flatter than theta_low
-        let mut lo = 0usize;
-        let mut hi = rulings.len();
-        while hi - lo > 2 && angles[lo] < params.junction_low_angle && border_is_flat(gmesh, rv[lo])
-        {
-            lo += 1;
-            report.shrunk += 1;
-        }
-        while hi - lo > 2
-            && angles[hi - 1] < params.junction_low_angle
-            && border_is_flat(gmesh, rv[hi - 1])
-        {
-            hi -= 1;
-            report.shrunk += 1;
-        }
+        let (lo, hi) = junctions.shrink(rulings.len(), &mut report);
         rulings = rulings[lo..hi].to_vec();
         // expand at an end sharper than theta_high
         for front in [true, false] {
-            let (k, k_in) = if front {
-                (lo, lo + 1)
-            } else {
-                (hi - 1, hi - 2)
-            };
-            if k_in >= rv.len() || !border_is_flat(gmesh, rv[k]) {
-                continue;
-            }
-            let theta = angles[k];
-            if theta <= params.junction_high_angle {
-                continue;
-            }
-            if theta <= opposite_angle(gmesh, rv[k]) {
-                continue;
-            }
-            let (r, r_in) = if front {
-                (rulings[0], rulings[1])
-            } else {
-                (rulings[rulings.len() - 1], rulings[rulings.len() - 2])
-            };
-            let spacing = params.boundary_spacing();
-            let out = |e: Endpoint, inner: Endpoint| match (e, inner) {
-                (Endpoint::Boundary(s), Endpoint::Boundary(si)) => {
-                    Some(Endpoint::Boundary(snap_to_vertex(
-                        ctx,
-                        gmesh,
-                        step_out(ctx.pattern, s, si, spacing),
-                        params.min_boundary_spacing(),
-                        &[],
-                    )))
-                }
-                (Endpoint::Singular(id), _) => Some(Endpoint::Singular(id)),
-                _ => None,
-            };
-            let (Some(a), Some(b)) = (out(r.a, r_in.a), out(r.b, r_in.b)) else {
+            let Some(new) = junctions.expansion(layer, &rulings, lo, hi, front) else {
                 continue;
             };
-            if a == r.a && b == r.b {
-                continue;
-            }
-            let new = Ruling { a, b };
-            let p = layer.endpoint_material(ctx.pattern, &a);
-            let q = layer.endpoint_material(ctx.pattern, &b);
-            if !segment_is_free(ctx, layer, gmesh, &p, &q, &[]) {
-                continue;
-            }
             if front {
                 rulings.insert(0, new);
             } else {
@@ -146,6 +98,99 @@ pub fn update_junctions(
         None => None,
     };
     (report, mesh)
+}
+
+/// A curved region's border rulings in S_G while sec. 6.1 moves its junctions.
+struct RegionJunctions<'r, 'a> {
+    ctx: &'r CrumpleContext<'a>,
+    gmesh: &'r GeometricMesh,
+    /// The S_G vertices [a, b] of each ruling.
+    rv: &'r [[u32; 2]],
+    /// The dihedral angle theta along each ruling (rad; 0 where it has no two faces).
+    angles: Vec<f64>,
+}
+
+impl RegionJunctions<'_, '_> {
+    /// Shrink the region's `n` rulings from both ends while the border ruling is
+    /// flatter than theta_low next to a flat region, keeping at least 2 (each removal
+    /// counted in `report.shrunk`). Returns the kept range lo..hi.
+    fn shrink(&self, n: usize, report: &mut JunctionReport) -> (usize, usize) {
+        let (gmesh, rv, angles) = (self.gmesh, self.rv, &self.angles);
+        let low = self.ctx.params.junction_low_angle;
+        let mut lo = 0usize;
+        let mut hi = n;
+        while hi - lo > 2 && angles[lo] < low && border_is_flat(gmesh, rv[lo]) {
+            lo += 1;
+            report.shrunk += 1;
+        }
+        while hi - lo > 2 && angles[hi - 1] < low && border_is_flat(gmesh, rv[hi - 1]) {
+            hi -= 1;
+            report.shrunk += 1;
+        }
+        (lo, hi)
+    }
+
+    /// The ruling one boundary spacing into F beyond the `front` (else back) border
+    /// ruling of the kept `rulings` (range lo..hi of the original ones), when that
+    /// border is next to a flat region, sharper than theta_high and than theta_opp of
+    /// the other borders at its junction (fig. 13), and the new ruling is free.
+    fn expansion(
+        &self,
+        layer: &GeometricLayer,
+        rulings: &[Ruling],
+        lo: usize,
+        hi: usize,
+        front: bool,
+    ) -> Option<Ruling> {
+        let (ctx, gmesh, rv) = (self.ctx, self.gmesh, self.rv);
+        let params = ctx.params;
+        let (k, k_in) = if front {
+            (lo, lo + 1)
+        } else {
+            (hi - 1, hi - 2)
+        };
+        if k_in >= rv.len() || !border_is_flat(gmesh, rv[k]) {
+            return None;
+        }
+        let theta = self.angles[k];
+        if theta <= params.junction_high_angle {
+            return None;
+        }
+        if theta <= opposite_angle(gmesh, rv[k]) {
+            return None;
+        }
+        let (r, r_in) = if front {
+            (rulings[0], rulings[1])
+        } else {
+            (rulings[rulings.len() - 1], rulings[rulings.len() - 2])
+        };
+        let spacing = params.boundary_spacing();
+        let out = |e: Endpoint, inner: Endpoint| match (e, inner) {
+            (Endpoint::Boundary(s), Endpoint::Boundary(si)) => {
+                Some(Endpoint::Boundary(snap_to_vertex(
+                    ctx,
+                    gmesh,
+                    step_out(ctx.pattern, s, si, spacing),
+                    params.min_boundary_spacing(),
+                    &[],
+                )))
+            }
+            (Endpoint::Singular(id), _) => Some(Endpoint::Singular(id)),
+            _ => None,
+        };
+        let (Some(a), Some(b)) = (out(r.a, r_in.a), out(r.b, r_in.b)) else {
+            return None;
+        };
+        if a == r.a && b == r.b {
+            return None;
+        }
+        let p = layer.endpoint_material(ctx.pattern, &a);
+        let q = layer.endpoint_material(ctx.pattern, &b);
+        if !segment_is_free(ctx, layer, gmesh, &p, &q, &[]) {
+            return None;
+        }
+        Some(Ruling { a, b })
+    }
 }
 
 /// Replace the rulings of regions (by id) and keep the result if S_G still meshes;
@@ -389,164 +434,10 @@ pub fn fit_cones(
     gmesh: &GeometricMesh,
 ) -> (ConeReport, Option<GeometricMesh>) {
     let mut report = ConeReport::default();
-    let scale = ctx.pattern.paper_length();
-    let tolerance = ctx.params.blaschke_tolerance * scale;
     let mut proposals = Vec::new();
     for ri in 0..layer.regions.len() {
-        if layer.regions[ri].singular_apex().is_some() || layer.regions[ri].rulings.len() < 3 {
-            continue;
-        }
-        let Some(rv) = gmesh.ruling_vertices.get(ri) else {
-            continue;
-        };
-        let planes: Vec<TangentPlane> = rv.iter().map(|&r| ruling_plane(gmesh, r)).collect();
-        let reference = Point3::from(
-            rv.iter()
-                .map(|&[a, b]| {
-                    (gmesh.vertices[a as usize].position.coords
-                        + gmesh.vertices[b as usize].position.coords)
-                        * 0.5
-                })
-                .sum::<Vector3>()
-                / rv.len() as f64,
-        );
-        let segments = segment_cones(&planes, &reference, scale, tolerance);
-        report.cones += segments.len();
-        let old = &layer.regions[ri].rulings;
-        let mut new = old.clone();
-        let mut moved = 0;
-        for (range, fit) in &segments {
-            if range.len() < 2 {
-                continue;
-            }
-            let e = contributions(&planes[range.clone()], fit);
-            let j = range.start
-                + e.iter()
-                    .enumerate()
-                    .min_by(|x, y| x.1.total_cmp(y.1))
-                    .map(|(k, _)| k)
-                    .unwrap_or(0);
-            let [ja, jb] = rv[j];
-            let (pa, pb) = (
-                gmesh.vertices[ja as usize].position,
-                gmesh.vertices[jb as usize].position,
-            );
-            let (ma, mb) = (
-                gmesh.vertices[ja as usize].material,
-                gmesh.vertices[jb as usize].material,
-            );
-            // the 2D apex (or direction) in the frame of ruling r_j
-            let apex_2d: Result<Point2, Vector2<f64>> = match fit.direction {
-                Some(_) => Err((mb - ma).normalize()),
-                None => {
-                    let d = pb - pa;
-                    let t = (fit.apex - pa).dot(&d) / d.norm_squared().max(1e-300);
-                    Ok(ma + (mb - ma) * t)
-                }
-            };
-            if let Ok(a2) = apex_2d {
-                // an apex inside the sheet would make this a cone with an interior
-                // singular point: not the case of sec. 6.2
-                if ctx.pattern.signed_inside_distance(&a2) > 1e-9 {
-                    continue;
-                }
-            }
-            for k in range.clone() {
-                if k == j {
-                    continue;
-                }
-                let r = old[k];
-                let (Endpoint::Boundary(_), Endpoint::Boundary(_)) = (r.a, r.b) else {
-                    continue;
-                };
-                let [ka, kb] = rv[k];
-                let (qa, qb) = (
-                    gmesh.vertices[ka as usize].material,
-                    gmesh.vertices[kb as usize].material,
-                );
-                let mid = Point2::from((qa.coords + qb.coords) * 0.5);
-                let dir = match apex_2d {
-                    Ok(a2) => (mid - a2).normalize(),
-                    Err(d) => d,
-                };
-                let Some([(s_lo, _), (s_hi, _)]) = ctx.pattern.clip_line(&mid, &dir) else {
-                    continue;
-                };
-                let (p_lo, p_hi) = (ctx.pattern.point_at(s_lo), ctx.pattern.point_at(s_hi));
-                // keep the sides: the new end nearer the old a end is a
-                let (sa, sb) = if (p_lo - qa).norm() + (p_hi - qb).norm()
-                    <= (p_hi - qa).norm() + (p_lo - qb).norm()
-                {
-                    (s_lo, s_hi)
-                } else {
-                    (s_hi, s_lo)
-                };
-                // ends closer than the minimum spacing to another vertex join it
-                let own: Vec<u32> = rv.iter().flat_map(|r| [r[0], r[1]]).collect();
-                let tol = ctx.params.min_boundary_spacing();
-                let sa = snap_to_vertex(ctx, gmesh, sa, tol, &own);
-                let sb = snap_to_vertex(ctx, gmesh, sb, tol, &own);
-                let moved_by = (ctx.pattern.point_at(sa) - qa)
-                    .norm()
-                    .max((ctx.pattern.point_at(sb) - qb).norm());
-                if moved_by < 1e-5 {
-                    continue;
-                }
-                new[k] = Ruling {
-                    a: Endpoint::Boundary(sa),
-                    b: Endpoint::Boundary(sb),
-                };
-                moved += 1;
-            }
-        }
-        if moved == 0 {
-            continue;
-        }
-        // junction cones: consecutive rulings that now cross share a boundary vertex
-        for k in 0..new.len().saturating_sub(1) {
-            let (r0, r1) = (new[k], new[k + 1]);
-            let p = [r0.a, r0.b, r1.a, r1.b].map(|e| layer.endpoint_material(ctx.pattern, &e));
-            if super::pattern::segments_cross(&p[0], &p[1], &p[2], &p[3], 1e-9) {
-                if let (
-                    Endpoint::Boundary(sa0),
-                    Endpoint::Boundary(sa1),
-                    Endpoint::Boundary(sb0),
-                    Endpoint::Boundary(sb1),
-                ) = (r0.a, r1.a, r0.b, r1.b)
-                {
-                    // the crossing is nearer one side: merge the ends there
-                    let da = (p[0] - p[2]).norm();
-                    let db = (p[1] - p[3]).norm();
-                    let mean = |x: f64, y: f64| {
-                        let d = ctx.pattern.arc_ccw(x, y);
-                        if d < 0.5 * ctx.pattern.perimeter() {
-                            ctx.pattern.wrap(x + 0.5 * d)
-                        } else {
-                            ctx.pattern.wrap(y + 0.5 * (ctx.pattern.perimeter() - d))
-                        }
-                    };
-                    if da <= db {
-                        let j = Endpoint::Boundary(mean(sa0, sa1));
-                        new[k].a = j;
-                        new[k + 1].a = j;
-                    } else {
-                        let j = Endpoint::Boundary(mean(sb0, sb1));
-                        new[k].b = j;
-                        new[k + 1].b = j;
-                    }
-                }
-            }
-        }
-        // drop rulings that became identical or too short
-        new.dedup();
-        let ok = new.len() >= 2
-            && new.iter().all(|r| {
-                let p = layer.endpoint_material(ctx.pattern, &r.a);
-                let q = layer.endpoint_material(ctx.pattern, &r.b);
-                (p - q).norm() > ctx.params.min_gap()
-            });
-        if ok {
-            proposals.push((layer.regions[ri].id, new, moved));
+        if let Some(proposal) = propose_realignment(ctx, layer, gmesh, ri, &mut report) {
+            proposals.push(proposal);
         }
     }
     let moved: std::collections::BTreeMap<u64, usize> =
@@ -563,6 +454,228 @@ pub fn fit_cones(
         }
     }
     (report, mesh)
+}
+
+/// Sec. 6.2 for curved region `ri`: segment it into generalized cones (counted in
+/// `report.cones`) and realign each cone's rulings through its apex, then merge the
+/// ends of rulings that now cross (junction cones, fig. 15). Returns the region's id,
+/// its new rulings and how many moved; `None` when the region has an interior
+/// singular apex or fewer than 3 rulings, nothing moved, or the result has fewer than
+/// 2 rulings or one shorter than the minimal gap.
+fn propose_realignment(
+    ctx: &CrumpleContext,
+    layer: &GeometricLayer,
+    gmesh: &GeometricMesh,
+    ri: usize,
+    report: &mut ConeReport,
+) -> Option<(u64, Vec<Ruling>, usize)> {
+    let scale = ctx.pattern.paper_length();
+    let tolerance = ctx.params.blaschke_tolerance * scale;
+    if layer.regions[ri].singular_apex().is_some() || layer.regions[ri].rulings.len() < 3 {
+        return None;
+    }
+    let rv = gmesh.ruling_vertices.get(ri)?;
+    let planes: Vec<TangentPlane> = rv.iter().map(|&r| ruling_plane(gmesh, r)).collect();
+    let reference = Point3::from(
+        rv.iter()
+            .map(|&[a, b]| {
+                (gmesh.vertices[a as usize].position.coords
+                    + gmesh.vertices[b as usize].position.coords)
+                    * 0.5
+            })
+            .sum::<Vector3>()
+            / rv.len() as f64,
+    );
+    let segments = segment_cones(&planes, &reference, scale, tolerance);
+    report.cones += segments.len();
+    let region = RegionRulings {
+        gmesh,
+        rv,
+        old: &layer.regions[ri].rulings,
+        planes: &planes,
+    };
+    let mut new = region.old.to_vec();
+    let mut moved = 0;
+    for (range, fit) in &segments {
+        moved += region.realign_cone(ctx, range, fit, &mut new);
+    }
+    if moved == 0 {
+        return None;
+    }
+    merge_crossing_rulings(ctx, layer, &mut new);
+    // drop rulings that became identical or too short
+    new.dedup();
+    let ok = new.len() >= 2
+        && new.iter().all(|r| {
+            let p = layer.endpoint_material(ctx.pattern, &r.a);
+            let q = layer.endpoint_material(ctx.pattern, &r.b);
+            (p - q).norm() > ctx.params.min_gap()
+        });
+    ok.then(|| (layer.regions[ri].id, new, moved))
+}
+
+/// A curved region's rulings in S_G while sec. 6.2 realigns them.
+struct RegionRulings<'r> {
+    gmesh: &'r GeometricMesh,
+    /// The S_G vertices [a, b] of each ruling.
+    rv: &'r [[u32; 2]],
+    /// The rulings before realignment.
+    old: &'r [Ruling],
+    /// The tangent plane along each ruling.
+    planes: &'r [TangentPlane],
+}
+
+impl RegionRulings<'_> {
+    /// Realign the rulings of the cone `fit` over `range` in `new`: every boundary
+    /// ruling but r_j (the one the fit explains best) turns about its midpoint to pass
+    /// through the apex's 2D image in r_j's frame (or to parallel r_j for a cylinder).
+    /// Returns how many moved; none for a cone of fewer than 2 rulings or whose apex
+    /// lies inside the sheet (a cone with an interior singular point: not the case of
+    /// sec. 6.2).
+    fn realign_cone(
+        &self,
+        ctx: &CrumpleContext,
+        range: &std::ops::Range<usize>,
+        fit: &ConeFit,
+        new: &mut [Ruling],
+    ) -> usize {
+        if range.len() < 2 {
+            return 0;
+        }
+        let gmesh = self.gmesh;
+        let e = contributions(&self.planes[range.clone()], fit);
+        let j = range.start
+            + e.iter()
+                .enumerate()
+                .min_by(|x, y| x.1.total_cmp(y.1))
+                .map(|(k, _)| k)
+                .unwrap_or(0);
+        let [ja, jb] = self.rv[j];
+        let (pa, pb) = (
+            gmesh.vertices[ja as usize].position,
+            gmesh.vertices[jb as usize].position,
+        );
+        let (ma, mb) = (
+            gmesh.vertices[ja as usize].material,
+            gmesh.vertices[jb as usize].material,
+        );
+        // the 2D apex (or direction) in the frame of ruling r_j
+        let apex_2d: Result<Point2, Vector2<f64>> = match fit.direction {
+            Some(_) => Err((mb - ma).normalize()),
+            None => {
+                let d = pb - pa;
+                let t = (fit.apex - pa).dot(&d) / d.norm_squared().max(1e-300);
+                Ok(ma + (mb - ma) * t)
+            }
+        };
+        if let Ok(a2) = apex_2d {
+            if ctx.pattern.signed_inside_distance(&a2) > 1e-9 {
+                return 0;
+            }
+        }
+        let mut moved = 0;
+        for k in range.clone() {
+            if k == j {
+                continue;
+            }
+            if let Some(r) = self.realigned_ruling(ctx, k, apex_2d) {
+                new[k] = r;
+                moved += 1;
+            }
+        }
+        moved
+    }
+
+    /// Ruling k turned about its pattern midpoint towards `apex_2d` (Ok: the apex
+    /// image, m; Err: the cylinder's direction), its new ends on ∂S̄ snapped to S_G
+    /// boundary vertices within the minimum spacing; `None` when it is not a boundary
+    /// ruling, its line misses the pattern or its ends move less than 1e-5 m.
+    fn realigned_ruling(
+        &self,
+        ctx: &CrumpleContext,
+        k: usize,
+        apex_2d: Result<Point2, Vector2<f64>>,
+    ) -> Option<Ruling> {
+        let (gmesh, rv) = (self.gmesh, self.rv);
+        let r = self.old[k];
+        let (Endpoint::Boundary(_), Endpoint::Boundary(_)) = (r.a, r.b) else {
+            return None;
+        };
+        let [ka, kb] = rv[k];
+        let (qa, qb) = (
+            gmesh.vertices[ka as usize].material,
+            gmesh.vertices[kb as usize].material,
+        );
+        let mid = Point2::from((qa.coords + qb.coords) * 0.5);
+        let dir = match apex_2d {
+            Ok(a2) => (mid - a2).normalize(),
+            Err(d) => d,
+        };
+        let [(s_lo, _), (s_hi, _)] = ctx.pattern.clip_line(&mid, &dir)?;
+        let (p_lo, p_hi) = (ctx.pattern.point_at(s_lo), ctx.pattern.point_at(s_hi));
+        // keep the sides: the new end nearer the old a end is a
+        let (sa, sb) =
+            if (p_lo - qa).norm() + (p_hi - qb).norm() <= (p_hi - qa).norm() + (p_lo - qb).norm() {
+                (s_lo, s_hi)
+            } else {
+                (s_hi, s_lo)
+            };
+        // ends closer than the minimum spacing to another vertex join it
+        let own: Vec<u32> = rv.iter().flat_map(|r| [r[0], r[1]]).collect();
+        let tol = ctx.params.min_boundary_spacing();
+        let sa = snap_to_vertex(ctx, gmesh, sa, tol, &own);
+        let sb = snap_to_vertex(ctx, gmesh, sb, tol, &own);
+        let moved_by = (ctx.pattern.point_at(sa) - qa)
+            .norm()
+            .max((ctx.pattern.point_at(sb) - qb).norm());
+        if moved_by < 1e-5 {
+            return None;
+        }
+        Some(Ruling {
+            a: Endpoint::Boundary(sa),
+            b: Endpoint::Boundary(sb),
+        })
+    }
+}
+
+/// Junction cones (fig. 15): consecutive boundary rulings of `new` that now cross
+/// share a boundary vertex, on the side nearer the crossing, at the mean arc length
+/// of their ends there.
+fn merge_crossing_rulings(ctx: &CrumpleContext, layer: &GeometricLayer, new: &mut [Ruling]) {
+    for k in 0..new.len().saturating_sub(1) {
+        let (r0, r1) = (new[k], new[k + 1]);
+        let p = [r0.a, r0.b, r1.a, r1.b].map(|e| layer.endpoint_material(ctx.pattern, &e));
+        if super::pattern::segments_cross(&p[0], &p[1], &p[2], &p[3], 1e-9) {
+            if let (
+                Endpoint::Boundary(sa0),
+                Endpoint::Boundary(sa1),
+                Endpoint::Boundary(sb0),
+                Endpoint::Boundary(sb1),
+            ) = (r0.a, r1.a, r0.b, r1.b)
+            {
+                // the crossing is nearer one side: merge the ends there
+                let da = (p[0] - p[2]).norm();
+                let db = (p[1] - p[3]).norm();
+                let mean = |x: f64, y: f64| {
+                    let d = ctx.pattern.arc_ccw(x, y);
+                    if d < 0.5 * ctx.pattern.perimeter() {
+                        ctx.pattern.wrap(x + 0.5 * d)
+                    } else {
+                        ctx.pattern.wrap(y + 0.5 * (ctx.pattern.perimeter() - d))
+                    }
+                };
+                if da <= db {
+                    let j = Endpoint::Boundary(mean(sa0, sa1));
+                    new[k].a = j;
+                    new[k + 1].a = j;
+                } else {
+                    let j = Endpoint::Boundary(mean(sb0, sb1));
+                    new[k].b = j;
+                    new[k + 1].b = j;
+                }
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -12,7 +12,7 @@
 use nalgebra::Vector2;
 use rand::Rng;
 
-use super::compression::TriangleStrain;
+use super::compression::{flat_regions, triangle_strain, TriangleStrain};
 use super::geometric::{
     Crease, CreaseKind, EdgeKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
     Ruling,
@@ -91,6 +91,30 @@ pub fn crumple_flat_region(
     Vec::new()
 }
 
+/// One attempt of step 2 on a flat region (appendix B), once T_comp's strip and band
+/// are known: what its borders are resolved against.
+struct Attempt<'c, 'a> {
+    ctx: &'c CrumpleContext<'a>,
+    /// The band of imaginary rulings through T_comp.
+    band: Band,
+    /// The pattern centre (m) of the strip's last face on each side, the side of F a
+    /// border is seen from (fig. 11).
+    f_refs: [Point2; 2],
+    /// Whether a border on a ruling of a cone of interior apex is that apex
+    /// (appendix B, fig. 24b, c) rather than a new singular point (fig. 6d).
+    attract: bool,
+}
+
+/// A border of the strip resolved into a terminal of the new curved region.
+struct Terminal {
+    /// None = the free boundary, Some(id) = a singular vertex the rulings pass through.
+    singular: Option<u64>,
+    /// The event, when the terminal is a singular vertex created for it (sec. 5.2).
+    new_singular: Option<CrumpleEvent>,
+    /// The border was a cone's ruling and the terminal is that cone's apex.
+    attracted: bool,
+}
+
 #[allow(clippy::too_many_arguments)]
 fn crumple_inner(
     ctx: &CrumpleContext,
@@ -102,10 +126,31 @@ fn crumple_inner(
     attracted: &mut bool,
     rng: &mut impl Rng,
 ) -> Option<Vec<CrumpleEvent>> {
-    let params = ctx.params;
     let mut strip = propagate(gmesh, labels, strain.face, &strain.ruling_direction)?;
-    // region indices -> stable ids
-    for b in strip.borders.iter_mut() {
+    borders_by_region_id(layer, &mut strip.borders)?;
+    let band = compression_band(ctx, gmesh, strain)?;
+    let attempt = Attempt {
+        ctx,
+        band,
+        f_refs: [
+            face_center(gmesh, strip.last_faces[0]),
+            face_center(gmesh, strip.last_faces[1]),
+        ],
+        attract,
+    };
+    let mut events = Vec::new();
+    let (terminals, current) =
+        attempt.resolve_borders(layer, gmesh, &strip.borders, attracted, &mut events, rng)?;
+    attempt.insert_curved_region(layer, &current, terminals, &mut events)?;
+    // the result must mesh
+    GeometricMesh::build(layer, ctx.pattern, ctx.position).ok()?;
+    Some(events)
+}
+
+/// Replace the region indices of curved-ruling borders by the regions' stable ids;
+/// `None` when an index names no region.
+fn borders_by_region_id(layer: &GeometricLayer, borders: &mut [Border; 2]) -> Option<()> {
+    for b in borders.iter_mut() {
         if let Border::CurvedRuling { region, ruling } = *b {
             *b = Border::CurvedRuling {
                 region: layer.regions.get(region as usize)?.id,
@@ -113,6 +158,17 @@ fn crumple_inner(
             };
         }
     }
+    Some(())
+}
+
+/// The band of imaginary rulings through T_comp: the face's extent along the
+/// compression direction v (m), less a tenth on each side; `None` when the face is
+/// narrower than the minimal gap.
+fn compression_band(
+    ctx: &CrumpleContext,
+    gmesh: &GeometricMesh,
+    strain: &TriangleStrain,
+) -> Option<Band> {
     let tri = &gmesh.faces[strain.face].vertices;
     let ts: Vec<f64> = tri
         .iter()
@@ -128,55 +184,104 @@ fn crumple_inner(
         ts.iter().copied().fold(f64::NEG_INFINITY, f64::max),
     );
     let w = t1 - t0;
-    if w < params.min_gap() {
+    if w < ctx.params.min_gap() {
         return None;
     }
-    let band = Band {
+    Some(Band {
         v: strain.direction,
         v_perp: strain.ruling_direction,
         t_min: t0 + 0.1 * w,
         t_max: t1 - 0.1 * w,
-    };
-    let face_center = |f: usize, g: &GeometricMesh| {
-        let vs = &g.faces[f].vertices;
-        Point2::from(
-            vs.iter()
-                .map(|&v| g.vertices[v as usize].material.coords)
-                .sum::<Vector2<f64>>()
-                / vs.len() as f64,
-        )
-    };
-    let f_refs = [
-        face_center(strip.last_faces[0], gmesh),
-        face_center(strip.last_faces[1], gmesh),
-    ];
+    })
+}
 
-    // resolve the borders into terminals: None = the free boundary, Some(id) = a
-    // singular vertex the rulings pass through
-    let mut events = Vec::new();
-    let mut terminals: [Option<u64>; 2] = [None, None];
-    let mut current = gmesh.clone();
-    for side in 0..2 {
+/// The centroid of face `f` in the pattern (m).
+pub(crate) fn face_center(g: &GeometricMesh, f: usize) -> Point2 {
+    let vs = &g.faces[f].vertices;
+    Point2::from(
+        vs.iter()
+            .map(|&v| g.vertices[v as usize].material.coords)
+            .sum::<Vector2<f64>>()
+            / vs.len() as f64,
+    )
+}
+
+/// The counts that change when resolving a border changed the structure (singular
+/// vertices, regions, creases, the next region id).
+fn structure_counts(layer: &GeometricLayer) -> (usize, usize, usize, u64) {
+    (
+        layer.singular.len(),
+        layer.regions.len(),
+        layer.creases.len(),
+        layer.next_region_id,
+    )
+}
+
+impl Attempt<'_, '_> {
+    /// Resolve the borders on the +v_perp and -v_perp sides into terminals, pushing
+    /// the events of new singular vertices; S_G is rebuilt after a side that changed
+    /// the structure. Returns the terminals and the S_G they were resolved in.
+    fn resolve_borders(
+        &self,
+        layer: &mut GeometricLayer,
+        gmesh: &GeometricMesh,
+        borders: &[Border; 2],
+        attracted: &mut bool,
+        events: &mut Vec<CrumpleEvent>,
+        rng: &mut impl Rng,
+    ) -> Option<([Option<u64>; 2], GeometricMesh)> {
+        let mut terminals: [Option<u64>; 2] = [None, None];
+        let mut current = gmesh.clone();
+        for side in 0..2 {
+            let before = structure_counts(layer);
+            let terminal = self.resolve_border(layer, &current, side, borders[side], rng)?;
+            *attracted |= terminal.attracted;
+            events.extend(terminal.new_singular);
+            terminals[side] = terminal.singular;
+            if before != structure_counts(layer) {
+                let Ok(c) = GeometricMesh::build(layer, self.ctx.pattern, self.ctx.position) else {
+                    return None;
+                };
+                current = c;
+            }
+        }
+        Some((terminals, current))
+    }
+
+    /// Resolve the border on `side` (0: +v_perp, 1: -v_perp): the free boundary, an
+    /// existing singular vertex, a new one on a fold (fig. 6c) or one in a curved
+    /// region (fig. 6d, or the cone's apex when attracting).
+    fn resolve_border(
+        &self,
+        layer: &mut GeometricLayer,
+        current: &GeometricMesh,
+        side: usize,
+        border: Border,
+        rng: &mut impl Rng,
+    ) -> Option<Terminal> {
+        let ctx = self.ctx;
+        let band = &self.band;
         let dir = if side == 0 { band.v_perp } else { -band.v_perp };
-        let before = (
-            layer.singular.len(),
-            layer.regions.len(),
-            layer.creases.len(),
-            layer.next_region_id,
-        );
-        terminals[side] = match strip.borders[side] {
-            Border::Boundary => None,
-            Border::Singular { id } => Some(id),
+        let terminal = |singular, new_singular, attracted| Terminal {
+            singular,
+            new_singular,
+            attracted,
+        };
+        Some(match border {
+            Border::Boundary => terminal(None, None, false),
+            Border::Singular { id } => terminal(Some(id), None, false),
             Border::FlatFold { a, b } => {
-                let (id, new) = split_fold(ctx, layer, &current, &band, a, b, rng)?;
-                if new {
-                    events.push(CrumpleEvent::NewSingular {
+                let (id, new) = split_fold(ctx, layer, current, band, a, b, rng)?;
+                let event = if new {
+                    Some(CrumpleEvent::NewSingular {
                         id,
                         material: layer.singular_material(id)?,
                         on_fold: true,
-                    });
-                }
-                Some(id)
+                    })
+                } else {
+                    None
+                };
+                terminal(Some(id), event, false)
             }
             Border::CurvedRuling { region, ruling } => {
                 let cone_apex = layer
@@ -187,103 +292,187 @@ fn crumple_inner(
                 let (id, new) = insert_in_curved(
                     ctx,
                     layer,
-                    &current,
-                    &band,
+                    current,
+                    band,
                     region,
                     ruling,
-                    &f_refs[side],
+                    &self.f_refs[side],
                     &dir,
-                    attract,
+                    self.attract,
                     rng,
                 )?;
-                *attracted |= attract && !new && Some(id) == cone_apex;
-                if new {
-                    events.push(CrumpleEvent::NewSingular {
+                let attracted = self.attract && !new && Some(id) == cone_apex;
+                let event = if new {
+                    Some(CrumpleEvent::NewSingular {
                         id,
                         material: layer.singular_material(id)?,
                         on_fold: false,
-                    });
-                }
-                Some(id)
+                    })
+                } else {
+                    None
+                };
+                terminal(Some(id), event, attracted)
             }
-        };
-        if before
-            != (
-                layer.singular.len(),
-                layer.regions.len(),
-                layer.creases.len(),
-                layer.next_region_id,
-            )
-        {
-            let Ok(c) = GeometricMesh::build(layer, ctx.pattern, ctx.position) else {
-                return None;
-            };
-            current = c;
+        })
+    }
+
+    /// Appendix B: the new curved region between the terminals, pushed to `layer`
+    /// with its event: a crease between two singular vertices (fig. 24c), parallel
+    /// rulings between free borders (fig. 24a) or conical rulings from a singular
+    /// vertex to the free border (fig. 24b). `None` when it does not fit.
+    fn insert_curved_region(
+        &self,
+        layer: &mut GeometricLayer,
+        current: &GeometricMesh,
+        terminals: [Option<u64>; 2],
+        events: &mut Vec<CrumpleEvent>,
+    ) -> Option<()> {
+        let ctx = self.ctx;
+        let band = &self.band;
+        match terminals {
+            [Some(s1), Some(s2)] => {
+                // fig. 24(c): a degenerate region, the crease (s1, s2)
+                if s1 == s2 {
+                    return None;
+                }
+                let (p, q) = (layer.singular_material(s1)?, layer.singular_material(s2)?);
+                if !segment_is_free(ctx, layer, current, &p, &q, &[]) {
+                    return None;
+                }
+                layer.creases.push(Crease {
+                    a: Endpoint::Singular(s1),
+                    b: Endpoint::Singular(s2),
+                    kind: CreaseKind::Plastic,
+                });
+                events.push(CrumpleEvent::Crease { from: s1, to: s2 });
+            }
+            [None, None] => {
+                // fig. 24(a): parallel rulings along d_prop
+                let rulings = band_rulings(ctx, layer, current, band, |t| {
+                    let (o, d) = band.line(t);
+                    let [(s_lo, _), (s_hi, _)] = ctx.pattern.clip_line(&o, &d)?;
+                    Some((Endpoint::Boundary(s_hi), Endpoint::Boundary(s_lo)))
+                });
+                if rulings.len() < 2 {
+                    return None;
+                }
+                let n = rulings.len();
+                let id = layer.add_region(rulings);
+                events.push(CrumpleEvent::ParallelRulings {
+                    region: id,
+                    rulings: n,
+                });
+            }
+            [Some(s), None] | [None, Some(s)] => {
+                // fig. 24(b): conical rulings from s to the free border
+                let s_on_plus = terminals[0].is_some();
+                let rulings = band_rulings(ctx, layer, current, band, |t| {
+                    let (o, d) = band.line(t);
+                    let [(s_lo, _), (s_hi, _)] = ctx.pattern.clip_line(&o, &d)?;
+                    Some(if s_on_plus {
+                        (Endpoint::Singular(s), Endpoint::Boundary(s_lo))
+                    } else {
+                        (Endpoint::Boundary(s_hi), Endpoint::Singular(s))
+                    })
+                });
+                if rulings.len() < 2 {
+                    return None;
+                }
+                let n = rulings.len();
+                let id = layer.add_region(rulings);
+                events.push(CrumpleEvent::ConicalRulings {
+                    region: id,
+                    apex: s,
+                    rulings: n,
+                });
+            }
+        }
+        Some(())
+    }
+}
+
+/// The flat regions of one frame's S_G before step 2 changes it: each is remeshed at
+/// most once (sec. 5.1: "it is applied to each flat region F"); the flat regions of
+/// later meshes map back to them by position.
+pub struct FrameFlatRegions {
+    /// S_G at the start of the frame.
+    original: GeometricMesh,
+    /// Its flat-region label per face (`usize::MAX`: not flat).
+    labels: Vec<usize>,
+    /// The labels of the regions already remeshed.
+    processed: Vec<usize>,
+}
+
+impl FrameFlatRegions {
+    /// The flat regions of `gmesh`, split at folds sharper than `fold` (rad) if given.
+    pub fn new(gmesh: &GeometricMesh, fold: Option<f64>) -> Self {
+        let original = gmesh.clone();
+        let labels = flat_regions(&original, fold);
+        FrameFlatRegions {
+            original,
+            labels,
+            processed: Vec::new(),
         }
     }
 
-    // appendix B: the new curved region
-    match terminals {
-        [Some(s1), Some(s2)] => {
-            // fig. 24(c): a degenerate region, the crease (s1, s2)
-            if s1 == s2 {
-                return None;
-            }
-            let (p, q) = (layer.singular_material(s1)?, layer.singular_material(s2)?);
-            if !segment_is_free(ctx, layer, &current, &p, &q, &[]) {
-                return None;
-            }
-            layer.creases.push(Crease {
-                a: Endpoint::Singular(s1),
-                b: Endpoint::Singular(s2),
-                kind: CreaseKind::Plastic,
-            });
-            events.push(CrumpleEvent::Crease { from: s1, to: s2 });
+    /// The frame's flat region under the centroid of `strain`'s face of `gmesh`.
+    fn origin_of(&self, gmesh: &GeometricMesh, strain: &TriangleStrain) -> Option<usize> {
+        let c = face_center(gmesh, strain.face);
+        self.original.face_at(&c).map(|f| self.labels[f])
+    }
+
+    /// T_comp of the next region to remesh: among the most compressed triangles of
+    /// the flat regions `labels` of `gmesh` (one per region), the most compressed one
+    /// above `threshold` whose frame region is not remeshed yet; that region is then
+    /// marked remeshed.
+    pub fn next_compressed(
+        &mut self,
+        gmesh: &GeometricMesh,
+        labels: &[usize],
+        threshold: f64,
+    ) -> Option<TriangleStrain> {
+        let worst = most_compressed_per_region(gmesh, labels);
+        let candidate = worst
+            .iter()
+            .flatten()
+            .filter(|w| w.compression > threshold)
+            .filter(|w| {
+                self.origin_of(gmesh, w)
+                    .is_some_and(|o| o != usize::MAX && !self.processed.contains(&o))
+            })
+            .max_by(|a, b| a.compression.total_cmp(&b.compression))
+            .copied();
+        let strain = candidate?;
+        if let Some(o) = self.origin_of(gmesh, &strain) {
+            self.processed.push(o);
         }
-        [None, None] => {
-            // fig. 24(a): parallel rulings along d_prop
-            let rulings = band_rulings(ctx, layer, &current, &band, |t| {
-                let (o, d) = band.line(t);
-                let [(s_lo, _), (s_hi, _)] = ctx.pattern.clip_line(&o, &d)?;
-                Some((Endpoint::Boundary(s_hi), Endpoint::Boundary(s_lo)))
-            });
-            if rulings.len() < 2 {
-                return None;
-            }
-            let n = rulings.len();
-            let id = layer.add_region(rulings);
-            events.push(CrumpleEvent::ParallelRulings {
-                region: id,
-                rulings: n,
-            });
+        Some(strain)
+    }
+}
+
+/// The most compressed triangle of each flat region `labels` of `gmesh` (indexed by
+/// label; the first of equals).
+fn most_compressed_per_region(
+    gmesh: &GeometricMesh,
+    labels: &[usize],
+) -> Vec<Option<TriangleStrain>> {
+    let n_labels = labels
+        .iter()
+        .filter(|&&l| l != usize::MAX)
+        .max()
+        .map_or(0, |m| m + 1);
+    let mut worst: Vec<Option<TriangleStrain>> = vec![None; n_labels];
+    for (f, &l) in labels.iter().enumerate() {
+        if l == usize::MAX {
+            continue;
         }
-        [Some(s), None] | [None, Some(s)] => {
-            // fig. 24(b): conical rulings from s to the free border
-            let s_on_plus = terminals[0].is_some();
-            let rulings = band_rulings(ctx, layer, &current, &band, |t| {
-                let (o, d) = band.line(t);
-                let [(s_lo, _), (s_hi, _)] = ctx.pattern.clip_line(&o, &d)?;
-                Some(if s_on_plus {
-                    (Endpoint::Singular(s), Endpoint::Boundary(s_lo))
-                } else {
-                    (Endpoint::Boundary(s_hi), Endpoint::Singular(s))
-                })
-            });
-            if rulings.len() < 2 {
-                return None;
+        if let Some(s) = triangle_strain(gmesh, f) {
+            if worst[l].is_none_or(|w| s.compression > w.compression) {
+                worst[l] = Some(s);
             }
-            let n = rulings.len();
-            let id = layer.add_region(rulings);
-            events.push(CrumpleEvent::ConicalRulings {
-                region: id,
-                apex: s,
-                rulings: n,
-            });
         }
     }
-    // the result must mesh
-    GeometricMesh::build(layer, ctx.pattern, ctx.position).ok()?;
-    Some(events)
+    worst
 }
 
 /// Snap a boundary arc length to an existing S_G boundary vertex within a third of

@@ -134,40 +134,18 @@ fn insert_new_singular(
     rng: &mut impl Rng,
 ) -> Option<(u64, bool)> {
     let params = ctx.params;
-    let rv = gmesh.ruling_vertices.get(ri)?.clone();
-    let m = rv.len();
+    let c = ConflictRegion {
+        gmesh,
+        rv: gmesh.ruling_vertices.get(ri)?,
+    };
+    let m = c.rv.len();
     if ruling >= m || m < 2 {
         return None;
     }
-    let mat = |v: u32| gmesh.vertices[v as usize].material;
-    // walk direction through C: away from F
-    let step: i64 = if ruling == 0 {
-        1
-    } else if ruling == m - 1 {
-        -1
-    } else {
-        let next = (ruling + 1).min(m - 1);
-        let mid = Point2::from((mat(rv[next][0]).coords + mat(rv[next][1]).coords) * 0.5);
-        let here = Point2::from((mat(rv[ruling][0]).coords + mat(rv[ruling][1]).coords) * 0.5);
-        if (mid - here).dot(dprop) >= 0.0 {
-            1
-        } else {
-            -1
-        }
-    };
-    let order: Vec<usize> = {
-        let mut o = Vec::new();
-        let mut k = ruling as i64;
-        while k >= 0 && (k as usize) < m {
-            o.push(k as usize);
-            k += step;
-        }
-        o
-    };
-    let dihedral = |k: usize| gmesh.dihedral(rv[k][0], rv[k][1]).unwrap_or(0.0);
+    let (step, order) = c.walk_away_from_flat(ruling, dprop);
     // the imaginary rulings must really cross C's rulings: nearly parallel ones are
     // compatible (C can grow instead, sec. 6.1)
-    let e_dir = (mat(rv[ruling][1]) - mat(rv[ruling][0])).normalize();
+    let e_dir = (c.mat(c.rv[ruling][1]) - c.mat(c.rv[ruling][0])).normalize();
     let cross = (e_dir.x * dprop.y - e_dir.y * dprop.x).abs();
     if cross < params.conflict_angle.sin() {
         return None;
@@ -177,70 +155,167 @@ fn insert_new_singular(
     let e_sing = order
         .iter()
         .copied()
-        .find(|&k| dihedral(k) > params.flat_angle)?;
-
-    // chi(s) = exp(-d^2/sigma^2): uniform along e_sing (where the band meets it),
-    // normal across with standard deviation sigma / sqrt(2)
-    let (pa, pb) = (mat(rv[e_sing][0]), mat(rv[e_sing][1]));
-    let len = (pb - pa).norm();
-    if len < 1e-9 {
-        return None;
-    }
-    let across = Vector2::new(-(pb - pa).y, (pb - pa).x) / len;
-    let (u0, u1) = band.clip_segment(&pa, &pb).unwrap_or((0.0, 1.0));
-    let gap = params.min_gap();
-    let mut s = None;
-    for _ in 0..32 {
-        let u = rng.random_range(u0..=u1);
-        let d = normal(rng) * params.singularity_sigma / std::f64::consts::SQRT_2;
-        let cand = pa + (pb - pa) * u + across * d;
-        if ctx.pattern.signed_inside_distance(&cand) < gap {
-            continue;
-        }
-        if gmesh
-            .vertices
-            .iter()
-            .any(|v| (v.material - cand).norm() < gap)
-        {
-            continue;
-        }
-        // not on another ruling of C
-        if rv
-            .iter()
-            .any(|&[a, b]| point_segment(&cand, &mat(a), &mat(b)).0 < 1e-6)
-        {
-            continue;
-        }
-        s = Some(cand);
-        break;
-    }
-    let s = s?;
+        .find(|&k| c.dihedral(k) > params.flat_angle)?;
+    let s = c.sample_singular(ctx, band, e_sing, rng)?;
     if let Some(old) = nearby_singular(layer, params, &s) {
         return Some((old, false));
     }
-    // which rulings separate s from F
-    let side = |k: usize, p: &Point2| orient(&mat(rv[k][0]), &mat(rv[k][1]), p).signum();
-    let mut removed = Vec::new();
-    let mut e_sup = None;
-    let mut past_sing = false;
-    for &k in &order {
-        let separates = side(k, &s) != side(k, f_ref);
-        if separates || !past_sing {
-            // between F and s, or between s and e_sing (all flatter than theta_0)
-            removed.push(k);
-            past_sing |= k == e_sing;
-            continue;
-        }
-        if dihedral(k) <= params.flat_angle {
-            removed.push(k);
-            continue;
-        }
-        e_sup = Some(k);
-        break;
-    }
+    let (removed, e_sup) = c.rulings_to_replace(params, &order, e_sing, &s, f_ref);
     if removed.is_empty() {
         return None;
     }
+    let id = replace_by_cones(layer, ri, s, step, &removed, e_sup);
+    Some((id, true))
+}
+
+/// The rulings of a curved region C in S_G, as a conflict of fig. 6(d) walks them.
+struct ConflictRegion<'g> {
+    gmesh: &'g GeometricMesh,
+    /// The S_G vertices [a, b] of each ruling of C.
+    rv: &'g [[u32; 2]],
+}
+
+impl ConflictRegion<'_> {
+    /// The pattern position (m) of S_G vertex `v`.
+    fn mat(&self, v: u32) -> Point2 {
+        self.gmesh.vertices[v as usize].material
+    }
+
+    /// The dihedral angle (rad) along ruling k, 0 where it has no two faces.
+    fn dihedral(&self, k: usize) -> f64 {
+        self.gmesh
+            .dihedral(self.rv[k][0], self.rv[k][1])
+            .unwrap_or(0.0)
+    }
+
+    /// The walk through C away from F, starting at ruling `ruling`: its step (+1 or
+    /// -1 in ruling index; inner rulings step along d_prop) and the rulings in order.
+    fn walk_away_from_flat(&self, ruling: usize, dprop: &Vector2<f64>) -> (i64, Vec<usize>) {
+        let (rv, m) = (self.rv, self.rv.len());
+        let step: i64 = if ruling == 0 {
+            1
+        } else if ruling == m - 1 {
+            -1
+        } else {
+            let next = (ruling + 1).min(m - 1);
+            let mid =
+                Point2::from((self.mat(rv[next][0]).coords + self.mat(rv[next][1]).coords) * 0.5);
+            let here = Point2::from(
+                (self.mat(rv[ruling][0]).coords + self.mat(rv[ruling][1]).coords) * 0.5,
+            );
+            if (mid - here).dot(dprop) >= 0.0 {
+                1
+            } else {
+                -1
+            }
+        };
+        let mut order = Vec::new();
+        let mut k = ruling as i64;
+        while k >= 0 && (k as usize) < m {
+            order.push(k as usize);
+            k += step;
+        }
+        (step, order)
+    }
+
+    /// The singular point s drawn by chi(s) = exp(-d^2/sigma^2) around ruling
+    /// `e_sing`: uniform along it (where the band meets it), normal across with
+    /// standard deviation sigma / sqrt(2); up to 32 draws for one at least the minimal
+    /// gap inside the sheet and from every S_G vertex, and off C's rulings.
+    fn sample_singular(
+        &self,
+        ctx: &CrumpleContext,
+        band: &Band,
+        e_sing: usize,
+        rng: &mut impl Rng,
+    ) -> Option<Point2> {
+        let params = ctx.params;
+        let rv = self.rv;
+        let (pa, pb) = (self.mat(rv[e_sing][0]), self.mat(rv[e_sing][1]));
+        let len = (pb - pa).norm();
+        if len < 1e-9 {
+            return None;
+        }
+        let across = Vector2::new(-(pb - pa).y, (pb - pa).x) / len;
+        let (u0, u1) = band.clip_segment(&pa, &pb).unwrap_or((0.0, 1.0));
+        let gap = params.min_gap();
+        for _ in 0..32 {
+            let u = rng.random_range(u0..=u1);
+            let d = normal(rng) * params.singularity_sigma / std::f64::consts::SQRT_2;
+            let cand = pa + (pb - pa) * u + across * d;
+            if ctx.pattern.signed_inside_distance(&cand) < gap {
+                continue;
+            }
+            if self
+                .gmesh
+                .vertices
+                .iter()
+                .any(|v| (v.material - cand).norm() < gap)
+            {
+                continue;
+            }
+            // not on another ruling of C
+            if rv
+                .iter()
+                .any(|&[a, b]| point_segment(&cand, &self.mat(a), &self.mat(b)).0 < 1e-6)
+            {
+                continue;
+            }
+            return Some(cand);
+        }
+        None
+    }
+
+    /// Fig. 11: the rulings along the walk `order` that the cones of apex `s` replace
+    /// (those between F and s, between s and e_sing, and the ones flatter than theta_0
+    /// after it) and e_sup, the first one sharper than theta_0 past s, if any.
+    fn rulings_to_replace(
+        &self,
+        params: &PaperParams,
+        order: &[usize],
+        e_sing: usize,
+        s: &Point2,
+        f_ref: &Point2,
+    ) -> (Vec<usize>, Option<usize>) {
+        let rv = self.rv;
+        // which rulings separate s from F
+        let side =
+            |k: usize, p: &Point2| orient(&self.mat(rv[k][0]), &self.mat(rv[k][1]), p).signum();
+        let mut removed = Vec::new();
+        let mut e_sup = None;
+        let mut past_sing = false;
+        for &k in order {
+            let separates = side(k, s) != side(k, f_ref);
+            if separates || !past_sing {
+                // between F and s, or between s and e_sing (all flatter than theta_0)
+                removed.push(k);
+                past_sing |= k == e_sing;
+                continue;
+            }
+            if self.dihedral(k) <= params.flat_angle {
+                removed.push(k);
+                continue;
+            }
+            e_sup = Some(k);
+            break;
+        }
+        (removed, e_sup)
+    }
+}
+
+/// Fig. 11: add the singular vertex `s` (pattern, m) and replace the `removed`
+/// rulings of region `ri` by cones of apex s towards both sides of C (a fan per side
+/// of at least 2 rulings, through the boundary ends of the removed rulings and of
+/// e_sup); C keeps the rulings from e_sup on (along the walk's `step`) if at least 2,
+/// else it is removed. Returns the new vertex's id.
+fn replace_by_cones(
+    layer: &mut GeometricLayer,
+    ri: usize,
+    s: Point2,
+    step: i64,
+    removed: &[usize],
+    e_sup: Option<usize>,
+) -> u64 {
     let old = layer.regions[ri].rulings.clone();
     let kept: Vec<Ruling> = match e_sup {
         Some(k) if step > 0 => old[k..].to_vec(),
@@ -276,5 +351,5 @@ fn insert_new_singular(
             layer.add_region(fan);
         }
     }
-    Some((id, true))
+    id
 }
