@@ -76,25 +76,7 @@ impl DualActiveSet {
         self.warm_start(a, b, lambda, tol);
 
         while outcome.iterations < max_iterations {
-            // w = b - A λ: the violation of each constraint at X(λ)
-            self.w.clear();
-            self.w.extend_from_slice(b);
-            for &p in &self.free {
-                let lp = lambda[p];
-                let col = &a[p * m..(p + 1) * m];
-                for (w, c) in self.w.iter_mut().zip(col) {
-                    *w -= c * lp;
-                }
-            }
-            let mut best = None;
-            let mut best_w = tol;
-            for i in 0..m {
-                if !self.in_free[i] && !self.blocked[i] && self.w[i] > best_w {
-                    best_w = self.w[i];
-                    best = Some(i);
-                }
-            }
-            let Some(j) = best else {
+            let Some(j) = self.most_violated(a, b, lambda, tol) else {
                 outcome.converged = true;
                 break;
             };
@@ -103,56 +85,92 @@ impl DualActiveSet {
                 self.blocked[j] = true;
                 continue;
             }
-            let mut first = true;
-            loop {
-                self.solve_free(b);
-                if self.s.iter().all(|&v| v > 0.0) {
-                    for (k, &p) in self.free.iter().enumerate() {
-                        lambda[p] = self.s[k];
-                    }
-                    break;
-                }
-                let last = self.free.len() - 1;
-                if first && self.s[last] <= 0.0 {
-                    // numerically the new constraint cannot be activated: drop it
-                    self.free.pop();
-                    self.in_free[j] = false;
-                    self.blocked[j] = true;
-                    break;
-                }
-                first = false;
-                // step from λ towards s until the first free λ reaches zero
-                let mut alpha: f64 = 1.0;
-                for (k, &p) in self.free.iter().enumerate() {
-                    let sk = self.s[k];
-                    if sk <= 0.0 {
-                        let lp = lambda[p];
-                        alpha = alpha.min(lp / (lp - sk));
-                    }
-                }
-                let scale = self.s.iter().fold(0.0f64, |acc, v| acc.max(v.abs()));
-                for (k, &p) in self.free.iter().enumerate() {
-                    lambda[p] += alpha * (self.s[k] - lambda[p]);
-                }
-                let before = self.free.len();
-                let in_free = &mut self.in_free;
-                self.free.retain(|&p| {
-                    let keep = lambda[p] > 1e-14 * scale.max(1e-300);
-                    if !keep {
-                        lambda[p] = 0.0;
-                        in_free[p] = false;
-                    }
-                    keep
-                });
-                outcome.iterations += (before - self.free.len()) as u32;
-                self.refactor(a, m);
-                if self.free.is_empty() {
-                    break;
-                }
-            }
+            outcome.iterations += self.activate(a, b, lambda, j);
         }
         outcome.active = self.free.len();
         outcome
+    }
+
+    /// The constraint outside P (and not blocked) most violated at X(λ), by more than
+    /// `tol` (m): the largest w_i of w = b - A λ (into `self.w`). None: the KKT
+    /// conditions hold.
+    fn most_violated(&mut self, a: &[f64], b: &[f64], lambda: &[f64], tol: f64) -> Option<usize> {
+        let m = b.len();
+        // w = b - A λ: the violation of each constraint at X(λ)
+        self.w.clear();
+        self.w.extend_from_slice(b);
+        for &p in &self.free {
+            let lp = lambda[p];
+            let col = &a[p * m..(p + 1) * m];
+            for (w, c) in self.w.iter_mut().zip(col) {
+                *w -= c * lp;
+            }
+        }
+        let mut best = None;
+        let mut best_w = tol;
+        for i in 0..m {
+            if !self.in_free[i] && !self.blocked[i] && self.w[i] > best_w {
+                best_w = self.w[i];
+                best = Some(i);
+            }
+        }
+        best
+    }
+
+    /// With constraint `j` just appended to P: solve on P and, while some λ_P would be
+    /// negative, step towards that solution until the first reaches zero and drop it
+    /// (Lawson-Hanson's inner loop). Returns the constraints dropped from P.
+    fn activate(&mut self, a: &[f64], b: &[f64], lambda: &mut [f64], j: usize) -> u32 {
+        let m = b.len();
+        let mut dropped = 0;
+        let mut first = true;
+        loop {
+            self.solve_free(b);
+            if self.s.iter().all(|&v| v > 0.0) {
+                for (k, &p) in self.free.iter().enumerate() {
+                    lambda[p] = self.s[k];
+                }
+                break;
+            }
+            let last = self.free.len() - 1;
+            if first && self.s[last] <= 0.0 {
+                // numerically the new constraint cannot be activated: drop it
+                self.free.pop();
+                self.in_free[j] = false;
+                self.blocked[j] = true;
+                break;
+            }
+            first = false;
+            // step from λ towards s until the first free λ reaches zero
+            let mut alpha: f64 = 1.0;
+            for (k, &p) in self.free.iter().enumerate() {
+                let sk = self.s[k];
+                if sk <= 0.0 {
+                    let lp = lambda[p];
+                    alpha = alpha.min(lp / (lp - sk));
+                }
+            }
+            let scale = self.s.iter().fold(0.0f64, |acc, v| acc.max(v.abs()));
+            for (k, &p) in self.free.iter().enumerate() {
+                lambda[p] += alpha * (self.s[k] - lambda[p]);
+            }
+            let before = self.free.len();
+            let in_free = &mut self.in_free;
+            self.free.retain(|&p| {
+                let keep = lambda[p] > 1e-14 * scale.max(1e-300);
+                if !keep {
+                    lambda[p] = 0.0;
+                    in_free[p] = false;
+                }
+                keep
+            });
+            dropped += (before - self.free.len()) as u32;
+            self.refactor(a, m);
+            if self.free.is_empty() {
+                break;
+            }
+        }
+        dropped
     }
 
     fn reserve(&mut self, m: usize) {

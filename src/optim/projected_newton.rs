@@ -147,6 +147,26 @@ struct IterationState {
     hessian_ready: bool,
     /// Whether this iteration steps on the stored factorization (chord step).
     chord: bool,
+    /// Whether no iteration has found a direction yet (its damping is remembered in
+    /// `ProjectedNewton::first_damping`).
+    first: bool,
+}
+
+/// When `minimize` stops: the two tests of [`NewtonOptions`], `pgtol` resolved.
+struct Stopping {
+    /// Projected-gradient infinity norm to reach.
+    pgtol: f64,
+    /// Relative decrease of f below which an accepted Newton step ends the solve.
+    ftol: f64,
+}
+
+/// How an iteration of `minimize` ends.
+enum Iteration {
+    /// Go on (if iterations are left).
+    Continue,
+    Converged,
+    /// No progress possible: return what we have, not converged.
+    Stop,
 }
 
 /// How an iteration's direction was found.
@@ -191,6 +211,58 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         upper: &[f64],
         options: &NewtonOptions,
     ) -> NewtonResult {
+        let mut state = self.start(problem, x, lower, upper);
+        let initial_pg = state.pg;
+        let stopping = Stopping {
+            pgtol: match options.pgtol_relative_to_start {
+                Some(factor) => factor * state.pg.max(1e-300),
+                None => options.pgtol,
+            },
+            ftol: options.ftol,
+        };
+        let result = |state: &IterationState, converged: bool, factorizations: u32| NewtonResult {
+            f: state.f,
+            iterations: state.iterations,
+            evaluations: state.evaluations,
+            projected_gradient_inf: state.pg,
+            factorizations,
+            initial_projected_gradient_inf: initial_pg,
+            converged,
+        };
+        if !state.f.is_finite() || !state.pg.is_finite() {
+            return result(&state, false, 0);
+        }
+        let mut converged = state.pg <= stopping.pgtol;
+        // Start from a tenth of the damping the last solve's first iteration needed:
+        // consecutive time steps have similar curvature, and every rejected
+        // factorization costs as much as an accepted one.
+        self.damping = (self.first_damping * 0.1).max(1e-9);
+        // Chord steps (the stored factorization, no new Hessian) while they contract
+        // the projected gradient at least 4x per step: each saves an assembly and a
+        // factorization (about half an iteration's cost at 100 unknowns).
+        state.chord = options.reuse_factorization && self.factor_valid;
+        if !state.chord {
+            self.factor_valid = false;
+        }
+        while !converged && state.iterations < options.max_iterations {
+            match self.iterate(problem, x, lower, upper, &stopping, &mut state) {
+                Iteration::Continue => {}
+                Iteration::Converged => converged = true,
+                Iteration::Stop => break,
+            }
+        }
+        result(&state, converged, self.factorizations)
+    }
+
+    /// Size the buffers for `problem`, clamp `x` into [lower, upper] and evaluate f and
+    /// its gradient there: the state before the first iteration.
+    fn start(
+        &mut self,
+        problem: &mut impl BoxProblem<Matrix = M>,
+        x: &mut [f64],
+        lower: &[f64],
+        upper: &[f64],
+    ) -> IterationState {
         let n = problem.dimension();
         self.g.resize(n, 0.0);
         self.g_trial.resize(n, 0.0);
@@ -207,116 +279,115 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
             evaluations: 1,
             hessian_ready: false,
             chord: false,
+            first: true,
         };
         state.pg = projected_gradient_inf(x, &self.g, lower, upper);
-        let initial_pg = state.pg;
-        let pgtol = match options.pgtol_relative_to_start {
-            Some(factor) => factor * state.pg.max(1e-300),
-            None => options.pgtol,
-        };
-        let result = |state: &IterationState, converged: bool, factorizations: u32| NewtonResult {
-            f: state.f,
-            iterations: state.iterations,
-            evaluations: state.evaluations,
-            projected_gradient_inf: state.pg,
-            factorizations,
-            initial_projected_gradient_inf: initial_pg,
-            converged,
-        };
-        if !state.f.is_finite() || !state.pg.is_finite() {
-            return result(&state, false, 0);
+        state
+    }
+
+    /// One iteration: the free set, a direction on it, the line search along it, and
+    /// the convergence tests after an accepted step.
+    fn iterate(
+        &mut self,
+        problem: &mut impl BoxProblem<Matrix = M>,
+        x: &mut [f64],
+        lower: &[f64],
+        upper: &[f64],
+        stopping: &Stopping,
+        state: &mut IterationState,
+    ) -> Iteration {
+        state.iterations += 1;
+        self.free_set(x, lower, upper);
+        if self.free.is_empty() {
+            return Iteration::Converged;
         }
-        let mut converged = state.pg <= pgtol;
-        // Start from a tenth of the damping the last solve's first iteration needed:
-        // consecutive time steps have similar curvature, and every rejected
-        // factorization costs as much as an accepted one.
-        self.damping = (self.first_damping * 0.1).max(1e-9);
-        let mut first = true;
-        // Chord steps (the stored factorization, no new Hessian) while they contract
-        // the projected gradient at least 4x per step: each saves an assembly and a
-        // factorization (about half an iteration's cost at 100 unknowns).
-        state.chord = options.reuse_factorization && self.factor_valid;
-        if !state.chord {
-            self.factor_valid = false;
+        let pg_before = state.pg;
+        let direction = self.direction(problem, x, lower, upper, state);
+        if state.first && !state.chord {
+            self.first_damping = self.damping;
         }
-        while !converged && state.iterations < options.max_iterations {
-            state.iterations += 1;
-            self.free_set(x, lower, upper);
-            if self.free.is_empty() {
-                converged = true;
-                break;
-            }
-            let pg_before = state.pg;
-            let direction = self.direction(problem, x, lower, upper, &mut state);
-            if first && !state.chord {
-                self.first_damping = self.damping;
-            }
-            first = false;
-            if !direction.ok {
-                break;
-            }
-            // Stationary to round-off: the model predicts a decrease no larger than the
-            // rounding error of f itself, so no step can be verified. Converged.
-            let predicted: f64 = -self
-                .free
-                .iter()
-                .zip(&self.reduced)
-                .map(|(&i, d)| self.g[i] * d)
-                .sum::<f64>();
-            if predicted <= 1e-14 * state.f.abs() {
-                converged = true;
-                break;
-            }
-            // (a chord step gets no line search: if its full step fails, the factorization
-            // is stale)
-            let trials = if state.chord { 1 } else { 40 };
-            let (accepted, alpha, f_new) =
-                self.line_search(problem, x, lower, upper, &mut state, trials);
-            if state.chord && !(accepted && alpha == 1.0) {
-                // the old factorization no longer models f here: a Newton step from x
-                state.chord = false;
-                if !accepted {
-                    // the workspace holds the trial's data: evaluate x again for its
-                    // Hessian
-                    state.evaluations += 1;
-                    state.f = problem.evaluate(x, Some(&mut self.g), None);
-                    state.iterations -= 1;
-                    continue;
-                }
-            }
+        state.first = false;
+        if !direction.ok {
+            return Iteration::Stop;
+        }
+        // Stationary to round-off: the model predicts a decrease no larger than the
+        // rounding error of f itself, so no step can be verified. Converged.
+        let predicted: f64 = -self
+            .free
+            .iter()
+            .zip(&self.reduced)
+            .map(|(&i, d)| self.g[i] * d)
+            .sum::<f64>();
+        if predicted <= 1e-14 * state.f.abs() {
+            return Iteration::Converged;
+        }
+        // (a chord step gets no line search: if its full step fails, the factorization
+        // is stale)
+        let trials = if state.chord { 1 } else { 40 };
+        let (accepted, alpha, f_new) = self.line_search(problem, x, lower, upper, state, trials);
+        if let Some(next) = self.after_search(problem, x, state, accepted, alpha) {
+            return next;
+        }
+        self.adapt_damping(alpha, direction.escalated);
+        let f_old = state.f;
+        self.accept(problem, x, alpha, f_new, state);
+        state.pg = projected_gradient_inf(x, &self.g, lower, upper);
+        // (chord steps only at the start of a call: within one, Newton steps
+        // converge in fewer evaluations)
+        state.chord &= state.pg <= 0.25 * pg_before;
+        let f = state.f;
+        if state.pg <= stopping.pgtol {
+            Iteration::Converged
+        } else if !direction.fallback
+            && (f_old - f) <= stopping.ftol * f_old.abs().max(f.abs()).max(1.0)
+        {
+            // After any accepted Newton step, as L-BFGS-B applies `factr`: where the
+            // resampling operator's kinks stall the projected gradient above its
+            // tolerance, the line search keeps passing steps of alpha ~1e-3 that
+            // change f only in its last digits (17 iterations for nothing on a
+            // Moebius loop before this). Not after a fallback step: a gradient
+            // step's small decrease says nothing about stationarity.
+            Iteration::Converged
+        } else {
+            Iteration::Continue
+        }
+    }
+
+    /// What follows a line search that was not a passed full chord step or an accepted
+    /// Newton step: a failed chord step falls back to Newton steps from x; a rejected
+    /// Newton step raises the damping (or stops at the noise floor). `None`: accept the
+    /// step at `alpha`.
+    fn after_search(
+        &mut self,
+        problem: &mut impl BoxProblem<Matrix = M>,
+        x: &[f64],
+        state: &mut IterationState,
+        accepted: bool,
+        alpha: f64,
+    ) -> Option<Iteration> {
+        if state.chord && !(accepted && alpha == 1.0) {
+            // the old factorization no longer models f here: a Newton step from x
+            state.chord = false;
             if !accepted {
-                // No decrease along the model direction: more damping next time (the
-                // Hessian at x is kept); stop if the model is already heavily damped
-                // (we are at the noise floor).
-                if self.damping > 1e2 {
-                    break;
-                }
-                self.damping = (self.damping * 100.0).max(1e-6);
-                continue;
-            }
-            self.adapt_damping(alpha, direction.escalated);
-            let f_old = state.f;
-            self.accept(problem, x, alpha, f_new, &mut state);
-            state.pg = projected_gradient_inf(x, &self.g, lower, upper);
-            // (chord steps only at the start of a call: within one, Newton steps
-            // converge in fewer evaluations)
-            state.chord &= state.pg <= 0.25 * pg_before;
-            let f = state.f;
-            if state.pg <= pgtol {
-                converged = true;
-            } else if !direction.fallback
-                && (f_old - f) <= options.ftol * f_old.abs().max(f.abs()).max(1.0)
-            {
-                // After any accepted Newton step, as L-BFGS-B applies `factr`: where the
-                // resampling operator's kinks stall the projected gradient above its
-                // tolerance, the line search keeps passing steps of alpha ~1e-3 that
-                // change f only in its last digits (17 iterations for nothing on a
-                // Moebius loop before this). Not after a fallback step: a gradient
-                // step's small decrease says nothing about stationarity.
-                converged = true;
+                // the workspace holds the trial's data: evaluate x again for its
+                // Hessian
+                state.evaluations += 1;
+                state.f = problem.evaluate(x, Some(&mut self.g), None);
+                state.iterations -= 1;
+                return Some(Iteration::Continue);
             }
         }
-        result(&state, converged, self.factorizations)
+        if !accepted {
+            // No decrease along the model direction: more damping next time (the
+            // Hessian at x is kept); stop if the model is already heavily damped
+            // (we are at the noise floor).
+            if self.damping > 1e2 {
+                return Some(Iteration::Stop);
+            }
+            self.damping = (self.damping * 100.0).max(1e-6);
+            return Some(Iteration::Continue);
+        }
+        None
     }
 
     /// The free set at x: every variable except those at a bound with the gradient

@@ -234,7 +234,24 @@ pub fn exact_plan(
     interval: f64,
     clamp: &'static str,
 ) -> Vec<ExactSpec> {
-    let spec = |method, sweep, dt, n: usize, tolerance, clamp| ExactSpec {
+    if problem.is_static() {
+        static_plan(quick, dt, tolerance, clamp)
+    } else {
+        dynamic_plan(quick, tolerance, interval, clamp)
+    }
+}
+
+/// One run: `method` in `sweep` at step `dt`, s, with `n` elements, solver
+/// `tolerance` and bending weight rule `clamp`.
+fn exact_spec(
+    method: Method,
+    sweep: Sweep,
+    dt: f64,
+    n: usize,
+    tolerance: f64,
+    clamp: &'static str,
+) -> ExactSpec {
+    ExactSpec {
         run: RunSpec {
             method,
             sweep,
@@ -243,27 +260,17 @@ pub fn exact_plan(
             tolerance,
         },
         clamp,
-    };
+    }
+}
+
+/// The runs of a static scene (see [`exact_plan`]).
+fn static_plan(quick: bool, dt: f64, tolerance: f64, clamp: &'static str) -> Vec<ExactSpec> {
+    let spec = exact_spec;
     let mut out = Vec::new();
-    if problem.is_static() {
-        for clamp in CLAMPS {
-            for n in SEGMENTS {
-                out.push(spec(
-                    Method::GaussNewton,
-                    Sweep::Resolution,
-                    dt,
-                    n,
-                    tolerance,
-                    clamp,
-                ));
-            }
-        }
-        for n in SEGMENTS
-            .into_iter()
-            .filter(|n| *n <= if quick { 20 } else { 50 })
-        {
+    for clamp in CLAMPS {
+        for n in SEGMENTS {
             out.push(spec(
-                Method::Lbfgsb,
+                Method::GaussNewton,
                 Sweep::Resolution,
                 dt,
                 n,
@@ -271,20 +278,39 @@ pub fn exact_plan(
                 clamp,
             ));
         }
-        if !quick {
-            for tol in [1e-4, 1e-6] {
-                out.push(spec(
-                    Method::GaussNewton,
-                    Sweep::Tolerance,
-                    dt,
-                    50,
-                    tol,
-                    clamp,
-                ));
-            }
-        }
-        return out;
     }
+    for n in SEGMENTS
+        .into_iter()
+        .filter(|n| *n <= if quick { 20 } else { 50 })
+    {
+        out.push(spec(
+            Method::Lbfgsb,
+            Sweep::Resolution,
+            dt,
+            n,
+            tolerance,
+            clamp,
+        ));
+    }
+    if !quick {
+        for tol in [1e-4, 1e-6] {
+            out.push(spec(
+                Method::GaussNewton,
+                Sweep::Tolerance,
+                dt,
+                50,
+                tol,
+                clamp,
+            ));
+        }
+    }
+    out
+}
+
+/// The runs of the dynamic scene, dt = `interval` / k, s (see [`exact_plan`]).
+fn dynamic_plan(quick: bool, tolerance: f64, interval: f64, clamp: &'static str) -> Vec<ExactSpec> {
+    let spec = exact_spec;
+    let mut out = Vec::new();
     let n = VIBRATION_SEGMENTS;
     let (main, lbfgsb, lumped, fem): (&[u32], &[u32], &[u32], &[u32]) = if quick {
         (&[8, 16, 32, 64], &[16], &[16, 32], &[8])

@@ -31,12 +31,6 @@ impl Coordinates {
     pub fn segments(&self) -> usize {
         self.crease_direction.len() - 1
     }
-    pub fn is_finite(&self) -> bool {
-        self.crease_direction.iter().all(|x| x.is_finite())
-            && self.bending_angle.iter().all(|x| x.is_finite())
-            && self.base.translation.vector.iter().all(|x| x.is_finite())
-            && self.base.rotation.coords.iter().all(|x| x.is_finite())
-    }
 }
 
 /// Ribbon dimensions: length l (m), width w (m), n elements.

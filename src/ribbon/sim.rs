@@ -5,7 +5,7 @@ use super::mass::element_mass;
 use super::objective::{Equality, Layout, NormalGuide, PointForce, RimHistory, StepTerms};
 use super::params::{BaseMode, KineticModel, RibbonParams};
 use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
-use super::step::{SolveOutcome, StepSolver};
+use super::step::StepSolver;
 use crate::contact::BodyTopology;
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3, VertexRegion};
 use crate::sim::handle::{HandleSpec, OrientationMode};
@@ -70,7 +70,6 @@ pub struct RibbonSim {
     q: Vec<f64>,
     mesh: SurfaceMesh,
     singular: Vec<SingularPoint>,
-    last_outcome: SolveOutcome,
     /// q at the end minus q at the start of the last step (extrapolation).
     q_delta: Vec<f64>,
     /// Frames of the loaded material points at the start of a step (for the work bound).
@@ -289,7 +288,6 @@ impl RibbonSim {
             q,
             mesh: SurfaceMesh::default(),
             singular: Vec::new(),
-            last_outcome: SolveOutcome::default(),
             q_delta: Vec::new(),
             loaded_before: Vec::new(),
         };
@@ -311,9 +309,6 @@ impl RibbonSim {
     }
     pub fn singular_points(&self) -> &[SingularPoint] {
         &self.singular
-    }
-    pub fn last_outcome(&self) -> &SolveOutcome {
-        &self.last_outcome
     }
 
     /// Overwrite the previous-step velocities (m/s) with a rigid motion: angular
@@ -345,47 +340,7 @@ impl RibbonSim {
         // `targets` are finite: the world keeps a handle's last target instead of a
         // non-finite one (see `StepContext::targets`).
         self.terms.h = dt;
-        if let BaseMode::Prescribed {
-            pose,
-            driven_by: Some(h),
-        } = &mut self.params.base
-        {
-            if let Some(target) = targets.get(*h).copied() {
-                let grasp = handles[*h].material_point;
-                // world_from_base = world_from_gripper * gripper_from_base; the gripper
-                // sits at the grasp point with axes along the material axes.
-                *pose = target * Pose::translation(-grasp.x, -grasp.y, 0.0);
-            }
-        }
-        // floating: the current base is the reference rotation, w restarts at 0
-        let base = match &self.params.base {
-            BaseMode::Prescribed { pose, .. } => *pose,
-            BaseMode::Floating { .. } => self.coords.base,
-        };
-        if self.layout.floating {
-            self.layout.pack(&self.coords, &base, &mut self.q);
-        }
-        for (eq, h) in self.terms.equalities.iter_mut().zip(&self.equality_handles) {
-            let Some(h) = h else { continue };
-            let Some(target) = targets.get(*h).copied() else {
-                continue;
-            };
-            match eq {
-                Equality::Position { target: t, .. } => {
-                    *t = Point3::from(target.translation.vector)
-                }
-                Equality::Orientation { target: r, .. } => {
-                    *r = *target.rotation.to_rotation_matrix().matrix()
-                }
-                Equality::Loop(_) => {}
-            }
-        }
-        for (guide, h) in self.terms.normal_guides.iter_mut().zip(&self.guide_handles) {
-            if let Some(target) = targets.get(*h).copied() {
-                guide.target = target.rotation * Vector3::z();
-            }
-        }
-
+        let base = self.follow_targets(handles, targets);
         let mut q = self.q.clone();
         if self.params.solver.extrapolate && self.q_delta.len() == q.len() {
             // start from the linear extrapolation of the last step (the solver clamps
@@ -439,7 +394,6 @@ impl RibbonSim {
             report.violation_handle = None;
         }
         self.loaded_before = loaded_before;
-        self.last_outcome = outcome;
         self.rebuild_outputs();
         report.energies = self.energies();
         report.isometry_error = self.mesh.isometry_error();
@@ -447,6 +401,54 @@ impl RibbonSim {
         // a rejected step keeps its NaN violation: the new state is unknown, and 0 would
         // read as "every constraint met"
         report
+    }
+
+    /// Move what the handles drive to their `targets` (`world_from_gripper`): a driven
+    /// prescribed base, the position / orientation equalities and the normal guides.
+    /// Returns the base pose of this step (for a floating base, the current one: the
+    /// reference rotation, w restarting at 0, with `q` repacked about it).
+    fn follow_targets(&mut self, handles: &[HandleSpec], targets: &[Pose]) -> Pose {
+        if let BaseMode::Prescribed {
+            pose,
+            driven_by: Some(h),
+        } = &mut self.params.base
+        {
+            if let Some(target) = targets.get(*h).copied() {
+                let grasp = handles[*h].material_point;
+                // world_from_base = world_from_gripper * gripper_from_base; the gripper
+                // sits at the grasp point with axes along the material axes.
+                *pose = target * Pose::translation(-grasp.x, -grasp.y, 0.0);
+            }
+        }
+        // floating: the current base is the reference rotation, w restarts at 0
+        let base = match &self.params.base {
+            BaseMode::Prescribed { pose, .. } => *pose,
+            BaseMode::Floating { .. } => self.coords.base,
+        };
+        if self.layout.floating {
+            self.layout.pack(&self.coords, &base, &mut self.q);
+        }
+        for (eq, h) in self.terms.equalities.iter_mut().zip(&self.equality_handles) {
+            let Some(h) = h else { continue };
+            let Some(target) = targets.get(*h).copied() else {
+                continue;
+            };
+            match eq {
+                Equality::Position { target: t, .. } => {
+                    *t = Point3::from(target.translation.vector)
+                }
+                Equality::Orientation { target: r, .. } => {
+                    *r = *target.rotation.to_rotation_matrix().matrix()
+                }
+                Equality::Loop(_) => {}
+            }
+        }
+        for (guide, h) in self.terms.normal_guides.iter_mut().zip(&self.guide_handles) {
+            if let Some(target) = targets.get(*h).copied() {
+                guide.target = target.rotation * Vector3::z();
+            }
+        }
+        base
     }
 
     /// New velocities at the new material points: V = (X^{n+1} - R(X̄^{n+1}, X^n)) / h

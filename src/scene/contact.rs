@@ -139,8 +139,31 @@ pub(super) fn build_stage(
         return Ok(None);
     }
     let defaults = ContactFile::default();
-    let c = contact.unwrap_or(&defaults);
-    let settings = ContactSettings {
+    let settings = contact_settings(ck, contact.unwrap_or(&defaults))?;
+    let colliders = colliders(ck, collider_files, file, world)?;
+    let topologies = world
+        .objects()
+        .iter()
+        .map(|o| match o.contact_body() {
+            Some(body) => Ok(body.contact_topology()),
+            None => Err(ck.fail(
+                "contact",
+                format!(
+                    "the contact stage acts on ribbons, not on a {} object; a paper sheet collides through `paper.colliders`",
+                    o.kind()
+                ),
+            )),
+        })
+        .collect::<Result<_, _>>()?;
+    let mut stage = ContactStage::new(settings, topologies, colliders)
+        .map_err(|e| ck.fail("contact", e.to_string()))?;
+    check_start(ck, &mut stage, &settings, world)?;
+    Ok(Some(stage))
+}
+
+/// The `contact:` section `c` checked into the stage's settings.
+fn contact_settings(ck: &Check, c: &ContactFile) -> Result<ContactSettings, SceneError> {
+    Ok(ContactSettings {
         thickness: ck.positive("contact.thickness", c.thickness)?,
         stiffness: ck.non_negative("contact.stiffness", c.stiffness)?,
         closeness: match ck.choice("contact.closeness", &c.closeness, &["stiff", "plain"])? {
@@ -151,7 +174,17 @@ pub(super) fn build_stage(
         max_qp_iterations: at_least_one(ck, "contact.max_qp_iterations", c.max_qp_iterations)?,
         tolerance: ck.positive("contact.tolerance", c.tolerance)?,
         self_contact: c.self_contact,
-    };
+    })
+}
+
+/// The `colliders:` list, each with a valid unique name (`collider_<index>` by
+/// default); mesh files are relative to `file`.
+fn colliders(
+    ck: &Check,
+    collider_files: &[ColliderFile],
+    file: &Path,
+    world: &World,
+) -> Result<Vec<Collider>, SceneError> {
     let mut colliders = Vec::new();
     let mut names: Vec<String> = Vec::new();
     for (i, cf) in collider_files.iter().enumerate() {
@@ -172,22 +205,17 @@ pub(super) fn build_stage(
         names.push(name);
         colliders.push(collider(ck, &key, cf, file, world)?);
     }
-    let topologies = world
-        .objects()
-        .iter()
-        .map(|o| match o.contact_body() {
-            Some(body) => Ok(body.contact_topology()),
-            None => Err(ck.fail(
-                "contact",
-                format!(
-                    "the contact stage acts on ribbons, not on a {} object; a paper sheet collides through `paper.colliders`",
-                    o.kind()
-                ),
-            )),
-        })
-        .collect::<Result<_, _>>()?;
-    let mut stage = ContactStage::new(settings, topologies, colliders)
-        .map_err(|e| ck.fail("contact", e.to_string()))?;
+    Ok(colliders)
+}
+
+/// Whether the scene can start: every ribbon vertex at least thickness/2 outside every
+/// collider, and no two surfaces closer than the contact distance.
+fn check_start(
+    ck: &Check,
+    stage: &mut ContactStage,
+    settings: &ContactSettings,
+    world: &World,
+) -> Result<(), SceneError> {
     // A ribbon must start outside every solid (the continuous detection keeps it
     // there; it cannot tell which side a vertex that starts inside belongs to).
     let half = 0.5 * settings.thickness;
@@ -227,7 +255,7 @@ pub(super) fn build_stage(
             ),
         ));
     }
-    Ok(Some(stage))
+    Ok(())
 }
 
 fn at_least_one(ck: &Check, key: &str, v: u32) -> Result<u32, SceneError> {
@@ -250,7 +278,35 @@ fn collider(
         &cf.kind,
         &["plane", "box", "sphere", "capsule", "mesh"],
     )?;
-    // keys used by each kind; any other is an error naming it
+    check_keys_used(ck, key, kind, cf)?;
+    let shape = collider_shape(ck, key, kind, cf, scene_file)?;
+    let friction = ck.non_negative(&format!("{key}.friction"), cf.friction)?;
+    let attached_to = match &cf.handle {
+        None => None,
+        Some(h) => Some(
+            world
+                .handles()
+                .iter()
+                .position(|s| &s.name == h)
+                .ok_or_else(|| {
+                    ck.fail(&format!("{key}.handle"), format!("no handle named `{h}`"))
+                })?,
+        ),
+    };
+    Ok(Collider {
+        shape,
+        pose: pose_from(
+            ck.vec3(&format!("{key}.position"), cf.position)?,
+            ck.vec3(&format!("{key}.rotation"), cf.rotation)?,
+        ),
+        friction,
+        attached_to,
+    })
+}
+
+/// Collider `key` of `kind` sets only the keys its kind uses; any other is an error
+/// naming it.
+fn check_keys_used(ck: &Check, key: &str, kind: &str, cf: &ColliderFile) -> Result<(), SceneError> {
     let used: &[&str] = match kind {
         "plane" => &[],
         "box" => &["size"],
@@ -272,6 +328,18 @@ fn collider(
             ));
         }
     }
+    Ok(())
+}
+
+/// The shape of collider `key` of `kind` from its keys (lengths in m; a mesh file is
+/// relative to `scene_file`, its coordinates times its `scale`).
+fn collider_shape(
+    ck: &Check,
+    key: &str,
+    kind: &str,
+    cf: &ColliderFile,
+    scene_file: &Path,
+) -> Result<ColliderShape, SceneError> {
     let required = |k: &str, v: Option<f64>| {
         v.ok_or_else(|| ck.fail(&format!("{key}.{k}"), format!("required for kind `{kind}`")))
     };
@@ -319,26 +387,5 @@ fn collider(
             }
         }
     };
-    let friction = ck.non_negative(&format!("{key}.friction"), cf.friction)?;
-    let attached_to = match &cf.handle {
-        None => None,
-        Some(h) => Some(
-            world
-                .handles()
-                .iter()
-                .position(|s| &s.name == h)
-                .ok_or_else(|| {
-                    ck.fail(&format!("{key}.handle"), format!("no handle named `{h}`"))
-                })?,
-        ),
-    };
-    Ok(Collider {
-        shape,
-        pose: pose_from(
-            ck.vec3(&format!("{key}.position"), cf.position)?,
-            ck.vec3(&format!("{key}.rotation"), cf.rotation)?,
-        ),
-        friction,
-        attached_to,
-    })
+    Ok(shape)
 }

@@ -395,6 +395,35 @@ struct EnergyWatch<'a> {
     hook: Option<&'a mut dyn FnMut(&mut StepReport)>,
 }
 
+impl<'a> EnergyWatch<'a> {
+    /// The watch of a run starting from `world`: E(0) and S(0) summed over its
+    /// objects, J; `tolerance` relative; `hook` sees each step's report first.
+    fn at_start(
+        world: &World,
+        tolerance: f64,
+        hook: Option<&'a mut dyn FnMut(&mut StepReport)>,
+    ) -> Self {
+        let initial: f64 = world.objects().iter().map(|o| o.energies().total()).sum();
+        let stored: f64 = world
+            .objects()
+            .iter()
+            .map(|o| {
+                let e = o.energies();
+                e.kinetic + e.elastic
+            })
+            .sum();
+        EnergyWatch {
+            initial,
+            stored,
+            tolerance,
+            work: 0.0,
+            rise_max: f64::NEG_INFINITY,
+            ratio_max: f64::NEG_INFINITY,
+            hook,
+        }
+    }
+}
+
 impl StepObserver for EnergyWatch<'_> {
     fn after_step(&mut self, _: &Scene, report: &StepReport, _: f64) -> Result<(), ObserverError> {
         let tampered;
@@ -528,10 +557,61 @@ pub fn run_case_with(
     config: &Path,
     tweaks: RunTweaks,
 ) -> Result<CaseResult, StressError> {
+    let RunTweaks {
+        sets,
+        offset,
+        report_hook,
+        world_hook,
+    } = tweaks;
     let duration = case.duration_for(dt, quick, max_steps);
+    let mut scene = load_case(case, dt, duration, config, sets, offset)?;
+    if let Some(hook) = world_hook {
+        hook(&mut scene.world);
+    }
+    let mut watch = EnergyWatch::at_start(&scene.world, case.energy_tolerance, report_hook);
+    let wall = Instant::now();
+    let stats = runner::run(&mut scene, &mut watch, &|| false)?;
+    let wall_s = wall.elapsed().as_secs_f64();
+    let object_steps = stats.steps * scene.world.objects().len();
+    let reasons = failure_reasons(case, &stats, &watch, object_steps);
+    Ok(CaseResult {
+        case: case.name.to_string(),
+        description: case.description.to_string(),
+        dt,
+        steps: stats.steps,
+        duration: stats.duration,
+        finite: stats.finite,
+        energy_initial: watch.initial,
+        energy_initial_stored: watch.stored,
+        energy_rise_max: watch.rise_max,
+        work_bound: watch.work,
+        energy_ratio_max: watch.ratio_max,
+        constraint_violation_max: stats.constraint_violation_max,
+        unconverged_steps: stats.solver.unconverged_steps,
+        object_steps,
+        rejected_steps: stats.solver.rejected_steps,
+        expectation: case.expectation,
+        allowance: case.allowance,
+        energy_tolerance: case.energy_tolerance,
+        pass: reasons.is_empty(),
+        reason: reasons.join("; "),
+        wall_s,
+    })
+}
+
+/// The scene of `case` at step `dt`, s, and `duration`, s, with the case's overrides,
+/// then `extra` (`--set`s) and, if asked, moved by `offset`, m.
+fn load_case(
+    case: &StressCase,
+    dt: f64,
+    duration: f64,
+    config: &Path,
+    extra: Vec<String>,
+    offset: Option<[f64; 3]>,
+) -> Result<Scene, StressError> {
     let mut sets = vec![format!("dt={dt}"), format!("duration={duration}")];
     sets.extend((case.overrides)(duration, dt));
-    sets.extend(tweaks.sets);
+    sets.extend(extra);
     let path = config.join(case.scene);
     let load = |sets: &[String]| {
         scene::load(&path, sets).map_err(|source| StressError::Scene {
@@ -541,7 +621,7 @@ pub fn run_case_with(
         })
     };
     let mut scene = load(&sets)?;
-    if let Some(offset) = tweaks.offset {
+    if let Some(offset) = offset {
         let moved =
             offset_override(&scene.source, offset).map_err(|reason| StressError::CannotMove {
                 case: case.name.to_string(),
@@ -551,36 +631,18 @@ pub fn run_case_with(
         sets.push(moved);
         scene = load(&sets)?;
     }
-    if let Some(hook) = tweaks.world_hook {
-        hook(&mut scene.world);
-    }
-    let initial: f64 = scene
-        .world
-        .objects()
-        .iter()
-        .map(|o| o.energies().total())
-        .sum();
-    let stored: f64 = scene
-        .world
-        .objects()
-        .iter()
-        .map(|o| {
-            let e = o.energies();
-            e.kinetic + e.elastic
-        })
-        .sum();
-    let mut watch = EnergyWatch {
-        initial,
-        stored,
-        tolerance: case.energy_tolerance,
-        work: 0.0,
-        rise_max: f64::NEG_INFINITY,
-        ratio_max: f64::NEG_INFINITY,
-        hook: tweaks.report_hook,
-    };
-    let wall = Instant::now();
-    let stats = runner::run(&mut scene, &mut watch, &|| false)?;
-    let wall_s = wall.elapsed().as_secs_f64();
+    Ok(scene)
+}
+
+/// Why a finished run of `case` fails (empty: it passes): a non-finite state, energy
+/// above the work bound, more unconverged or rejected steps than allowed, or a
+/// constraint violation below the one it is expected to report.
+fn failure_reasons(
+    case: &StressCase,
+    stats: &crate::stats::RunStats,
+    watch: &EnergyWatch,
+    object_steps: usize,
+) -> Vec<String> {
     let mut reasons = Vec::new();
     if !stats.finite {
         reasons.push("non-finite state".to_string());
@@ -592,7 +654,6 @@ pub fn run_case_with(
             watch.rise_max, watch.work
         ));
     }
-    let object_steps = stats.steps * scene.world.objects().len();
     let allowed = case.allowance;
     let unconverged = stats.solver.unconverged_steps;
     if unconverged as f64 > allowed.unconverged_fraction * object_steps as f64 {
@@ -615,29 +676,7 @@ pub fn run_case_with(
             ));
         }
     }
-    Ok(CaseResult {
-        case: case.name.to_string(),
-        description: case.description.to_string(),
-        dt,
-        steps: stats.steps,
-        duration: stats.duration,
-        finite: stats.finite,
-        energy_initial: initial,
-        energy_initial_stored: stored,
-        energy_rise_max: watch.rise_max,
-        work_bound: watch.work,
-        energy_ratio_max: watch.ratio_max,
-        constraint_violation_max: stats.constraint_violation_max,
-        unconverged_steps: unconverged,
-        object_steps,
-        rejected_steps: stats.solver.rejected_steps,
-        expectation: case.expectation,
-        allowance: allowed,
-        energy_tolerance: case.energy_tolerance,
-        pass: reasons.is_empty(),
-        reason: reasons.join("; "),
-        wall_s,
-    })
+    reasons
 }
 
 /// The whole suite's outcome (`stress.json`).

@@ -19,69 +19,31 @@ impl Lbfgsb {
         if pg_norm <= 0.0 {
             return;
         }
-        // d = -g on the variables not held at a bound; breakpoints t_i; f' = -dᵀd; p = Wᵀd.
-        w.p[..col2].fill(0.0);
-        w.breaks.clear();
-        let (mut bounded, mut n_unbroken, mut ibkmin, mut bkmin, mut f1) = (true, 0, 0, 0.0, 0.0);
-        for (i, &xi) in x.iter().enumerate() {
-            let neggi = -w.g[i];
-            let status = &mut w.iwhere[i];
-            if *status != FIXED && *status != UNBOUNDED {
-                let at_lower = w.has_lower[i] && xi <= b.lower[i];
-                let at_upper = w.has_upper[i] && xi >= b.upper[i];
-                *status = match (at_lower, at_upper) {
-                    (true, _) if neggi <= 0.0 => AT_LOWER,
-                    (false, true) if neggi >= 0.0 => AT_UPPER,
-                    (false, false) if neggi == 0.0 => ZERO_GRADIENT,
-                    _ => FREE,
-                };
-            }
-            if *status != FREE && *status != UNBOUNDED {
-                w.d[i] = 0.0;
-                continue;
-            }
-            w.d[i] = neggi;
-            f1 -= neggi * neggi;
-            for j in 0..col {
-                w.p[j] += mem.y(j)[i] * neggi;
-                w.p[col + j] += mem.s(j)[i] * neggi;
-            }
-            let t = if w.has_lower[i] && neggi < 0.0 {
-                (xi - b.lower[i]) / -neggi
-            } else if w.has_upper[i] && neggi > 0.0 {
-                (b.upper[i] - xi) / neggi
-            } else {
-                n_unbroken += 1;
-                bounded &= neggi == 0.0;
-                continue;
-            };
-            if w.breaks.is_empty() || t < bkmin {
-                (bkmin, ibkmin) = (t, w.breaks.len());
-            }
-            w.breaks.push((t, i));
-        }
-        w.p[col..col2].iter_mut().for_each(|pj| *pj *= theta);
-        if w.breaks.is_empty() && n_unbroken == 0 {
+        let start = steepest_descent_path(mem, w, x, b);
+        if w.breaks.is_empty() && start.n_unbroken == 0 {
             return; // d = 0: x^c = x
         }
         // f'' = dᵀBd = θdᵀd - pᵀMp.
-        let mut f2 = -theta * f1;
-        let f2_org = f2;
+        let mut slope = PathDerivatives {
+            f1: start.f1,
+            f2: -theta * start.f1,
+        };
+        let f2_org = slope.f2;
         if col > 0 {
             mem.bmv(&w.p[..col2], &mut w.v[..col2]);
-            f2 -= dot(&w.v[..col2], &w.p[..col2]);
+            slope.f2 -= dot(&w.v[..col2], &w.p[..col2]);
         }
-        let mut dtm = -f1 / f2;
+        let mut dtm = -slope.f1 / slope.f2;
         let (mut tsum, nbreak, mut all_fixed) = (0.0, w.breaks.len(), false);
         let (mut nleft, mut k, mut tj) = (nbreak, 0, 0.0);
         while nleft > 0 {
             // The smallest breakpoint is known; sort the others only if the search goes on
             // (the reference code uses a heap for the same purpose).
             if k == 1 {
-                w.breaks.swap(0, ibkmin);
+                w.breaks.swap(0, start.ibkmin);
                 w.breaks[1..].sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
             }
-            let (t, ibp) = w.breaks[if k == 0 { ibkmin } else { k }];
+            let (t, ibp) = w.breaks[if k == 0 { start.ibkmin } else { k }];
             let dt = t - tj;
             tj = t;
             if dtm < dt {
@@ -103,28 +65,13 @@ impl Lbfgsb {
                 (dtm, all_fixed) = (dt, true); // every variable fixed: x^c is this breakpoint
                 break;
             }
-            // Update f' and f'' for the next segment.
-            let dibp2 = dibp * dibp;
-            f1 += dt * f2 + dibp2 - theta * dibp * zibp;
-            f2 -= theta * dibp2;
-            if col > 0 {
-                for j in 0..col2 {
-                    w.c[j] += dt * w.p[j];
-                }
-                for j in 0..col {
-                    (w.wbp[j], w.wbp[col + j]) = (mem.y(j)[ibp], theta * mem.s(j)[ibp]);
-                }
-                let (wbp, v) = (&w.wbp[..col2], &mut w.v[..col2]);
-                mem.bmv(wbp, v);
-                let (wmc, wmp, wmw) = (dot(&w.c[..col2], v), dot(&w.p[..col2], v), dot(wbp, v));
-                for (pj, &wj) in w.p[..col2].iter_mut().zip(wbp) {
-                    *pj -= dibp * wj;
-                }
-                f1 += dibp * wmc;
-                f2 += 2.0 * dibp * wmp - dibp2 * wmw;
-            }
-            f2 = f2.max(f64::EPSILON * f2_org);
-            dtm = if nleft == 0 && bounded { 0.0 } else { -f1 / f2 };
+            next_segment(mem, w, ibp, dibp, zibp, dt, &mut slope);
+            slope.f2 = slope.f2.max(f64::EPSILON * f2_org);
+            dtm = if nleft == 0 && start.bounded {
+                0.0
+            } else {
+                -slope.f1 / slope.f2
+            };
         }
         if !all_fixed {
             tsum += dtm.max(0.0);
@@ -229,5 +176,114 @@ impl Lbfgsb {
             w.xcp[k] += alpha * ri;
         }
         true
+    }
+}
+
+/// The derivatives of the model along the projected path on the current segment:
+/// `f1 = ∂m/∂t`, `f2 = ∂²m/∂t²`.
+struct PathDerivatives {
+    f1: f64,
+    f2: f64,
+}
+
+/// What [`steepest_descent_path`] found besides the direction and breakpoints it
+/// writes to the workspace.
+struct PathStart {
+    /// f' = -dᵀd at t = 0.
+    f1: f64,
+    /// Index in `breaks` of the smallest breakpoint.
+    ibkmin: usize,
+    /// Variables of d ≠ 0 that meet no bound along the path.
+    n_unbroken: usize,
+    /// Every variable without a breakpoint has a zero direction.
+    bounded: bool,
+}
+
+/// The start of algorithm CP: marks each variable's status (`iwhere`), writes
+/// d = -g on the variables not held at a bound (`w.d`), the breakpoints t_i
+/// (`w.breaks`) and p = Wᵀd (`w.p`, its second half times θ).
+fn steepest_descent_path(mem: &Memory, w: &mut Work, x: &[f64], b: &Bounds) -> PathStart {
+    let (col, theta) = (mem.col, mem.theta);
+    w.p[..2 * col].fill(0.0);
+    w.breaks.clear();
+    let (mut bounded, mut n_unbroken, mut ibkmin, mut bkmin, mut f1) = (true, 0, 0, 0.0, 0.0);
+    for (i, &xi) in x.iter().enumerate() {
+        let neggi = -w.g[i];
+        let status = &mut w.iwhere[i];
+        if *status != FIXED && *status != UNBOUNDED {
+            let at_lower = w.has_lower[i] && xi <= b.lower[i];
+            let at_upper = w.has_upper[i] && xi >= b.upper[i];
+            *status = match (at_lower, at_upper) {
+                (true, _) if neggi <= 0.0 => AT_LOWER,
+                (false, true) if neggi >= 0.0 => AT_UPPER,
+                (false, false) if neggi == 0.0 => ZERO_GRADIENT,
+                _ => FREE,
+            };
+        }
+        if *status != FREE && *status != UNBOUNDED {
+            w.d[i] = 0.0;
+            continue;
+        }
+        w.d[i] = neggi;
+        f1 -= neggi * neggi;
+        for j in 0..col {
+            w.p[j] += mem.y(j)[i] * neggi;
+            w.p[col + j] += mem.s(j)[i] * neggi;
+        }
+        let t = if w.has_lower[i] && neggi < 0.0 {
+            (xi - b.lower[i]) / -neggi
+        } else if w.has_upper[i] && neggi > 0.0 {
+            (b.upper[i] - xi) / neggi
+        } else {
+            n_unbroken += 1;
+            bounded &= neggi == 0.0;
+            continue;
+        };
+        if w.breaks.is_empty() || t < bkmin {
+            (bkmin, ibkmin) = (t, w.breaks.len());
+        }
+        w.breaks.push((t, i));
+    }
+    w.p[col..2 * col].iter_mut().for_each(|pj| *pj *= theta);
+    PathStart {
+        f1,
+        ibkmin,
+        n_unbroken,
+        bounded,
+    }
+}
+
+/// Past breakpoint `ibp` (its direction component `dibp` just zeroed, `zibp` = its
+/// bound - x): update f' and f'' for the next segment after a step `dt` on this one,
+/// and c and p in O(m²) through W's row `ibp`.
+fn next_segment(
+    mem: &Memory,
+    w: &mut Work,
+    ibp: usize,
+    dibp: f64,
+    zibp: f64,
+    dt: f64,
+    slope: &mut PathDerivatives,
+) {
+    let (col, theta) = (mem.col, mem.theta);
+    let col2 = 2 * col;
+    let dibp2 = dibp * dibp;
+    slope.f1 += dt * slope.f2 + dibp2 - theta * dibp * zibp;
+    slope.f2 -= theta * dibp2;
+    if col > 0 {
+        for j in 0..col2 {
+            w.c[j] += dt * w.p[j];
+        }
+        for j in 0..col {
+            (w.wbp[j], w.wbp[col + j]) = (mem.y(j)[ibp], theta * mem.s(j)[ibp]);
+        }
+        let (wbp, v) = (&w.wbp[..col2], &mut w.v[..col2]);
+        mem.bmv(wbp, v);
+        let (wmc, wmp, wmw) = (dot(&w.c[..col2], v), dot(&w.p[..col2], v), dot(wbp, v));
+        for (pj, &wj) in w.p[..col2].iter_mut().zip(wbp) {
+            *pj -= dibp * wj;
+        }
+        slope.f1 += dibp * wmc;
+        slope.f2 += 2.0 * dibp * wmp - dibp2 * wmw;
     }
 }

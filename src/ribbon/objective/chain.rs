@@ -93,7 +93,6 @@ impl Objective<'_> {
         );
         let n = self.strip.segments;
         let lay = self.layout;
-        let t = self.terms;
         suffix_sums(
             &ws.element_hessian,
             &ws.element_gradient,
@@ -104,14 +103,30 @@ impl Objective<'_> {
         model.segments = n;
         model.floating = lay.floating;
         model.diagonal_ready = false;
-        let base = lay.base_len();
-        let twist = |a: usize| Vec6::from(ws.twists[a].to_array());
-        // W_b = P Ω_b - tr(P) Ω_b + v_b × F at the first element b moves
-        let geometric = |a: usize, s: usize| -> Vector3 {
-            let (p, f, _) = &ws.scratch_psuf[s];
-            let o = ws.twists[a].angular;
-            p * o - o * p.trace() + ws.twists[a].linear.cross(f)
-        };
+        self.crease_blocks(ws, model);
+        element_blocks(ws, model);
+        model.base_twists = Mat6::zeros();
+        model.base_local = Matrix3::zeros();
+        if lay.base_len() == 6 {
+            base_blocks(ws, model);
+        }
+        model.closure = None;
+        for (e1, e2, b) in &ws.cross_blocks {
+            assert!(
+                (*e1, *e2) == (n - 1, 0),
+                "a cross block other than the loop closure's"
+            );
+            *model.closure.get_or_insert_with(Mat8::zeros) += b;
+        }
+    }
+
+    /// Per crease k = 1..n-1: the twists ξ and geometric terms W of c_k and psi_k, and
+    /// the 2x2 local block (bending, regularizer, the crease's own second-order terms,
+    /// the end-crease penalty on the last); entry 0 of each is a zero placeholder.
+    fn crease_blocks(&self, ws: &Workspace, model: &mut ChainModel) {
+        let n = self.strip.segments;
+        let lay = self.layout;
+        let t = self.terms;
         model.xi_c.clear();
         model.xi_psi.clear();
         model.w_c.clear();
@@ -124,7 +139,7 @@ impl Objective<'_> {
         model.local.push(Matrix2::zeros());
         for k in 1..n {
             let (ic, ip) = (lay.c(k), lay.psi(k));
-            let (wc, wp) = (geometric(ic, k), geometric(ip, k));
+            let (wc, wp) = (geometric(ws, ic, k), geometric(ws, ip, k));
             let (a_k, dd_world, domega_world) = ws.crease_extra[k];
             let (_, f, m) = &ws.scratch_psuf[k];
             let arm = m - a_k.cross(f);
@@ -136,8 +151,8 @@ impl Objective<'_> {
             local[(0, 1)] += cross;
             local[(1, 0)] += cross;
             local[(1, 1)] += op.dot(&wp);
-            model.xi_c.push(twist(ic));
-            model.xi_psi.push(twist(ip));
+            model.xi_c.push(twist(ws, ic));
+            model.xi_psi.push(twist(ws, ip));
             model.w_c.push(wc);
             model.w_psi.push(wp);
             model.local.push(local);
@@ -150,44 +165,56 @@ impl Objective<'_> {
                 }
             }
         }
-        model.blocks.clear();
-        for e in 0..n {
-            let mut g = ws.element_hessian[e];
-            for col in 0..2 {
-                let s = ws.element_second[e].slide[col];
-                for i in 0..3 {
-                    g[(i, 6 + col)] += s[i];
-                }
-            }
-            // symmetric from the columns the dense assembly reads
-            for j in 6..8 {
-                for i in 0..j {
-                    g[(j, i)] = g[(i, j)];
-                }
-            }
-            model.blocks.push(g);
-        }
-        model.base_twists = Mat6::zeros();
-        model.base_local = Matrix3::zeros();
-        if base == 6 {
-            for a in 0..6 {
-                model.base_twists.set_column(a, &twist(a));
-            }
-            for j in 0..3 {
-                for i in 0..3 {
-                    let (wi, wj) = (geometric(i, 0), geometric(j, 0));
-                    model.base_local[(i, j)] =
-                        0.5 * (ws.twists[i].angular.dot(&wj) + ws.twists[j].angular.dot(&wi));
-                }
+    }
+}
+
+/// The twist ξ_a of coordinate a as a 6-vector (angular, linear).
+fn twist(ws: &Workspace, a: usize) -> Vec6 {
+    Vec6::from(ws.twists[a].to_array())
+}
+
+/// W_b = P Ω_b - tr(P) Ω_b + v_b × F at the first element b moves (`s`: the suffix
+/// sums P, F from element s on).
+fn geometric(ws: &Workspace, a: usize, s: usize) -> Vector3 {
+    let (p, f, _) = &ws.scratch_psuf[s];
+    let o = ws.twists[a].angular;
+    p * o - o * p.trace() + ws.twists[a].linear.cross(f)
+}
+
+/// The 8x8 block of each element (its Hessian with the slide terms of its crease
+/// columns added), symmetric from the columns the dense assembly reads.
+fn element_blocks(ws: &Workspace, model: &mut ChainModel) {
+    let n = model.segments;
+    model.blocks.clear();
+    for e in 0..n {
+        let mut g = ws.element_hessian[e];
+        for col in 0..2 {
+            let s = ws.element_second[e].slide[col];
+            for i in 0..3 {
+                g[(i, 6 + col)] += s[i];
             }
         }
-        model.closure = None;
-        for (e1, e2, b) in &ws.cross_blocks {
-            assert!(
-                (*e1, *e2) == (n - 1, 0),
-                "a cross block other than the loop closure's"
-            );
-            *model.closure.get_or_insert_with(Mat8::zeros) += b;
+        // symmetric from the columns the dense assembly reads
+        for j in 6..8 {
+            for i in 0..j {
+                g[(j, i)] = g[(i, j)];
+            }
+        }
+        model.blocks.push(g);
+    }
+}
+
+/// A floating base's twists (the columns of `base_twists`) and the symmetric
+/// geometric block of its rotation (`base_local`).
+fn base_blocks(ws: &Workspace, model: &mut ChainModel) {
+    for a in 0..6 {
+        model.base_twists.set_column(a, &twist(ws, a));
+    }
+    for j in 0..3 {
+        for i in 0..3 {
+            let (wi, wj) = (geometric(ws, i, 0), geometric(ws, j, 0));
+            model.base_local[(i, j)] =
+                0.5 * (ws.twists[i].angular.dot(&wj) + ws.twists[j].angular.dot(&wi));
         }
     }
 }
