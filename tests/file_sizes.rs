@@ -1,5 +1,6 @@
-//! No library file is longer than 900 lines, its tests excluded (ENGINEERING.md: a file
-//! holds one job and is read in one sitting). Counted: every line of a `.rs` file under
+//! No library file is longer than 900 lines and no library function longer than 120,
+//! tests excluded (ENGINEERING.md: a file holds one job and is read in one sitting, a
+//! function fits on a screen or two). Counted: every line of a `.rs` file under
 //! src/, blank and comment lines included, except items marked `#[cfg(test)]` (a unit
 //! test module and test-only helpers) and files that are test modules themselves
 //! (`tests.rs`, or any file in a `tests/` folder).
@@ -9,14 +10,23 @@ use std::path::{Path, PathBuf};
 /// The most lines a library file may have.
 const MAX_LINES: usize = 900;
 
-/// Lines of `text` outside `#[cfg(test)]` items. An item ends where its braces
-/// balance again (or at its `;` when it has none); braces in `//` comments do not count.
+/// The most lines a library function may have, its signature and closing brace
+/// included.
+const MAX_FUNCTION_LINES: usize = 120;
+
+/// Lines of `text` outside `#[cfg(test)]` items.
 fn library_lines(text: &str) -> usize {
-    let mut count = 0;
+    library_text(text).len()
+}
+
+/// The lines of `text` outside `#[cfg(test)]` items. An item ends where its braces
+/// balance again (or at its `;` when it has none); braces in `//` comments do not count.
+fn library_text(text: &str) -> Vec<&str> {
+    let mut kept = Vec::new();
     let mut lines = text.lines();
     while let Some(line) = lines.next() {
         if line.trim() != "#[cfg(test)]" {
-            count += 1;
+            kept.push(line);
             continue;
         }
         let mut depth: i64 = 0;
@@ -38,7 +48,96 @@ fn library_lines(text: &str) -> usize {
             }
         }
     }
-    count
+    kept
+}
+
+/// `line` without its `//` comment and with the contents of string and character
+/// literals blanked (so that `"{}"` or `'{'` do not count as braces). Lifetimes (`'a`)
+/// are left alone: a character literal is a quote, one (escaped) character, a quote.
+fn code_of(line: &str) -> String {
+    let chars: Vec<char> = line.chars().collect();
+    let mut out = String::new();
+    let mut i = 0;
+    while i < chars.len() {
+        match chars[i] {
+            '/' if chars.get(i + 1) == Some(&'/') => break,
+            '"' => {
+                i += 1;
+                while i < chars.len() && chars[i] != '"' {
+                    i += if chars[i] == '\\' { 2 } else { 1 };
+                }
+                out.push_str("\"\"");
+            }
+            '\'' if chars.get(i + 1) == Some(&'\\') && chars.get(i + 3) == Some(&'\'') => {
+                i += 3;
+                out.push_str("' '");
+            }
+            '\'' if chars.get(i + 2) == Some(&'\'') => {
+                i += 2;
+                out.push_str("' '");
+            }
+            c => out.push(c),
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The name of the function `code` starts, if it starts one (`fn`, `pub fn`,
+/// `pub(crate) const fn`, ...).
+fn function_name(code: &str) -> Option<&str> {
+    let mut words = code.split_whitespace();
+    loop {
+        let w = words.next()?;
+        if w == "fn" {
+            let name = words.next()?;
+            return Some(name.split(['(', '<']).next().unwrap_or(name));
+        }
+        let qualifier =
+            w.starts_with("pub") || matches!(w, "const" | "async" | "unsafe" | "extern");
+        if !qualifier {
+            return None;
+        }
+    }
+}
+
+/// (name, first line (1-based in `lines`), length) of every function in `lines` over
+/// [`MAX_FUNCTION_LINES`]. A function runs from its `fn` line to where its braces
+/// balance again; one without a body (a trait method's signature) ends at its `;`.
+fn long_functions(lines: &[&str]) -> Vec<(String, usize, usize)> {
+    let mut long = Vec::new();
+    let mut i = 0;
+    while i < lines.len() {
+        let Some(name) = function_name(&code_of(lines[i])).map(str::to_string) else {
+            i += 1;
+            continue;
+        };
+        let (mut depth, mut opened, mut end) = (0i64, false, i);
+        for (j, line) in lines.iter().enumerate().skip(i) {
+            let code = code_of(line);
+            for c in code.chars() {
+                match c {
+                    '{' => {
+                        depth += 1;
+                        opened = true;
+                    }
+                    '}' => depth -= 1,
+                    _ => {}
+                }
+            }
+            end = j;
+            if (opened && depth <= 0) || (!opened && code.trim_end().ends_with(';')) {
+                break;
+            }
+        }
+        let n = end - i + 1;
+        if opened && n > MAX_FUNCTION_LINES {
+            long.push((name, i + 1, n));
+        }
+        // a nested function is counted inside its parent only
+        i = if opened { end + 1 } else { i + 1 };
+    }
+    long
 }
 
 fn is_test_file(path: &Path) -> bool {
@@ -74,6 +173,64 @@ fn too_long(root: &Path) -> Vec<(String, usize)> {
         }
     }
     long
+}
+
+/// (path:line, name, lines) of every library function over [`MAX_FUNCTION_LINES`].
+fn too_long_functions(root: &Path) -> Vec<(String, String, usize)> {
+    let mut files = Vec::new();
+    rust_files(&root.join("src"), &mut files);
+    files.sort();
+    let mut long = Vec::new();
+    for path in files {
+        let rel = path.strip_prefix(root).unwrap().to_path_buf();
+        if is_test_file(&rel) {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        for (name, line, n) in long_functions(&library_text(&text)) {
+            long.push((format!("{}:{line}", rel.display()), name, n));
+        }
+    }
+    long
+}
+
+#[test]
+fn no_library_function_is_over_120_lines() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let long = too_long_functions(root);
+    assert!(
+        long.is_empty(),
+        "library functions over {MAX_FUNCTION_LINES} lines (tests excluded), split them \
+         along their jobs: {long:?}"
+    );
+}
+
+/// The function check's negative test: a 121-line function is reported with its name
+/// and line, a 120-line one is not, braces in strings, character literals and
+/// comments do not count, and a long function in a `#[cfg(test)]` module is ignored.
+#[test]
+fn the_check_reports_a_long_function_and_ignores_braces_in_literals() {
+    let body = |n: usize| "    let x = 1;\n".repeat(n);
+    let text = format!(
+        "use std::fmt;\n\
+         pub(crate) fn short<'a>(s: &'a str) -> usize {{\n{}    let _ = \"{{ {{\"; let _ = '{{'; // {{\n}}\n\
+         fn long() {{\n{}}}\n\
+         trait T {{\n    fn signature_only(&self);\n}}\n\
+         #[cfg(test)]\nmod tests {{\n    fn long_test() {{\n{}    }}\n}}\n",
+        body(117),
+        body(119),
+        body(300)
+    );
+    let lines = library_text(&text);
+    let long = long_functions(&lines);
+    // `short` has 1 + 117 + 1 + 1 = 120 lines; `long` 1 + 119 + 1 = 121, from line 122
+    assert_eq!(long, vec![("long".to_string(), 122, 121)]);
+    assert_eq!(
+        code_of(r#"let s = "}"; let c = '}'; let e = '\''; // }"#),
+        r#"let s = ""; let c = ' '; let e = ' '; "#
+    );
+    assert_eq!(function_name("pub(crate) const fn f<T>(x: T)"), Some("f"));
+    assert_eq!(function_name("let f = 1;"), None);
 }
 
 #[test]
