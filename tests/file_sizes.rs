@@ -19,36 +19,44 @@ fn library_lines(text: &str) -> usize {
     library_text(text).len()
 }
 
-/// The lines of `text` outside `#[cfg(test)]` items. An item ends where its braces
-/// balance again (or at its `;` when it has none); braces in `//` comments do not count.
+/// The lines of `text` outside `#[cfg(test)]` items (see [`item_end`]).
 fn library_text(text: &str) -> Vec<&str> {
+    let lines: Vec<&str> = text.lines().collect();
     let mut kept = Vec::new();
-    let mut lines = text.lines();
-    while let Some(line) = lines.next() {
-        if line.trim() != "#[cfg(test)]" {
-            kept.push(line);
-            continue;
-        }
-        let mut depth: i64 = 0;
-        let mut opened = false;
-        for item_line in lines.by_ref() {
-            let code = item_line.split("//").next().unwrap_or("");
-            for c in code.chars() {
-                match c {
-                    '{' => {
-                        depth += 1;
-                        opened = true;
-                    }
-                    '}' => depth -= 1,
-                    _ => {}
-                }
-            }
-            if (opened && depth <= 0) || (!opened && code.trim_end().ends_with(';')) {
-                break;
-            }
+    let mut i = 0;
+    while i < lines.len() {
+        if lines[i].trim() == "#[cfg(test)]" {
+            i = item_end(&lines, i + 1).0 + 1;
+        } else {
+            kept.push(lines[i]);
+            i += 1;
         }
     }
     kept
+}
+
+/// The last line of the item starting at `lines[start]` (where its braces balance
+/// again, or its `;` when it has no braces) and whether it has braces. Braces in
+/// comments and literals do not count ([`code_of`]).
+fn item_end(lines: &[&str], start: usize) -> (usize, bool) {
+    let (mut depth, mut opened) = (0i64, false);
+    for (j, line) in lines.iter().enumerate().skip(start) {
+        let code = code_of(line);
+        for c in code.chars() {
+            match c {
+                '{' => {
+                    depth += 1;
+                    opened = true;
+                }
+                '}' => depth -= 1,
+                _ => {}
+            }
+        }
+        if (opened && depth <= 0) || (!opened && code.trim_end().ends_with(';')) {
+            return (j, opened);
+        }
+    }
+    (lines.len().saturating_sub(1), opened)
 }
 
 /// `line` without its `//` comment and with the contents of string and character
@@ -112,24 +120,7 @@ fn long_functions(lines: &[&str]) -> Vec<(String, usize, usize)> {
             i += 1;
             continue;
         };
-        let (mut depth, mut opened, mut end) = (0i64, false, i);
-        for (j, line) in lines.iter().enumerate().skip(i) {
-            let code = code_of(line);
-            for c in code.chars() {
-                match c {
-                    '{' => {
-                        depth += 1;
-                        opened = true;
-                    }
-                    '}' => depth -= 1,
-                    _ => {}
-                }
-            }
-            end = j;
-            if (opened && depth <= 0) || (!opened && code.trim_end().ends_with(';')) {
-                break;
-            }
-        }
+        let (end, opened) = item_end(lines, i);
         let n = end - i + 1;
         if opened && n > MAX_FUNCTION_LINES {
             long.push((name, i + 1, n));
@@ -156,39 +147,40 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
-/// (path relative to `root`, library lines) of every library file over [`MAX_LINES`].
-fn too_long(root: &Path) -> Vec<(String, usize)> {
+/// (path relative to `root`, text) of every library file under `root`/src, sorted.
+fn library_files(root: &Path) -> Vec<(String, String)> {
     let mut files = Vec::new();
     rust_files(&root.join("src"), &mut files);
     files.sort();
-    let mut long = Vec::new();
-    for path in files {
-        let rel = path.strip_prefix(root).unwrap().to_path_buf();
-        if is_test_file(&rel) {
-            continue;
-        }
-        let n = library_lines(&std::fs::read_to_string(&path).unwrap());
-        if n > MAX_LINES {
-            long.push((rel.display().to_string(), n));
-        }
-    }
-    long
+    files
+        .into_iter()
+        .filter_map(|path| {
+            let rel = path.strip_prefix(root).unwrap().to_path_buf();
+            (!is_test_file(&rel)).then(|| {
+                (
+                    rel.display().to_string(),
+                    std::fs::read_to_string(&path).unwrap(),
+                )
+            })
+        })
+        .collect()
+}
+
+/// (path relative to `root`, library lines) of every library file over [`MAX_LINES`].
+fn too_long(root: &Path) -> Vec<(String, usize)> {
+    library_files(root)
+        .into_iter()
+        .map(|(rel, text)| (rel, library_lines(&text)))
+        .filter(|&(_, n)| n > MAX_LINES)
+        .collect()
 }
 
 /// (path:line, name, lines) of every library function over [`MAX_FUNCTION_LINES`].
 fn too_long_functions(root: &Path) -> Vec<(String, String, usize)> {
-    let mut files = Vec::new();
-    rust_files(&root.join("src"), &mut files);
-    files.sort();
     let mut long = Vec::new();
-    for path in files {
-        let rel = path.strip_prefix(root).unwrap().to_path_buf();
-        if is_test_file(&rel) {
-            continue;
-        }
-        let text = std::fs::read_to_string(&path).unwrap();
+    for (rel, text) in library_files(root) {
         for (name, line, n) in long_functions(&library_text(&text)) {
-            long.push((format!("{}:{line}", rel.display()), name, n));
+            long.push((format!("{rel}:{line}"), name, n));
         }
     }
     long
