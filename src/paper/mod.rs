@@ -24,6 +24,7 @@ pub mod params;
 pub mod pattern;
 pub mod physical;
 pub mod projection;
+pub mod reach;
 mod sim;
 pub(crate) mod sparse;
 pub mod tracking;

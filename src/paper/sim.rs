@@ -22,6 +22,7 @@ use super::isometry::{restore_lengths, IsometryReport};
 use super::params::{PaperError, PaperParams};
 use super::pattern::Pattern;
 use super::physical::{build_physical, Interpolator, PhysicalMesh};
+use super::reach::{reachable, HeldTarget};
 use super::tracking::{fit_cones, update_junctions, ConeReport, JunctionReport};
 use crate::geometry::{EdgeStrain, Point2, Point3, Pose, SurfaceMesh, Vector3};
 use crate::sim::handle::{HandleSpec, OrientationMode};
@@ -29,6 +30,7 @@ use crate::sim::object::{
     CompressionStats, Energies, NoClock, ObjectSim, ObjectStepReport, Phase, PhaseClock,
     SingularPoint, StepContext,
 };
+use nalgebra::Translation3;
 
 /// A handle holding this sheet.
 #[derive(Clone, Debug, PartialEq)]
@@ -85,6 +87,11 @@ pub struct PaperSim {
     last_targets: Vec<Option<Pose>>,
     /// Hard constraints of the current frame: vertex material point -> world target.
     held: Vec<(Point2, Point3)>,
+    /// Per entry of `handles`: how far its target is moved to be reachable by an
+    /// isometric sheet (m, world frame; zero when it is), and the largest such move
+    /// with its handle's index in the world (see [`super::reach`]).
+    reach_corrections: Vec<Vector3>,
+    reach_excess: (f64, Option<usize>),
     time: f64,
     /// `gmesh` was built by step 2 from the current structure and S_P positions.
     gmesh_fresh: bool,
@@ -168,6 +175,8 @@ impl PaperSim {
         let fem = FemSystem::new(&sp);
         let mut sim = PaperSim {
             last_targets: vec![None; handles.len()],
+            reach_corrections: Vec::new(),
+            reach_excess: (0.0, None),
             params,
             pattern,
             layer,
@@ -257,6 +266,14 @@ impl PaperSim {
                 violation = violation.max((self.sp.position[v] - target).norm());
             }
         }
+        // a target out of the sheet's reach counts as far as it was moved
+        let (excess, excess_handle) = self.reach_excess;
+        let violation_handle = if excess > violation {
+            violation = excess;
+            excess_handle
+        } else {
+            None
+        };
         ObjectStepReport {
             iterations: fem.iterations,
             outer_iterations: 1,
@@ -265,7 +282,7 @@ impl PaperSim {
             energies: self.energies(),
             isometry_error: self.mesh.isometry_error(),
             constraint_violation: violation,
-            violation_handle: None,
+            violation_handle,
             singular_points: self.singular.len(),
             work_bound: fem.handle_work,
         }
@@ -286,7 +303,7 @@ impl PaperSim {
         let mut dirichlet = Vec::new();
         let mut springs = Vec::new();
         let mut held = Vec::new();
-        for h in &self.handles {
+        for (k, h) in self.handles.iter().enumerate() {
             if h.release_at.is_some_and(|t| time >= t) {
                 continue;
             }
@@ -301,6 +318,10 @@ impl PaperSim {
             else {
                 continue;
             };
+            // moved onto the reachable set as a whole: the tangent plane keeps its
+            // place relative to the grasp point
+            let correction = self.reach_corrections.get(k).copied().unwrap_or_default();
+            let target = Translation3::from(correction) * target;
             let p = Point3::from(target.translation.vector);
             for axis in 0..3 {
                 if h.axes[axis] {
@@ -343,6 +364,35 @@ impl PaperSim {
         (dirichlet, springs, held)
     }
 
+    /// The corrections that make this frame's targets reachable by an isometric sheet
+    /// ([`super::reach`]): among the active handles that hold all three axes of their
+    /// grasp point (one that holds fewer leaves the sheet a way out).
+    fn update_reach(&mut self, time: f64) {
+        let mut index = Vec::new();
+        let mut points = Vec::new();
+        for (k, h) in self.handles.iter().enumerate() {
+            if h.release_at.is_some_and(|t| time >= t) || !h.axes.iter().all(|&a| a) {
+                continue;
+            }
+            if let Some(target) = self.last_targets.get(h.world).copied().flatten() {
+                index.push(k);
+                points.push(HeldTarget {
+                    material: h.material,
+                    target: Point3::from(target.translation.vector),
+                });
+            }
+        }
+        let reach = reachable(&points);
+        self.reach_corrections = vec![Vector3::zeros(); self.handles.len()];
+        for (&k, c) in index.iter().zip(&reach.corrections) {
+            self.reach_corrections[k] = *c;
+        }
+        self.reach_excess = (
+            reach.excess,
+            reach.worst.map(|i| self.handles[index[i]].world),
+        );
+    }
+
     /// Step 1 (sec. 4): move the handles to `targets` (world handle order) and relax
     /// S_P by one implicit step of `dt` s ending at `time` s.
     pub fn simulate(
@@ -358,6 +408,7 @@ impl PaperSim {
         for (slot, t) in self.last_targets.iter_mut().zip(targets) {
             *slot = Some(*t);
         }
+        self.update_reach(time);
         let (dirichlet, springs, held) = self.handle_constraints(time);
         self.held = held;
         if !self.fem.matches(&self.sp) {

@@ -1,4 +1,5 @@
 //! Handle targets an object cannot reach: an inextensible ribbon pulled past its length,
+//! a sheet's handles pulled farther apart than in its pattern ([`crate::paper::reach`]),
 //! a grasp point sent farther in one tick than the step can follow. The solver keeps
 //! the object as close as it can and reports the distance (`constraint_violation`);
 //! [`ReachWatch`] turns that number into a sentence when it starts and when it ends, so
