@@ -67,14 +67,18 @@ pub fn crumple_flat_region(
     // appendix B, fig. 24(b, c): a border on a ruling of a cone whose apex is an
     // interior singular vertex is that apex (the d-cone absorbs the conflict); only when
     // no region can be built that way, a new singular point is created inside the cone
-    // (sec. 5.2, fig. 6d)
+    // (sec. 5.2, fig. 6d). A region S_G has already (two apices joined by a crease) is
+    // not a failure: nothing is added
     let mut attracted = false;
     if let Some(events) =
         crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng)
     {
-        if !events.is_empty() {
-            return events;
+        if events.is_empty() {
+            // the region is already in S_G (fig. 24c: the crease between the two
+            // apices exists): nothing to add, and no new singular point either
+            *layer = saved;
         }
+        return events;
     }
     *layer = saved.clone();
     if attracted {
@@ -335,6 +339,13 @@ impl Attempt<'_, '_> {
                 if s1 == s2 {
                     return None;
                 }
+                // appendix B: the strip's region degenerates into the edge (s1, s2);
+                // where S_G had that crease already (no border made a new point), the
+                // compression is the one it takes up, and the paper generates no new
+                // region ("let the physical simulation further deform this region")
+                if events.is_empty() && has_crease(layer, s1, s2) {
+                    return Some(());
+                }
                 let (p, q) = (layer.singular_material(s1)?, layer.singular_material(s2)?);
                 if !segment_is_free(ctx, layer, current, &p, &q, &[]) {
                     return None;
@@ -389,6 +400,15 @@ impl Attempt<'_, '_> {
         }
         Some(())
     }
+}
+
+/// True when `layer` has a crease joining singular vertices `s1` and `s2`.
+fn has_crease(layer: &GeometricLayer, s1: u64, s2: u64) -> bool {
+    let (a, b) = (Endpoint::Singular(s1), Endpoint::Singular(s2));
+    layer
+        .creases
+        .iter()
+        .any(|c| (c.a == a && c.b == b) || (c.a == b && c.b == a))
 }
 
 /// The flat regions of one frame's S_G before step 2 changes it: each is remeshed at
