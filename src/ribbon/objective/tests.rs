@@ -497,11 +497,16 @@ fn chain_solve_is_the_dense_solve() {
         }
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let rhs: Vec<f64> = (0..nq).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut compared = 0;
         for (held, damping) in [
             (vec![], 1e-3),
             (vec![obj.layout.c(3), obj.layout.c(5)], 1e-1),
             (vec![obj.layout.psi(2)], 0.0),
             (vec![obj.layout.c(1), 0, 4], 1e-2),
+            // heavily damped: positive definite, so these compare a solve
+            (vec![], 3.0),
+            (vec![obj.layout.c(2)], 10.0),
+            (vec![obj.layout.psi(4), 1], 30.0),
         ] {
             let free: Vec<bool> = (0..nq).map(|j| !held.contains(&j)).collect();
             let shift: Vec<f64> = (0..nq).map(|j| damping * hz[(j, j)].abs() + 1e-9).collect();
@@ -518,6 +523,7 @@ fn chain_solve_is_the_dense_solve() {
                 "positive definite: chain {chain_ok} (held {held:?}, damping {damping})"
             );
             let Some(dense) = dense else { continue };
+            compared += 1;
             let r = nalgebra::DVector::from_fn(m, |r, _| rhs[idx[r]]);
             let expected = dense.solve(&r);
             let mut out = vec![f64::NAN; nq];
@@ -535,5 +541,11 @@ fn chain_solve_is_the_dense_solve() {
                 assert_eq!(out[j], 0.0);
             }
         }
+        // a factorization that only ever fails would agree with a failing Cholesky
+        // without comparing one solve
+        assert!(
+            compared >= 2,
+            "only {compared} positive definite cases (floating {floating}, {closure:?})"
+        );
     }
 }
