@@ -25,8 +25,8 @@ fn main() {
             }
         }
         let o = &r.objects[0];
-        println!("step {k} t={:.3}: newton {} conv {} iso_err {:.3} (edge {}-{} m {:?}-{:?} rest {:.4}) comp {:.3}% ({:.1}%) tris {} regions {} sing {} events {} junc {:?} cones {:?} iso_it {} lenerr {:.2e}->{:.2e}",
-            r.time, o.iterations, o.converged, o.isometry_error, worst.1, worst.2, m.material[worst.1 as usize], m.material[worst.2 as usize],
+        println!("step {k} t={:.3}: energy {:.4e} (kinetic {:.2e}) work {:.3e} newton {} conv {} iso_err {:.3} (edge {}-{} m {:?}-{:?} rest {:.4}) comp {:.3}% ({:.1}%) tris {} regions {} sing {} events {} junc {:?} cones {:?} iso_it {} lenerr {:.2e}->{:.2e}",
+            r.time, o.energies.total(), o.energies.kinetic, o.work_bound, o.iterations, o.converged, o.isometry_error, worst.1, worst.2, m.material[worst.1 as usize], m.material[worst.2 as usize],
             (m.material[worst.1 as usize]-m.material[worst.2 as usize]).norm(),
             f.edges.compression_mean_pct, f.edges.compressed_edges_pct, f.triangles, f.curved_regions, o.singular_points, f.crumple_events.len(), f.junctions, f.cones, f.isometry.iterations, f.isometry.length_error_before, f.isometry.length_error_after);
         for a in &f.crumple_attempts {

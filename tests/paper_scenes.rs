@@ -4,12 +4,26 @@
 
 use developable_sim::paper::PaperSim;
 use developable_sim::scene::{self, Scene};
+use developable_sim::stats::RunStats;
 
 mod common;
 use common::{load, run, scene_path};
 
 fn paper(scene: &Scene) -> &PaperSim {
     scene.world.object_as::<PaperSim>(0).expect("a paper scene")
+}
+
+/// Issue 20's targets on a run's S_P edges: at most `share` % of them strained by more
+/// than 1 % either way on the final frame (table IV counts compression only: 8 % in
+/// fig. 1, 11 % in the crumpling), and no edge strained by more than 10 % in any frame.
+fn assert_isometric(name: &str, stats: &RunStats, share: f64) {
+    let e = stats.edge_strain.as_ref().expect("paper stats");
+    let (last, worst) = (e.final_frame.strained_edges_pct, e.max.strain_max_pct);
+    assert!(
+        last <= share,
+        "{name}: {last} % of the edges over 1 % at the end"
+    );
+    assert!(worst <= 10.0, "{name}: an edge strained by {worst} %");
 }
 
 #[test]
@@ -21,6 +35,7 @@ fn cylinder_then_bend_is_nearly_isometric_and_creases_only_in_the_second_bend() 
     let n = stats.compressed_edges_pct.expect("paper stats");
     assert!(c <= 0.5, "compression_mean_pct {c}");
     assert!(n <= 5.0, "compressed_edges_pct {n}");
+    assert_isometric("paper_cylinder_then_bend", &stats, 8.0);
     // the cylinder wrap (0-1.5 s) is smooth; the orthogonal bend creates singular points
     let first = stats
         .first_singular_point
@@ -113,44 +128,80 @@ fn singular_vertices_survive_unloading() {
     );
 }
 
+/// Mean singular vertices of fig. 1's scenario over seeds 0-3 at each epsilon_c of
+/// fig. 21 (1 %, 0.5 %, 0.2 %), with `extra` overrides.
+fn singular_by_epsilon_c(extra: &[&str]) -> Vec<(&'static str, f64)> {
+    let seeds = ["seed=0", "seed=1", "seed=2", "seed=3"];
+    ["0.01", "0.005", "0.002"]
+        .into_iter()
+        .map(|eps| {
+            let set = format!("paper.compression_threshold={eps}");
+            let n: usize = seeds
+                .iter()
+                .map(|seed| {
+                    let mut sets = vec![*seed, set.as_str()];
+                    sets.extend_from_slice(extra);
+                    let (_, st) = run("paper_cylinder_then_bend", &sets);
+                    st.singular_vertices.unwrap()
+                })
+                .sum();
+            (eps, n as f64 / seeds.len() as f64)
+        })
+        .collect()
+}
+
 #[test]
 fn fewer_singular_points_as_epsilon_c_grows() {
     // fig. 21: the fig. 1 scenario with epsilon_c = 1 %, 0.5 %, 0.2 %: a stiffer paper
     // (larger epsilon_c) gets fewer singular points; averaged over seeds since the
-    // placement of each one is random (sec. 5.2)
-    let mean = |eps: &str| {
-        let seeds = ["seed=0", "seed=1", "seed=2", "seed=3"];
-        let n: usize = seeds
-            .iter()
-            .map(|seed| {
-                let set = format!("paper.compression_threshold={eps}");
-                let (_, st) = run("paper_cylinder_then_bend", &[seed, &set]);
-                st.singular_vertices.unwrap()
-            })
-            .sum();
-        n as f64 / seeds.len() as f64
-    };
-    let counts: Vec<(&str, f64)> = ["0.01", "0.005", "0.002"]
-        .into_iter()
-        .map(|eps| (eps, mean(eps)))
-        .collect();
-    for w in counts.windows(2) {
+    // placement of each one is random (sec. 5.2). The paper's own restoration shows
+    // the whole trend.
+    let paper = singular_by_epsilon_c(&["paper.length_restoration=paper"]);
+    for w in paper.windows(2) {
         assert!(
             w[1].1 > w[0].1,
-            "mean singular points by epsilon_c (strictly more as it shrinks): {counts:?}"
+            "paper restoration, mean singular points by epsilon_c: {paper:?}"
         );
     }
+    // The strain limit (the default) shows it from 0.5 % to 0.2 % only: a sheet that
+    // cannot stretch creases as often at 1 % as at 0.5 % (12.3 and 11.5 singular
+    // vertices over seeds 0-9, 2026-12-05; docs/paper_simulator.md, known gaps)
+    let limit = singular_by_epsilon_c(&[]);
+    assert!(
+        limit[2].1 > limit[0].1 && limit[2].1 > limit[1].1,
+        "strain limit, mean singular points by epsilon_c: {limit:?}"
+    );
 }
 
 #[test]
-fn heavy_crumpling_makes_more_than_twenty_singular_points() {
-    let (_, stats) = run("paper_crumple", &[]);
-    assert!(stats.finite);
-    let n = stats.singular_vertices.unwrap();
-    assert!(n > 20, "singular vertices {n} (fig. 22: more than twenty)");
-    // and the sheet stays near-isometric, like the fig. 1 scene (table IV: 0.89 %)
-    let c = stats.compression_mean_pct.unwrap();
-    assert!(c <= 0.5, "compression_mean_pct {c}");
+fn heavy_crumpling_over_seeds_stays_isometric_and_creases() {
+    // fig. 22, second row. The placement of each singular vertex is random (sec. 5.2)
+    // and the count follows it, so over seeds 0-9: the paper's text has "more than
+    // twenty singular vertices ... progressively created", its table V at most 15
+    // interior ones.
+    let mut counts = Vec::new();
+    for seed in 0..10 {
+        let name = format!("paper_crumple seed {seed}");
+        let (_, stats) = run("paper_crumple", &[&format!("seed={seed}")]);
+        assert!(stats.finite, "{name}");
+        assert_isometric(&name, &stats, 11.0);
+        counts.push(stats.singular_vertices.unwrap());
+    }
+    let mean = counts.iter().sum::<usize>() as f64 / counts.len() as f64;
+    assert!(mean >= 15.0, "singular vertices by seed {counts:?}");
+    assert!(
+        counts.iter().any(|&n| n > 20),
+        "singular vertices by seed {counts:?}"
+    );
+}
+
+#[test]
+fn the_pushed_and_unloaded_sheets_stay_isometric() {
+    for name in ["paper_first_singularity", "paper_unload"] {
+        let (_, stats) = run(name, &[]);
+        assert!(stats.finite, "{name}");
+        assert_isometric(name, &stats, 2.0);
+    }
 }
 
 #[test]
@@ -160,6 +211,7 @@ fn the_mobius_strip_and_the_preset_crease_stay_finite_and_nearly_isometric() {
         assert!(stats.finite, "{name}");
         let c = stats.compression_mean_pct.unwrap();
         assert!(c <= 0.5, "{name}: compression_mean_pct {c}");
+        assert_isometric(name, &stats, 2.0);
     }
 }
 
@@ -269,7 +321,7 @@ fn paper_stats_fields_only_for_paper_scenes() {
 #[test]
 fn bad_paper_scenes_name_the_key() {
     let path = scene_path("paper_preset_crease");
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 8] = [
         (&["handles.0.point=[0.02, 0.05]"], "handles.0.point"),
         (
             &["paper.compression_threshold=1.5"],
@@ -280,6 +332,15 @@ fn bad_paper_scenes_name_the_key() {
         (
             &["paper.colliders=[{kind: cube}]"],
             "paper.colliders.0.kind",
+        ),
+        (&["paper.strain_limit=0.7"], "paper.strain_limit"),
+        (
+            &["paper.strain_limit_stiffness=-1"],
+            "paper.strain_limit_stiffness",
+        ),
+        (
+            &["paper.length_restoration=exact"],
+            "paper.length_restoration",
         ),
     ];
     for (sets, key) in cases {

@@ -134,6 +134,32 @@ fn paper_crumpling_and_compression_stay_finite_and_bounded() {
 }
 
 #[test]
+fn a_stretched_paper_sheet_fails_the_suite() {
+    // the paper's own length restoration (sec. 6.3) leaves edges next to the held
+    // corners strained by 10-50 %: the suite names the strain, not only the energy
+    let c = case("paper_crumple");
+    let sets = vec!["paper.length_restoration=paper".to_string()];
+    let r = quick_with(
+        &c,
+        0.1,
+        RunTweaks {
+            sets,
+            ..Default::default()
+        },
+    );
+    assert!(!r.pass, "{r:#?}");
+    assert!(r.reason.contains("an edge strained by"), "{}", r.reason);
+    assert!(
+        r.strain_max_pct.unwrap() > stress::PAPER_STRAIN_MAX_PCT,
+        "{r:#?}"
+    );
+    // and the default keeps every edge within its 0.5 % limit
+    let r = quick_with(&c, 0.1, RunTweaks::default());
+    assert!(r.strain_max_pct.unwrap() < 1.0, "{r:#?}");
+    assert!(r.pass, "{r:#?}");
+}
+
+#[test]
 fn unconverged_steps_are_counted_not_hidden() {
     // no step can converge: every step must be counted
     let path = config().join("scenes/ribbon_two_grippers.yaml");

@@ -1,12 +1,14 @@
 //! Step 1, elastic deformation (Schreck et al. sec. 4): one implicit-Euler step of S_P
 //! with Green-strain (St Venant-Kirchhoff) stretching, discrete dihedral bending with
 //! rest angles (Bridson et al. 2003, Grinspun et al. 2003), gravity, collider
-//! repulsion springs, handles as hard constraints. Newton's method on the incremental
+//! repulsion springs, handles as hard constraints; optionally a strain-limit penalty on
+//! the edges (the relaxation of step 3, [`super::isometry`]). Newton's method on the incremental
 //! potential with a Gauss-Newton (positive semi-definite) Hessian, faer's sparse
 //! Cholesky and a backtracking line search.
 
 use nalgebra::{Matrix2, Matrix3, Vector2};
 
+use super::isometry::{edge_excess, excess_hessian};
 use super::params::PaperParams;
 use super::physical::{signed_dihedral, PhysicalMesh};
 use super::sparse::BlockSpd;
@@ -25,6 +27,16 @@ pub struct Dirichlet {
 pub struct Spring {
     pub vertex: u32,
     pub target: Point3,
+    pub stiffness: f64,
+}
+
+/// The strain-limit penalty (k / 2) e^2 on every S_P edge, e the part of its length
+/// outside [(1 - s) L, (1 + s) L] (m, L its pattern length); counted as stretching.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StrainLimit {
+    /// s, dimensionless.
+    pub limit: f64,
+    /// k, N/m.
     pub stiffness: f64,
 }
 
@@ -145,6 +157,7 @@ struct Potential<'a> {
     x_tilde: &'a [Vector3],
     inv_h2: f64,
     springs: &'a [Spring],
+    strain_limit: Option<StrainLimit>,
     mu: f64,
     lambda: f64,
     /// Keep only the positive part of the stress in the geometric stiffness (a
@@ -170,6 +183,7 @@ impl Potential<'_> {
             self.add_stretching(t, rest, x, &mut out, parts);
         }
         self.add_bending(x, &mut out, parts);
+        self.add_strain_limit(x, &mut out, parts);
         self.add_collisions_and_springs(x, &mut out, parts);
         inertia + parts.stretching + parts.bending + parts.gravity + parts.collision + parts.springs
     }
@@ -299,6 +313,35 @@ impl Potential<'_> {
         }
     }
 
+    /// The strain-limit penalty, if any ([`StrainLimit`]); its transverse curvature
+    /// k e / l is negative on a compressed edge and follows `clamp_stress` like the
+    /// membrane's geometric stiffness.
+    fn add_strain_limit(&self, x: &[Vector3], out: &mut GradHess<'_>, parts: &mut FemEnergies) {
+        let Some(StrainLimit { limit, stiffness }) = self.strain_limit else {
+            return;
+        };
+        let mesh = self.mesh;
+        for [a, b] in &mesh.edges {
+            let (i, j) = (*a as usize, *b as usize);
+            let rest = (mesh.material[i] - mesh.material[j]).norm();
+            let d = x[j] - x[i];
+            let len = d.norm();
+            let excess = edge_excess(len, rest, limit);
+            if excess == 0.0 || len < 1e-300 {
+                continue;
+            }
+            parts.stretching += 0.5 * stiffness * excess * excess;
+            let Some((g, h)) = out.as_mut() else { continue };
+            let u = d / len;
+            g[j] += stiffness * excess * u;
+            g[i] -= stiffness * excess * u;
+            let blk = stiffness * excess_hessian(&u, excess, len, self.clamp_stress.get());
+            add_block3(h, i, i, &blk, true);
+            add_block3(h, j, j, &blk, true);
+            add_block3(h, i, j, &(-blk), false);
+        }
+    }
+
     /// Collisions (one-sided repulsion springs) and the handles' soft springs.
     fn add_collisions_and_springs(
         &self,
@@ -358,6 +401,10 @@ fn add_block3(h: &mut BlockSpd, i: usize, j: usize, m: &Matrix3<f64>, diagonal: 
         h.add_block(i, j, &a);
     }
 }
+
+/// Line-search step length (fraction of the Newton step) below which a step shorter
+/// than the Newton tolerance is a stall, not convergence: four halvings.
+const STALLED_STEP: f64 = 1.0 / 16.0;
 
 /// A Newton direction (in `rhs`) at `x` and what the line search needs.
 struct NewtonDirection {
@@ -455,7 +502,8 @@ fn start_point(x_tilde: &[Vector3], dirichlet: &[Dirichlet]) -> (Vec<Vector3>, V
     (x, fixed)
 }
 
-/// One implicit-Euler step of `dt` s: new positions and velocities of `mesh`.
+/// One implicit-Euler step of `dt` s: new positions and velocities of `mesh`; with
+/// `strain_limit`, its penalty is part of the potential.
 pub fn implicit_step(
     system: &mut FemSystem,
     mesh: &mut PhysicalMesh,
@@ -463,6 +511,7 @@ pub fn implicit_step(
     dt: f64,
     dirichlet: &[Dirichlet],
     springs: &[Spring],
+    strain_limit: Option<StrainLimit>,
 ) -> FemReport {
     let n = mesh.material.len();
     let x_prev: Vec<Vector3> = mesh.position.iter().map(|p| p.coords).collect();
@@ -480,6 +529,7 @@ pub fn implicit_step(
         x_tilde: &x_tilde,
         inv_h2: 1.0 / (dt * dt),
         springs,
+        strain_limit,
         mu,
         lambda,
         clamp_stress: std::cell::Cell::new(false),
@@ -519,7 +569,11 @@ pub fn implicit_step(
         };
         std::mem::swap(&mut x, &mut trial);
         if alpha * step_max < params.newton_tolerance {
-            report.converged = true;
+            // a short step is convergence only when the line search took (nearly) the
+            // Newton step; one cut down by more than STALLED_STEP stopped at a kink of
+            // the energy (a hinge folded through, a degenerate triangle) with descent
+            // left, and is reported as such
+            report.converged = alpha > STALLED_STEP;
             break;
         }
     }
@@ -606,6 +660,7 @@ mod tests {
             x_tilde: &x_tilde,
             inv_h2: 0.0,
             springs: &[],
+            strain_limit: None,
             mu,
             lambda,
             clamp_stress: std::cell::Cell::new(true),
@@ -639,5 +694,73 @@ mod tests {
         }
         let _ = mesh.position.len();
         mesh.position.clear();
+    }
+    #[test]
+    fn the_strain_limit_penalty_gradient_matches_finite_differences() {
+        use crate::geometry::Point2;
+        let mut mesh = PhysicalMesh {
+            material: vec![
+                Point2::new(0.0, 0.0),
+                Point2::new(0.01, 0.0),
+                Point2::new(0.002, 0.012),
+            ],
+            triangles: vec![[0, 1, 2]],
+            edges: vec![[0, 1], [0, 2], [1, 2]],
+            ..Default::default()
+        };
+        mesh.mass = vec![0.0; 3];
+        let system = FemSystem::new(&mesh);
+        let params = PaperParams {
+            stretch_stiffness: 1e-9,
+            ..PaperParams::default()
+        };
+        let (mu, lambda) = lame(&params);
+        let x_tilde = vec![Vector3::zeros(); 3];
+        let pot = Potential {
+            mesh: &mesh,
+            rest: &system.rest,
+            params: &params,
+            x_tilde: &x_tilde,
+            inv_h2: 0.0,
+            springs: &[],
+            strain_limit: Some(StrainLimit {
+                limit: 0.005,
+                stiffness: 3e4,
+            }),
+            mu,
+            lambda,
+            clamp_stress: std::cell::Cell::new(true),
+        };
+        // edge 0-1 compressed by 2.4 %, 0-2 stretched by 3.4 %: both beyond 0.5 %
+        let x = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(0.0095, 0.001, 0.002),
+            Vector3::new(0.001, 0.0125, -0.001),
+        ];
+        let mut g = vec![Vector3::zeros(); 3];
+        let mut hm = system.matrix.clone();
+        let mut parts = FemEnergies::default();
+        let e = pot.evaluate(&x, Some((&mut g, &mut hm)), &mut parts);
+        assert!(
+            parts.stretching > 0.9 * e && e > 0.0,
+            "the penalty is the energy"
+        );
+        let h = 1e-9;
+        let scale = g.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        for v in 0..3 {
+            for a in 0..3 {
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[v][a] += h;
+                xm[v][a] -= h;
+                let fd = (pot.evaluate(&xp, None, &mut parts)
+                    - pot.evaluate(&xm, None, &mut parts))
+                    / (2.0 * h);
+                assert!(
+                    (fd - g[v][a]).abs() < 1e-5 * scale,
+                    "{v} {a}: {fd} vs {}",
+                    g[v][a]
+                );
+            }
+        }
     }
 }

@@ -5,10 +5,15 @@
 //! (eqs. 3-6: a 2x2 system per iteration, at most 200 iterations). Phase II places the
 //! vertices by least squares on (p_j - p_i) - l_ij u_ij (eq. 7) with the handle
 //! vertices fixed; x, y and z decouple and share one sparse Cholesky factorization.
+//!
+//! Ours, the default ([`super::params::LengthRestoration::StrainLimit`]): every edge
+//! within a strain limit s of its pattern length by Newton's method on the excess
+//! ([`limit_strains`]), a relaxation of the FEM's energy with that limit as a penalty
+//! (in [`super::PaperSim`]), then the limit once more. See docs/paper_simulator.md.
 
 use super::physical::PhysicalMesh;
 use super::sparse::BlockSpd;
-use crate::geometry::{Point3, Vector3};
+use crate::geometry::{Matrix3, Point3, Vector3};
 
 /// What the length restoration did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -20,9 +25,14 @@ pub struct IsometryReport {
     /// Mean relative edge-length error before and after, dimensionless.
     pub length_error_before: f64,
     pub length_error_after: f64,
+    /// Largest |l / L - 1| over the edges before and after (strain limit only; 0 for
+    /// the paper's phases), dimensionless.
+    pub strain_before: f64,
+    pub strain_after: f64,
 }
 
-fn mean_length_error(mesh: &PhysicalMesh) -> f64 {
+/// Mean |l / L - 1| over the edges of `mesh`, dimensionless.
+pub fn mean_length_error(mesh: &PhysicalMesh) -> f64 {
     let mut s = 0.0;
     for [a, b] in &mesh.edges {
         let rest = (mesh.material[*a as usize] - mesh.material[*b as usize]).norm();
@@ -268,6 +278,186 @@ fn place_vertices(mesh: &mut PhysicalMesh, fixed: &[bool], rest: &[f64], u: &[Ve
     }
 }
 
+/// The part of an edge's length `len` outside [(1 - limit) rest, (1 + limit) rest],
+/// m: positive when stretched beyond the limit, negative when compressed beyond it.
+pub fn edge_excess(len: f64, rest: f64, limit: f64) -> f64 {
+    len - len.clamp((1.0 - limit) * rest, (1.0 + limit) * rest)
+}
+
+/// The Hessian of e^2 / 2 with respect to the edge's end point (the other end fixed),
+/// e = [`edge_excess`] of an edge of length `len` and direction `u`: u u^T + (e / len)
+/// (I - u u^T). The transverse part is negative on a compressed edge (a buckling
+/// direction); with `clamp` it is dropped there, which keeps the block positive
+/// semi-definite.
+pub fn excess_hessian(u: &Vector3, excess: f64, len: f64, clamp: bool) -> Matrix3 {
+    let uu = u * u.transpose();
+    let transverse = if clamp {
+        (excess / len).max(0.0)
+    } else {
+        excess / len
+    };
+    uu + transverse * (Matrix3::identity() - uu)
+}
+
+/// Relative overshoot of the limit [`limit_strains`] stops at (0.5 % becomes at most
+/// 0.5005 %).
+pub const LIMIT_TOLERANCE: f64 = 1e-3;
+
+/// What [`limit_strains`] did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct StrainLimitReport {
+    /// Newton iterations.
+    pub iterations: u32,
+    /// Largest |l / L - 1| over the edges before and after, dimensionless.
+    pub strain_before: f64,
+    pub strain_after: f64,
+}
+
+/// f = 1/2 sum over edges of (e / L)^2 (dimensionless, zero when every edge strain is
+/// within `limit`) and the largest |l / L - 1|.
+fn strain_excess(mesh: &PhysicalMesh, rest: &[f64], limit: f64) -> (f64, f64) {
+    let (mut f, mut worst) = (0.0, 0.0f64);
+    for (e, [i, j]) in mesh.edges.iter().enumerate() {
+        let len = (mesh.position[*j as usize] - mesh.position[*i as usize]).norm();
+        f += 0.5 * (edge_excess(len, rest[e], limit) / rest[e]).powi(2);
+        worst = worst.max((len / rest[e] - 1.0).abs());
+    }
+    (f, worst)
+}
+
+/// Move the vertices of `mesh` (those with `fixed[v]` stay) until no edge is strained
+/// by more than `limit`: Newton's method on [`strain_excess`] (Provot 1995's strain
+/// limit, solved as one system instead of edge by edge). Edges within the limit feel
+/// nothing. Each Newton matrix is the sum of the edges' [`excess_hessian`] blocks
+/// (clamped: positive semi-definite) plus a Levenberg-Marquardt shift mu * mean
+/// diagonal, which keeps the steps small where the excess allows many solutions; a
+/// backtracking search keeps f decreasing. At most `max_iterations`.
+pub fn limit_strains(
+    mesh: &mut PhysicalMesh,
+    fixed: &[bool],
+    limit: f64,
+    max_iterations: u32,
+) -> StrainLimitReport {
+    let rest: Vec<f64> = mesh
+        .edges
+        .iter()
+        .map(|[a, b]| (mesh.material[*a as usize] - mesh.material[*b as usize]).norm())
+        .collect();
+    let (mut f, worst) = strain_excess(mesh, &rest, limit);
+    let mut report = StrainLimitReport {
+        strain_before: worst,
+        strain_after: worst,
+        ..Default::default()
+    };
+    let n = mesh.material.len();
+    if worst <= limit * (1.0 + LIMIT_TOLERANCE) || n == 0 {
+        return report;
+    }
+    let mut groups = mesh.edges.iter().map(|e| e.to_vec());
+    let mut h = BlockSpd::new(n, 3, &mut groups);
+    let fixed_dofs: Vec<bool> = (0..3 * n)
+        .map(|d| fixed.get(d / 3).copied().unwrap_or(false))
+        .collect();
+    let mut mu = 1e-6;
+    let mut rhs = faer::Mat::<f64>::zeros(3 * n, 1);
+    let mut trial = mesh.position.clone();
+    for it in 0..max_iterations {
+        report.iterations = it + 1;
+        let diag_mean = newton_system(mesh, &rest, limit, &mut h, &mut rhs);
+        for v in 0..3 * n {
+            h.add(v, v, mu * diag_mean);
+            if fixed_dofs[v] {
+                rhs[(v, 0)] = 0.0;
+            }
+        }
+        h.fix_all(&fixed_dofs);
+        if h.solve_in_place(rhs.as_mut()).is_err() {
+            mu *= 100.0;
+            continue;
+        }
+        let Some(ft) = backtrack(mesh, &rest, limit, &rhs, &mut trial, f) else {
+            break;
+        };
+        f = ft;
+        report.strain_after = strain_excess(mesh, &rest, limit).1;
+        // the excess vanishes on the limit: Newton approaches it from outside, and
+        // the last digits are not worth iterations
+        if report.strain_after <= limit * (1.0 + LIMIT_TOLERANCE) {
+            break;
+        }
+        mu = (mu * 0.3).max(1e-9);
+    }
+    report
+}
+
+/// The Gauss-Newton system of [`strain_excess`] at `mesh`'s positions: its matrix in
+/// `h`, minus its gradient in `rhs`; returns the mean diagonal of the matrix (1/m^2).
+fn newton_system(
+    mesh: &PhysicalMesh,
+    rest: &[f64],
+    limit: f64,
+    h: &mut BlockSpd,
+    rhs: &mut faer::Mat<f64>,
+) -> f64 {
+    h.clear();
+    for v in 0..rhs.nrows() {
+        rhs[(v, 0)] = 0.0;
+    }
+    let mut diag_sum = 0.0;
+    for (e, [i, j]) in mesh.edges.iter().enumerate() {
+        let (i, j) = (*i as usize, *j as usize);
+        let d = mesh.position[j] - mesh.position[i];
+        let len = d.norm();
+        let excess = edge_excess(len, rest[e], limit);
+        if excess == 0.0 || len < 1e-300 {
+            continue;
+        }
+        let w = 1.0 / (rest[e] * rest[e]);
+        let u = d / len;
+        let g = w * excess * u;
+        for c in 0..3 {
+            rhs[(3 * j + c, 0)] -= g[c];
+            rhs[(3 * i + c, 0)] += g[c];
+        }
+        let k = w * excess_hessian(&u, excess, len, true);
+        let blk: Vec<f64> = (0..9).map(|r| k[(r / 3, r % 3)]).collect();
+        let neg: Vec<f64> = blk.iter().map(|x| -x).collect();
+        h.add_block(i, i, &blk);
+        h.add_block(j, j, &blk);
+        h.add_block(i, j, &neg);
+        diag_sum += 2.0 * w;
+    }
+    diag_sum / mesh.material.len().max(1) as f64
+}
+
+/// Backtracking along the step in `rhs` from `mesh`'s positions (f at them: `f`):
+/// moves `mesh` to the first of 20 halvings that lowers f and returns the new f;
+/// None (positions kept) when none does.
+fn backtrack(
+    mesh: &mut PhysicalMesh,
+    rest: &[f64],
+    limit: f64,
+    rhs: &faer::Mat<f64>,
+    trial: &mut Vec<Point3>,
+    f: f64,
+) -> Option<f64> {
+    let mut alpha = 1.0;
+    for _ in 0..20 {
+        for (v, t) in trial.iter_mut().enumerate() {
+            let dx = Vector3::new(rhs[(3 * v, 0)], rhs[(3 * v + 1, 0)], rhs[(3 * v + 2, 0)]);
+            *t = mesh.position[v] + alpha * dx;
+        }
+        std::mem::swap(trial, &mut mesh.position);
+        let (ft, _) = strain_excess(mesh, rest, limit);
+        if ft.is_finite() && ft < f {
+            return Some(ft);
+        }
+        std::mem::swap(trial, &mut mesh.position);
+        alpha *= 0.5;
+    }
+    None
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -344,5 +534,68 @@ mod tests {
             mesh.position[0] == Point3::new(0.0, 0.0, 0.0),
             "handle fixed"
         );
+    }
+    #[test]
+    fn the_excess_hessian_is_the_derivative_of_the_excess_gradient() {
+        // an edge from the origin to x, rest length 1, limit 0.1: gradient e x / |x|
+        let g = |x: &Vector3| {
+            let l = x.norm();
+            edge_excess(l, 1.0, 0.1) * x / l
+        };
+        let stretched = Vector3::new(1.3, 0.2, -0.1);
+        let compressed = Vector3::new(0.5, 0.3, 0.2);
+        for x in [stretched, compressed] {
+            let l = x.norm();
+            let h = excess_hessian(&(x / l), edge_excess(l, 1.0, 0.1), l, false);
+            let eps = 1e-6;
+            for k in 0..3 {
+                let mut d = Vector3::zeros();
+                d[k] = eps;
+                let fd = (g(&(x + d)) - g(&(x - d))) / (2.0 * eps);
+                // central differences: error O(eps^2) against second derivatives ~ 1
+                assert!((fd - h.column(k)).norm() < 1e-8, "{x:?} column {k}");
+            }
+        }
+        // within the limit: nothing
+        assert_eq!(edge_excess(1.05, 1.0, 0.1), 0.0);
+        // clamped, a compressed edge keeps only its own direction: positive
+        // semi-definite
+        let l = compressed.norm();
+        let h = excess_hessian(&(compressed / l), edge_excess(l, 1.0, 0.1), l, true);
+        assert!(h.symmetric_eigenvalues().min() > -1e-12);
+        let h = excess_hessian(&(compressed / l), edge_excess(l, 1.0, 0.1), l, false);
+        assert!(h.symmetric_eigenvalues().min() < -0.1);
+    }
+
+    #[test]
+    fn limit_strains_moves_only_edges_beyond_the_limit() {
+        let mut mesh = grid();
+        // bent into a cylinder of radius 3 cm: isometric, nothing to do, not one bit
+        for (p, m) in mesh.position.iter_mut().zip(&mesh.material) {
+            let phi = m.x / 0.03;
+            *p = Point3::new(0.03 * phi.sin(), m.y, 0.03 * (1.0 - phi.cos()));
+        }
+        let bent = mesh.position.clone();
+        let fixed = vec![false; mesh.material.len()];
+        let r = limit_strains(&mut mesh, &fixed, 0.005, 50);
+        assert_eq!(r.iterations, 0);
+        assert_eq!(mesh.position, bent);
+        // the corner at (0, 0) held and pulled 3 mm away, a middle vertex lifted 2 mm
+        let mut fixed = fixed;
+        fixed[0] = true;
+        mesh.position[0] += Vector3::new(-0.003, -0.001, 0.0);
+        mesh.position[14] += Vector3::new(0.0, 0.0, 0.002);
+        let held = mesh.position[0];
+        let r = limit_strains(&mut mesh, &fixed, 0.005, 50);
+        assert!(r.strain_before > 0.1, "{r:?}");
+        let within = 0.005 * (1.0 + LIMIT_TOLERANCE);
+        assert!(r.strain_after <= within && r.iterations < 50, "{r:?}");
+        let rest =
+            |[a, b]: [u32; 2]| (mesh.material[a as usize] - mesh.material[b as usize]).norm();
+        for e in &mesh.edges {
+            let len = (mesh.position[e[1] as usize] - mesh.position[e[0] as usize]).norm();
+            assert!((len / rest(*e) - 1.0).abs() <= within, "edge {e:?}");
+        }
+        assert_eq!(mesh.position[0], held, "a fixed vertex does not move");
     }
 }

@@ -29,5 +29,7 @@ mod sim;
 pub(crate) mod sparse;
 pub mod tracking;
 
-pub use params::{Collider, PaperError, PaperInitialShape, PaperParams, PresetCrease};
+pub use params::{
+    Collider, LengthRestoration, PaperError, PaperInitialShape, PaperParams, PresetCrease,
+};
 pub use sim::{CrumpleAttempt, PaperFrameStats, PaperSim};

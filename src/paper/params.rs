@@ -43,6 +43,21 @@ pub struct PresetCrease {
     pub rest_angle: f64,
 }
 
+/// How step 3(h) restores the edge lengths of S_P.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LengthRestoration {
+    /// Schreck et al. sec. 6.3: phase I (unit edge directions under two aggregated
+    /// constraints) and phase II (least squares on positions, eq. 7). Its unweighted
+    /// least squares spreads one absolute error over short and long edges alike and
+    /// leaves the shortest edges, next to held corners, strained by 10-100 %
+    /// (docs/paper_simulator.md).
+    Paper,
+    /// Every S_P edge within `strain_limit` of its pattern length: Newton's method on
+    /// the excess, a relaxation of the FEM's energy with the limit as a penalty of
+    /// stiffness `strain_limit_stiffness` (handles held), the limit once more.
+    StrainLimit,
+}
+
 /// Initial shape of the sheet.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PaperInitialShape {
@@ -117,13 +132,25 @@ pub struct PaperParams {
     /// The plastic rest angle around a singular vertex is
     /// theta_i = plastic_angle / N_i, rad (eq. 1). Default pi/8.
     pub plastic_angle: f64,
-    /// Newton iterations of the implicit step, at most. Default 20.
+    /// Newton iterations of the implicit step, at most. Default 100: the paper
+    /// "usually obtain[s] convergence after 10 to 100 iterations" (sec. 4); a hard
+    /// frame (dt 0.1 s compression, the sheet buckling) needs 20-30.
     pub newton_max_iterations: u32,
     /// Newton stops when the largest vertex update is below this, m. Default 1e-6
     /// (1e-5 of the sheet; step 3 restores lengths to ~1e-3 anyway).
     pub newton_tolerance: f64,
     /// Phase I iterations of the length restoration, at most (sec. 6.3: 200).
     pub isometry_max_iterations: u32,
+    /// How step 3 restores lengths. Default [`LengthRestoration::StrainLimit`].
+    pub length_restoration: LengthRestoration,
+    /// s: the largest |l / L - 1| step 3 leaves on an S_P edge (dimensionless).
+    /// Default 0.005 (0.5 %; table IV's n_comp counts edges over 1 %).
+    pub strain_limit: f64,
+    /// k: stiffness of the strain-limit penalty (k / 2) e^2 on an edge's length beyond
+    /// the limit (e, m) in step 3's relaxation, N/m. Default 3e4 (30 x the membrane's
+    /// Y t: the excess the relaxation lets through, which the last limit removes, stays
+    /// small).
+    pub strain_limit_stiffness: f64,
     /// Stiffness of the collision repulsion springs, N/m. Default 1e4.
     pub collision_stiffness: f64,
     /// Distance kept from colliders (half the paper thickness plus margin), m.
@@ -166,9 +193,12 @@ impl Default for PaperParams {
             singularity_sigma: 0.001,
             blaschke_tolerance: 0.005,
             plastic_angle: std::f64::consts::FRAC_PI_8,
-            newton_max_iterations: 20,
+            newton_max_iterations: 100,
             newton_tolerance: 1e-6,
             isometry_max_iterations: 200,
+            length_restoration: LengthRestoration::StrainLimit,
+            strain_limit: 0.005,
+            strain_limit_stiffness: 3e4,
             collision_stiffness: 1e4,
             collision_thickness: 5e-4,
             colliders: Vec::new(),
@@ -215,7 +245,7 @@ pub enum PaperError {
 impl PaperParams {
     /// Check every value (the scene layer reports scene keys; this guards the core).
     pub fn validate(&self) -> Result<(), PaperError> {
-        let positive: [(&'static str, f64); 12] = [
+        let positive: [(&'static str, f64); 14] = [
             ("width", self.width),
             ("height", self.height),
             ("density", self.density),
@@ -228,6 +258,8 @@ impl PaperParams {
             ("blaschke_tolerance", self.blaschke_tolerance),
             ("newton_tolerance", self.newton_tolerance),
             ("collision_thickness", self.collision_thickness),
+            ("strain_limit", self.strain_limit),
+            ("strain_limit_stiffness", self.strain_limit_stiffness),
         ];
         for (k, v) in positive {
             if !(v.is_finite() && v > 0.0) {
@@ -253,6 +285,12 @@ impl PaperParams {
             return Err(PaperError::Invalid {
                 key: "poisson_ratio",
                 message: format!("must be in (-1, 0.5), got {}", self.poisson_ratio),
+            });
+        }
+        if self.strain_limit > 0.5 {
+            return Err(PaperError::Invalid {
+                key: "strain_limit",
+                message: format!("must be at most 0.5 (50 %), got {}", self.strain_limit),
             });
         }
         if self.junction_low_angle > self.junction_high_angle {

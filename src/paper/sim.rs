@@ -14,14 +14,14 @@ use super::compression::flat_regions;
 use super::crumpling::{
     crumple_flat_region, face_center, CrumpleContext, CrumpleEvent, FrameFlatRegions,
 };
-use super::fem::{implicit_step, Dirichlet, FemReport, FemSystem, Spring};
+use super::fem::{implicit_step, Dirichlet, FemReport, FemSystem, Spring, StrainLimit};
 use super::geometric::{
     Crease, CreaseKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
 };
-use super::isometry::{restore_lengths, IsometryReport};
-use super::params::{PaperError, PaperParams};
+use super::isometry::{limit_strains, mean_length_error, restore_lengths, IsometryReport};
+use super::params::{LengthRestoration, PaperError, PaperParams};
 use super::pattern::Pattern;
-use super::physical::{build_physical, Interpolator, PhysicalMesh};
+use super::physical::{build_physical, Interpolator, PhysicalMesh, Placement};
 use super::reach::{reachable, HeldTarget};
 use super::tracking::{fit_cones, update_junctions, ConeReport, JunctionReport};
 use crate::geometry::{EdgeStrain, Point2, Point3, Pose, SurfaceMesh, Vector3};
@@ -93,6 +93,8 @@ pub struct PaperSim {
     reach_corrections: Vec<Vector3>,
     reach_excess: (f64, Option<usize>),
     time: f64,
+    /// The time step of the last step 1, s (the inertia of step 3's relaxation).
+    dt: f64,
     /// `gmesh` was built by step 2 from the current structure and S_P positions.
     gmesh_fresh: bool,
     mesh: SurfaceMesh,
@@ -159,11 +161,17 @@ impl PaperSim {
         let flat = move |_: &GVertexKind, m: &Point2| placement * Point3::new(m.x, m.y, 0.0);
         let gmesh = GeometricMesh::build(&layer, &pattern, &flat)
             .map_err(|e| PaperError::Triangulation(e.to_string()))?;
-        let mut sp = build_physical(&gmesh, &layer, &pattern, &params, &|s| {
+        let on_sheet = |s: f64| {
             let m = pattern.point_at(s);
             placement * Point3::new(m.x, m.y, 0.0)
-        })
-        .map_err(PaperError::Triangulation)?;
+        };
+        let flat_at = |m: &Point2| placement * Point3::new(m.x, m.y, 0.0);
+        let samples = match params.length_restoration {
+            LengthRestoration::Paper => Placement::OnGeometricLayer(&on_sheet),
+            LengthRestoration::StrainLimit => Placement::Interpolated(&flat_at),
+        };
+        let mut sp = build_physical(&gmesh, &layer, &pattern, &params, samples)
+            .map_err(PaperError::Triangulation)?;
         let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
         if params.imperfection > 0.0 {
             use rand::Rng;
@@ -187,6 +195,7 @@ impl PaperSim {
             handles: own,
             held: Vec::new(),
             time: 0.0,
+            dt: 0.0,
             gmesh_fresh: false,
             mesh: SurfaceMesh::default(),
             singular: Vec::new(),
@@ -421,7 +430,9 @@ impl PaperSim {
             dt,
             &dirichlet,
             &springs,
+            None,
         );
+        self.dt = dt;
         self.gmesh_fresh = false;
         self.frame = PaperFrameStats {
             fem: report,
@@ -511,14 +522,72 @@ impl PaperSim {
             }
         }
         self.held = held;
-        self.frame.isometry =
-            restore_lengths(&mut self.sp, &fixed, self.params.isometry_max_iterations);
+        self.frame.isometry = match self.params.length_restoration {
+            LengthRestoration::Paper => {
+                restore_lengths(&mut self.sp, &fixed, self.params.isometry_max_iterations)
+            }
+            LengthRestoration::StrainLimit => self.limit_strains(&fixed),
+        };
         self.gmesh = gmesh;
         // S_G vertices are the first S_P vertices: their final positions
         for (v, g) in self.gmesh.vertices.iter_mut().enumerate() {
             g.position = self.sp.position[v];
         }
         self.rebuild_outputs();
+    }
+
+    /// Step 3(h), ours ([`LengthRestoration::StrainLimit`]): every edge of S_P within
+    /// `strain_limit` of its pattern length, `fixed` vertices (the held ones) still.
+    /// The limit alone leaves what the FEM then sees as energy (a bend pushed into a
+    /// few short edges, caps of the old S_P): a relaxation, one implicit step from
+    /// rest of the FEM's own energy with the limit as a penalty and the handles held,
+    /// lowers it; the limit once more removes the excess the penalty let through.
+    /// Velocities are the interpolated ones: the restoration moves positions only.
+    fn limit_strains(&mut self, fixed: &[bool]) -> IsometryReport {
+        const ITERATIONS: u32 = 50;
+        const RELAXATION_ITERATIONS: u32 = 6;
+        let limit = self.params.strain_limit;
+        let before = mean_length_error(&self.sp);
+        let first = limit_strains(&mut self.sp, fixed, limit, ITERATIONS);
+        if self.dt > 0.0 {
+            let velocity = vec![Vector3::zeros(); self.sp.material.len()];
+            let velocity = std::mem::replace(&mut self.sp.velocity, velocity);
+            let (dirichlet, springs, _) = self.handle_constraints(self.time);
+            if !self.fem.matches(&self.sp) {
+                self.fem = FemSystem::new(&self.sp);
+            }
+            let penalty = StrainLimit {
+                limit,
+                stiffness: self.params.strain_limit_stiffness,
+            };
+            // a few Newton iterations: the relaxation smooths what the limit handed
+            // over, it need not converge (6 against the FEM's 20 met the stress
+            // suite's energy bound on 59 of 60 runs, 2026-12-04)
+            let params = PaperParams {
+                newton_max_iterations: RELAXATION_ITERATIONS,
+                ..self.params.clone()
+            };
+            implicit_step(
+                &mut self.fem,
+                &mut self.sp,
+                &params,
+                self.dt,
+                &dirichlet,
+                &springs,
+                Some(penalty),
+            );
+            // a failed relaxation keeps the positions; the second limit applies anyway
+            self.sp.velocity = velocity;
+        }
+        let last = limit_strains(&mut self.sp, fixed, limit, ITERATIONS);
+        IsometryReport {
+            iterations: first.iterations + last.iterations,
+            length_error_before: before,
+            length_error_after: mean_length_error(&self.sp),
+            strain_before: first.strain_before,
+            strain_after: last.strain_after,
+            ..Default::default()
+        }
     }
 
     /// Step 3 (e)-(g): junction points and generalized cones update the structure
@@ -561,10 +630,13 @@ impl PaperSim {
         if let Some(g) = changed {
             gmesh = g;
         }
-        let mut sp = build_physical(&gmesh, layer, pattern, params, &|s| {
-            interp.boundary_position(s)
-        })
-        .ok()?;
+        let curve = |s: f64| interp.boundary_position(s);
+        let at = |m: &Point2| interp.position(m);
+        let placement = match params.length_restoration {
+            LengthRestoration::Paper => Placement::OnGeometricLayer(&curve),
+            LengthRestoration::StrainLimit => Placement::Interpolated(&at),
+        };
+        let mut sp = build_physical(&gmesh, layer, pattern, params, placement).ok()?;
         for (v, m) in sp.velocity.iter_mut().zip(&sp.material) {
             *v = interp.velocity(m);
         }
@@ -728,31 +800,21 @@ mod tests {
             .collect()
     }
 
-    #[test]
-    fn a_compressed_flat_sheet_grows_a_curved_region() {
+    /// The |y| component of the ruling passing nearest the centre of the sheet, and the
+    /// median of its region's, after `steps` frames of `dt` s of [`two_handles`].
+    fn middle_ruling(restoration: LengthRestoration, steps: usize, dt: f64) -> (f64, f64) {
         let handles = two_handles(0.01, 0.6);
-        let mut sim = PaperSim::new(PaperParams::default(), &handles, 0).unwrap();
+        let params = PaperParams {
+            length_restoration: restoration,
+            ..PaperParams::default()
+        };
+        let mut sim = PaperSim::new(params, &handles, 0).unwrap();
         assert!(sim.geometric_layer().regions.is_empty());
-        let reports = run(&mut sim, &handles, 15, 1.0 / 30.0);
+        let reports = run(&mut sim, &handles, steps, dt);
         assert!(reports.iter().all(|r| r.converged), "{reports:?}");
         assert!(sim.mesh().is_finite());
         let layer = sim.geometric_layer();
-        assert!(
-            !layer.regions.is_empty(),
-            "a curved region appears: {:?}",
-            sim.frame_stats()
-        );
-        // The rulings of a sheet bent about y run along y (v_perp of the compression)
-        // where the sheet bends as a cylinder: in the middle, away from the handles.
-        // Not every ruling does: the first compression analysis measures the strain of
-        // a coarse S_G triangle between both handle anchors and a corner (sec. 5.1,
-        // "standard method based on stretch tensors" on the triangles of F), whose
-        // v_perp leans ~20 deg; the next frames' rulings near the pinched handles
-        // conflict with that band and make singular vertices (sec. 5.2), and the
-        // border rulings of the band then end at the d-cones' fans (a band ruling
-        // shares its end with a cone ruling, fig. 6d): those legitimately lean (up to
-        // ~27 deg here). So: the ruling passing nearest the sheet's centre, and the
-        // median of its region's rulings, run along y.
+        assert!(!layer.regions.is_empty(), "a curved region appears");
         let centre = Point2::new(0.05, 0.05);
         let ends = |r: &super::super::geometric::Ruling| {
             [r.a, r.b].map(|e| layer.endpoint_material(sim.pattern(), &e))
@@ -772,18 +834,53 @@ mod tests {
             .min_by(|a, b| distance(a.1).total_cmp(&distance(b.1)))
             .unwrap();
         assert!(distance(ruling) < 0.01, "a ruling crosses the middle");
-        let d = direction(ruling);
-        assert!(d.y.abs() > 0.95, "middle ruling direction {d:?}");
         let mut dy: Vec<f64> = region
             .rulings
             .iter()
             .map(|r| direction(r).y.abs())
             .collect();
         dy.sort_by(f64::total_cmp);
-        let median = 0.5 * (dy[(dy.len() - 1) / 2] + dy[dy.len() / 2]);
-        assert!(
-            median > 0.95,
-            "|d.y| of the middle region's rulings: {dy:?}"
-        );
+        (direction(ruling).y.abs(), median(&dy))
+    }
+
+    fn median(sorted: &[f64]) -> f64 {
+        0.5 * (sorted[(sorted.len() - 1) / 2] + sorted[sorted.len() / 2])
+    }
+
+    #[test]
+    fn a_compressed_flat_sheet_grows_a_curved_region() {
+        // The rulings of a sheet bent about y run along y (v_perp of the compression)
+        // where the sheet bends as a cylinder: in the middle, away from the handles.
+        // Not every ruling does: the first compression analysis measures the strain of
+        // a coarse S_G triangle between both handle anchors and a corner (sec. 5.1,
+        // "standard method based on stretch tensors" on the triangles of F), whose
+        // v_perp leans ~20 deg; the next frames' rulings near the pinched handles
+        // conflict with that band and make singular vertices (sec. 5.2), and the
+        // border rulings of the band then end at the d-cones' fans (a band ruling
+        // shares its end with a cone ruling, fig. 6d): those legitimately lean. Which
+        // ruling ends up in the middle changes with the frame rate (one frame rate is
+        // one sample of a chaotic process: at 26 frames/s the middle ruling leans 31
+        // deg with the paper's restoration, at 30 frames/s 4 deg), so: the median over
+        // nine frame rates of the ruling passing nearest the sheet's centre, and of
+        // its region's median.
+        let rates = [26.0, 27.0, 28.0, 29.0, 30.0, 31.0, 32.0, 33.0, 34.0];
+        let sample = |restoration| {
+            let (mut mid, mut region): (Vec<f64>, Vec<f64>) = rates
+                .iter()
+                .map(|r| middle_ruling(restoration, 15, 1.0 / r))
+                .unzip();
+            mid.sort_by(f64::total_cmp);
+            region.sort_by(f64::total_cmp);
+            (median(&mid), median(&region))
+        };
+        // the paper's length restoration: within 18 deg (0.968 and 0.960 on
+        // 2026-12-04)
+        let (mid, region) = sample(LengthRestoration::Paper);
+        assert!(mid > 0.95 && region > 0.95, "paper: {mid} {region}");
+        // the strain limit keeps the first band's lean in the middle more often: 24
+        // deg (0.912 and 0.933 on 2026-12-04; docs/paper_simulator.md, known gaps);
+        // this guards it from growing past 28 deg
+        let (mid, region) = sample(LengthRestoration::StrainLimit);
+        assert!(mid > 0.88 && region > 0.88, "strain limit: {mid} {region}");
     }
 }

@@ -7,7 +7,7 @@ use super::check::{pose_from, Check};
 use super::handle_file::{parse_handle, HandleFile, PoseFile};
 use super::SceneError;
 use crate::geometry::{Point2, Pose, Vector3};
-use crate::paper::{Collider, PaperParams, PaperSim, PresetCrease};
+use crate::paper::{Collider, LengthRestoration, PaperParams, PaperSim, PresetCrease};
 use crate::sim::{HandleSpec, World};
 
 /// A sheet of paper. Every key is optional; defaults in parentheses.
@@ -78,9 +78,21 @@ pub struct PaperFile {
     /// Newton stop on the largest vertex update, m (1e-6).
     #[serde(default = "d_newton_tol")]
     pub newton_tolerance: f64,
-    /// Phase I iterations of the length restoration, at most (200).
+    /// Phase I iterations of the length restoration, at most (200; `paper` only).
     #[serde(default = "d_iso_max")]
     pub isometry_max_iterations: u32,
+    /// How step 3 restores the edge lengths of S_P: `strain_limit` (every edge within
+    /// `strain_limit` of its pattern length; ours) or `paper` (phases I and II of sec.
+    /// 6.3). (strain_limit)
+    #[serde(default = "d_restoration")]
+    pub length_restoration: String,
+    /// s: the largest |l / L - 1| step 3 leaves on an edge, dimensionless, in (0, 0.5]
+    /// (0.005).
+    #[serde(default = "d_strain_limit")]
+    pub strain_limit: f64,
+    /// k: stiffness of the strain-limit penalty in step 3's relaxation, N/m (3e4).
+    #[serde(default = "d_strain_limit_k")]
+    pub strain_limit_stiffness: f64,
     /// Collision repulsion stiffness, N/m (1e4).
     #[serde(default = "d_kc")]
     pub collision_stiffness: f64,
@@ -177,6 +189,15 @@ fn d_newton_tol() -> f64 {
 fn d_iso_max() -> u32 {
     PaperParams::default().isometry_max_iterations
 }
+fn d_restoration() -> String {
+    "strain_limit".into()
+}
+fn d_strain_limit() -> f64 {
+    PaperParams::default().strain_limit
+}
+fn d_strain_limit_k() -> f64 {
+    PaperParams::default().strain_limit_stiffness
+}
 fn d_kc() -> f64 {
     PaperParams::default().collision_stiffness
 }
@@ -239,6 +260,7 @@ pub(super) fn build_paper(
         return Err(ck.fail("forces", "point forces are not supported on paper objects"));
     }
     let m = material(ck, paper)?;
+    let restoration = restoration(ck, paper)?;
     let params = PaperParams {
         width: sheet.width,
         height: sheet.height,
@@ -263,6 +285,9 @@ pub(super) fn build_paper(
         newton_max_iterations: paper.newton_max_iterations,
         newton_tolerance: m.newton_tolerance,
         isometry_max_iterations: paper.isometry_max_iterations,
+        length_restoration: restoration.0,
+        strain_limit: restoration.1,
+        strain_limit_stiffness: restoration.2,
         collision_stiffness: m.collision_stiffness,
         collision_thickness: m.collision_thickness,
         colliders,
@@ -383,6 +408,27 @@ fn thresholds(ck: &Check, paper: &PaperFile) -> Result<Thresholds, SceneError> {
         poisson_ratio: poisson,
         compression_threshold: eps_c,
     })
+}
+
+/// Validate step 3's length restoration: the method, s in (0, 0.5] and k > 0.
+fn restoration(ck: &Check, paper: &PaperFile) -> Result<(LengthRestoration, f64, f64), SceneError> {
+    let kind = match ck.choice(
+        &key("length_restoration"),
+        &paper.length_restoration,
+        &["strain_limit", "paper"],
+    )? {
+        "paper" => LengthRestoration::Paper,
+        _ => LengthRestoration::StrainLimit,
+    };
+    let limit = ck.positive(&key("strain_limit"), paper.strain_limit)?;
+    if limit > 0.5 {
+        return Err(ck.fail(
+            &key("strain_limit"),
+            format!("is a fraction (0.005 = 0.5 %) of at most 0.5, got {limit}"),
+        ));
+    }
+    let stiffness = ck.positive(&key("strain_limit_stiffness"), paper.strain_limit_stiffness)?;
+    Ok((kind, limit, stiffness))
 }
 
 /// The static colliders (plane with a normalized normal, or sphere).

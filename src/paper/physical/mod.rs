@@ -1,16 +1,37 @@
 //! The physical mesh S_P (Schreck et al. sec. 4, fig. 4): S_G enriched with boundary
-//! samples (density rho_bound) and interior samples of the flat regions (density
-//! rho_int), Delaunay-connected with the rulings and creases of S_G kept, and the faces of the curved
-//! regions split at their barycenter. S_P carries the state between frames (positions,
-//! velocities) and is the mesh that is simulated (step 1), length-restored (step 3)
-//! and displayed.
+//! samples (density rho_bound), interior samples of the flat regions (density rho_int)
+//! and the barycenters of the curved faces, Delaunay-connected with the boundary and
+//! the rulings and creases of S_G kept. By default two departures from fig. 4, for the
+//! triangles' shape: the barycenters are connected by the triangulation, not as a fan
+//! over each curved face, and a triangle with an angle near 180 deg has the segment it
+//! lies against split ([`refine`]); `length_restoration: paper` builds fig. 4's fans
+//! ([`fans`]). See docs/paper_simulator.md ("S_P without caps"). S_P carries the state
+//! between frames (positions, velocities) and is the mesh that is simulated (step 1),
+//! length-restored (step 3) and displayed.
+
+mod fans;
+mod interpolate;
+mod refine;
+
+pub use interpolate::Interpolator;
 
 use std::collections::BTreeMap;
 
 use super::geometric::{EdgeKind, FaceKind, GVertexKind, GeometricLayer, GeometricMesh};
-use super::params::PaperParams;
+use super::params::{LengthRestoration, PaperParams};
 use super::pattern::{in_convex_polygon, orient, point_segment, Pattern};
 use crate::geometry::{Point2, Point3, Vector3, VertexRegion};
+
+/// Where the samples of a new S_P go.
+#[derive(Clone, Copy)]
+pub enum Placement<'a> {
+    /// The paper's (fig. 4: S_P is S_G enriched): on S_G's piecewise-planar surface,
+    /// a sample on a curved face's boundary on this curve (arc length, m -> point).
+    OnGeometricLayer(&'a dyn Fn(f64) -> Point3),
+    /// Ours: at this point of the previous S_P (pattern point -> point), which keeps
+    /// the shape the FEM step gave the sheet; S_G's flat triangles are chords of it.
+    Interpolated(&'a dyn Fn(&Point2) -> Point3),
+}
 
 /// What an S_P vertex is.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,6 +44,8 @@ pub enum SampleKind {
     InteriorSample,
     /// The barycenter of a curved face.
     Barycenter,
+    /// A point splitting a ruling, a crease or the boundary under a cap ([`refine`]).
+    CapSplit,
 }
 
 /// A bending hinge: the interior edge (v[0], v[1]) with opposite vertices v[2]
@@ -60,188 +83,14 @@ pub struct PhysicalMesh {
     pub mass: Vec<f64>,
 }
 
-fn quantize(p: &Point2) -> (i64, i64) {
-    ((p.x * 1e9).round() as i64, (p.y * 1e9).round() as i64)
-}
-
-/// Interpolates positions and velocities of an S_P at pattern points: exact at its
-/// vertices, barycentric inside its triangles, cubic (Catmull-Rom) along its boundary
-/// curve (sec. 5, appendix B: "cubic interpolation along the boundary curve given by
-/// the mesh S_P").
-pub struct Interpolator<'a> {
-    mesh: &'a PhysicalMesh,
-    exact: BTreeMap<(i64, i64), u32>,
-    pattern: &'a Pattern,
-}
-
-impl<'a> Interpolator<'a> {
-    pub fn new(mesh: &'a PhysicalMesh, pattern: &'a Pattern) -> Self {
-        let exact = mesh
-            .material
-            .iter()
-            .enumerate()
-            .map(|(i, m)| (quantize(m), i as u32))
-            .collect();
-        Interpolator {
-            mesh,
-            exact,
-            pattern,
-        }
-    }
-
-    /// The vertex at `m`, if any.
-    pub fn vertex_at(&self, m: &Point2) -> Option<u32> {
-        self.exact.get(&quantize(m)).copied()
-    }
-
-    /// Barycentric coordinates of `m` in the best triangle (smallest violation).
-    fn locate(&self, m: &Point2) -> Option<([u32; 3], [f64; 3])> {
-        let mut best: Option<(f64, [u32; 3], [f64; 3])> = None;
-        for t in &self.mesh.triangles {
-            let [a, b, c] = t.map(|i| self.mesh.material[i as usize]);
-            let det = orient(&a, &b, &c);
-            if det.abs() < 1e-18 {
-                continue;
-            }
-            let l1 = orient(&a, m, &c) / det;
-            let l2 = orient(&a, &b, m) / det;
-            let l0 = 1.0 - l1 - l2;
-            let out = (-l0).max(-l1).max(-l2).max(0.0);
-            if best.as_ref().is_none_or(|(o, _, _)| out < *o) {
-                best = Some((out, *t, [l0, l1, l2]));
-                if out == 0.0 {
-                    break;
-                }
-            }
-        }
-        best.map(|(_, t, l)| (t, l))
-    }
-
-    /// World position at pattern point `m`, m.
-    pub fn position(&self, m: &Point2) -> Point3 {
-        if let Some(v) = self.vertex_at(m) {
-            return self.mesh.position[v as usize];
-        }
-        if self.pattern.signed_inside_distance(m) < 1e-9 {
-            if let Some(s) = self.pattern.arc_of(m, 1e-7) {
-                return self.boundary_position(s);
-            }
-        }
-        match self.locate(m) {
-            Some((t, l)) => Point3::from(
-                self.mesh.position[t[0] as usize].coords * l[0]
-                    + self.mesh.position[t[1] as usize].coords * l[1]
-                    + self.mesh.position[t[2] as usize].coords * l[2],
-            ),
-            None => Point3::new(m.x, m.y, 0.0),
-        }
-    }
-
-    /// World position of the S_G vertex of kind `k` at pattern point `m`, m: the S_P
-    /// vertex there if any, else on the boundary curve (boundary vertices) or inside
-    /// S_P (singular vertices).
-    pub fn geometric_vertex(&self, k: &GVertexKind, m: &Point2) -> Point3 {
-        match k {
-            GVertexKind::Boundary { s } => match self.vertex_at(m) {
-                Some(v) => self.mesh.position[v as usize],
-                None => self.boundary_position(*s),
-            },
-            GVertexKind::Singular { .. } => self.position(m),
-        }
-    }
-
-    /// Velocity at pattern point `m`, m/s.
-    pub fn velocity(&self, m: &Point2) -> Vector3 {
-        if let Some(v) = self.vertex_at(m) {
-            return self.mesh.velocity[v as usize];
-        }
-        match self.locate(m) {
-            Some((t, l)) => {
-                self.mesh.velocity[t[0] as usize] * l[0]
-                    + self.mesh.velocity[t[1] as usize] * l[1]
-                    + self.mesh.velocity[t[2] as usize] * l[2]
-            }
-            None => Vector3::zeros(),
-        }
-    }
-
-    /// World position of the boundary point at arc length `s` by Catmull-Rom
-    /// interpolation of the S_P boundary vertices of the same side (corners are kept
-    /// sharp: the tangent at a side's end is the one-sided difference).
-    pub fn boundary_position(&self, s: f64) -> Point3 {
-        let b = &self.mesh.boundary;
-        let arc = &self.mesh.boundary_arc;
-        let n = b.len();
-        if n < 2 {
-            let m = self.pattern.point_at(s);
-            return Point3::new(m.x, m.y, 0.0);
-        }
-        let s = self.pattern.wrap(s);
-        // segment k: arc[k] <= s < arc[k+1] (cyclic)
-        let k = match arc.partition_point(|&x| x <= s) {
-            0 => n - 1,
-            i => i - 1,
-        };
-        let k1 = (k + 1) % n;
-        let per = self.pattern.perimeter();
-        let len = self.pattern.arc_ccw(arc[k], arc[k1]).max(1e-15);
-        let t = (self.pattern.arc_ccw(arc[k], s) / len).clamp(0.0, 1.0);
-        let p1 = self.mesh.position[b[k] as usize].coords;
-        let p2 = self.mesh.position[b[k1] as usize].coords;
-        if t == 0.0 {
-            return Point3::from(p1);
-        }
-        let side = self.pattern.side_of(arc[k] + 0.5 * len);
-        let same_side = |i: usize| {
-            let a = arc[i];
-            // a corner belongs to both sides
-            let is_corner = (0..self.pattern.corners().len())
-                .any(|c| (self.pattern.corner_arc(c) - a).abs() < 1e-9 || (per - a).abs() < 1e-9);
-            is_corner || self.pattern.side_of(a) == side
-        };
-        let (k0, k2) = ((k + n - 1) % n, (k1 + 1) % n);
-        let corner_k = !same_side(k0) || self.is_corner(arc[k]);
-        let corner_k1 = !same_side(k2) || self.is_corner(arc[k1]);
-        let p0 = if corner_k {
-            2.0 * p1 - p2
-        } else {
-            self.mesh.position[b[k0] as usize].coords
-        };
-        let p3 = if corner_k1 {
-            2.0 * p2 - p1
-        } else {
-            self.mesh.position[b[k2] as usize].coords
-        };
-        // uniform Catmull-Rom
-        let t2 = t * t;
-        let t3 = t2 * t;
-        let v = 0.5
-            * ((2.0 * p1)
-                + (-p0 + p2) * t
-                + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * t2
-                + (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * t3);
-        Point3::from(v)
-    }
-
-    fn is_corner(&self, s: f64) -> bool {
-        let per = self.pattern.perimeter();
-        (0..self.pattern.corners().len()).any(|c| {
-            let d = (self.pattern.corner_arc(c) - s).abs();
-            d < 1e-9 || (per - d).abs() < 1e-9
-        })
-    }
-}
-
-/// Build S_P from the mesh of S_G. Vertex positions: S_G vertices keep theirs; boundary
-/// samples on a flat triangle's edge are on the straight edge, on a curved face's
-/// boundary they follow `boundary_curve`; interior samples lie in their flat triangle;
-/// barycenters are the mean of their face's vertices.
+/// Build S_P from the mesh of S_G. S_G vertices keep their positions; the samples go
+/// where `placement` says (docs/paper_simulator.md, "S_P without caps").
 pub fn build_physical(
     gmesh: &GeometricMesh,
     layer: &GeometricLayer,
     pattern: &Pattern,
     params: &PaperParams,
-    boundary_curve: &dyn Fn(f64) -> Point3,
+    placement: Placement,
 ) -> Result<PhysicalMesh, String> {
     let mut sp = PhysicalMesh::default();
     let ng = gmesh.vertices.len();
@@ -251,18 +100,28 @@ pub fn build_physical(
         sp.position.push(v.position);
         sp.kind.push(SampleKind::Geometric);
     }
-    let boundary = sp.add_boundary_samples(gmesh, pattern, params, boundary_curve);
-    sp.add_interior_samples(gmesh, pattern, params);
-    let cdt = sp.triangulate(gmesh)?;
-    let curved_faces = curved_face_polygons(gmesh, pattern, &boundary);
-    let mut curved_of_vertex = vec![false; sp.material.len()];
-    for (poly, _) in &curved_faces {
-        for &v in poly {
-            curved_of_vertex[v as usize] = true;
+    sp.add_boundary_samples(gmesh, pattern, params, placement);
+    sp.add_interior_samples(gmesh, pattern, params, placement);
+    let curved_faces: Vec<Vec<Point2>> = gmesh
+        .faces
+        .iter()
+        .filter(|f| f.kind != FaceKind::Flat)
+        .map(|f| {
+            f.vertices
+                .iter()
+                .map(|&v| gmesh.vertices[v as usize].material)
+                .collect()
+        })
+        .collect();
+    let curved_of_vertex = match params.length_restoration {
+        LengthRestoration::Paper => fans::triangulate(&mut sp, gmesh, pattern)?,
+        LengthRestoration::StrainLimit => {
+            let position = |m: &Point2| sample_position(gmesh, placement, m);
+            sp.add_barycenters(&curved_faces, &position);
+            let cdt = refine::triangulate(&mut sp, gmesh, pattern, params, &position)?;
+            sp.add_triangles(&cdt, &curved_faces)
         }
-    }
-    sp.add_triangles(&cdt, &curved_faces);
-    curved_of_vertex.resize(sp.material.len(), true);
+    };
     // orientation: counter-clockwise in the pattern
     for t in sp.triangles.iter_mut() {
         let [a, b, c] = t.map(|i| sp.material[i as usize]);
@@ -293,81 +152,17 @@ pub fn build_physical(
     Ok(sp)
 }
 
-/// The polygon of each curved S_G face in S_P vertices (its corners with the boundary
-/// samples lying on its boundary edges, in order) and its corners' pattern points.
-/// `boundary`: every S_P boundary vertex with its arc length, sorted.
-fn curved_face_polygons(
-    gmesh: &GeometricMesh,
-    pattern: &Pattern,
-    boundary: &[(f64, u32)],
-) -> Vec<(Vec<u32>, Vec<Point2>)> {
-    let ng = gmesh.vertices.len();
-    let per = pattern.perimeter();
-    let mut curved_faces: Vec<(Vec<u32>, Vec<Point2>)> = Vec::new();
-    for f in &gmesh.faces {
-        if f.kind == FaceKind::Flat {
-            continue;
-        }
-        let mut poly: Vec<u32> = Vec::new();
-        let n = f.vertices.len();
-        for i in 0..n {
-            let (a, b) = (f.vertices[i], f.vertices[(i + 1) % n]);
-            poly.push(a);
-            if let (GVertexKind::Boundary { s: sa }, GVertexKind::Boundary { s: sb }) = (
-                gmesh.vertices[a as usize].kind,
-                gmesh.vertices[b as usize].kind,
-            ) {
-                let is_boundary_edge = gmesh
-                    .edges
-                    .get(&super::geometric::edge_key(a, b))
-                    .is_some_and(|e| e.kind == super::geometric::EdgeKind::Boundary);
-                if is_boundary_edge {
-                    // samples strictly between, in the direction a -> b
-                    let fwd = pattern.arc_ccw(sa, sb) < 0.5 * per;
-                    let mut between: Vec<(f64, u32)> = boundary
-                        .iter()
-                        .filter(|&&(s, v)| {
-                            (v as usize) >= ng && {
-                                let (x, y) = if fwd { (sa, sb) } else { (sb, sa) };
-                                let da = pattern.arc_ccw(x, s);
-                                da > 0.0 && da < pattern.arc_ccw(x, y)
-                            }
-                        })
-                        .map(|&(s, v)| {
-                            let key = if fwd {
-                                pattern.arc_ccw(sa, s)
-                            } else {
-                                pattern.arc_ccw(s, sa)
-                            };
-                            (key, v)
-                        })
-                        .collect();
-                    between.sort_by(|x, y| x.0.total_cmp(&y.0));
-                    poly.extend(between.iter().map(|&(_, v)| v));
-                }
-            }
-        }
-        let mats: Vec<Point2> = f
-            .vertices
-            .iter()
-            .map(|&v| gmesh.vertices[v as usize].material)
-            .collect();
-        curved_faces.push((poly, mats));
-    }
-    curved_faces
-}
-
 impl PhysicalMesh {
     /// Boundary samples (rho_bound): a fixed lattice of arc lengths (temporal
     /// coherence), kept away from the S_G boundary vertices. Sets `boundary` and
-    /// `boundary_arc`; returns every boundary vertex with its arc length, sorted.
+    /// `boundary_arc` (every boundary vertex in arc-length order).
     fn add_boundary_samples(
         &mut self,
         gmesh: &GeometricMesh,
         pattern: &Pattern,
         params: &PaperParams,
-        boundary_curve: &dyn Fn(f64) -> Point3,
-    ) -> Vec<(f64, u32)> {
+        placement: Placement,
+    ) {
         let per = pattern.perimeter();
         let nsamples = ((per * params.boundary_density).round() as usize).max(4);
         let spacing = per / nsamples as f64;
@@ -389,27 +184,31 @@ impl PhysicalMesh {
                 i => i - 1,
             };
             let j = (i + 1) % gb.len();
-            let (s0, v0) = gb[i];
-            let (s1, v1) = gb[j];
-            let d0 = pattern.arc_ccw(s0, s);
-            let d1 = pattern.arc_ccw(s, s1);
+            let ((s0, v0), (s1, v1)) = (gb[i], gb[j]);
+            let (d0, d1) = (pattern.arc_ccw(s0, s), pattern.arc_ccw(s, s1));
             if d0 < gap || d1 < gap {
                 continue;
             }
-            let faces = gmesh.edge_faces(v0, v1);
-            let flat = faces
-                .iter()
-                .flatten()
-                .all(|&f| gmesh.faces[f].kind == FaceKind::Flat);
             let m = pattern.point_at(s);
-            let pos = if flat {
-                let t = d0 / (d0 + d1);
-                Point3::from(
-                    gmesh.vertices[v0 as usize].position.coords * (1.0 - t)
-                        + gmesh.vertices[v1 as usize].position.coords * t,
-                )
-            } else {
-                boundary_curve(s)
+            let pos = match placement {
+                Placement::Interpolated(at) => at(&m),
+                Placement::OnGeometricLayer(curve) => {
+                    // on the straight S_G edge when it borders flat faces only
+                    let flat = gmesh
+                        .edge_faces(v0, v1)
+                        .iter()
+                        .flatten()
+                        .all(|&f| gmesh.faces[f].kind == FaceKind::Flat);
+                    if flat {
+                        let t = d0 / (d0 + d1);
+                        Point3::from(
+                            gmesh.vertices[v0 as usize].position.coords * (1.0 - t)
+                                + gmesh.vertices[v1 as usize].position.coords * t,
+                        )
+                    } else {
+                        curve(s)
+                    }
+                }
             };
             boundary.push((s, self.material.len() as u32));
             self.material.push(m);
@@ -419,7 +218,6 @@ impl PhysicalMesh {
         boundary.sort_by(|a, b| a.0.total_cmp(&b.0));
         self.boundary = boundary.iter().map(|&(_, v)| v).collect();
         self.boundary_arc = boundary.iter().map(|&(s, _)| s).collect();
-        boundary
     }
 
     /// Interior samples (rho_int): a fixed triangular lattice of spacing d, area per
@@ -430,6 +228,7 @@ impl PhysicalMesh {
         gmesh: &GeometricMesh,
         pattern: &Pattern,
         params: &PaperParams,
+        placement: Placement,
     ) {
         let d = (2.0 / (3f64.sqrt() * params.interior_density)).sqrt();
         let row = 0.5 * 3f64.sqrt() * d;
@@ -492,36 +291,39 @@ impl PhysicalMesh {
                 {
                     continue;
                 }
-                let Some(f) = gmesh.flat_face_at(&p) else {
+                if gmesh.flat_face_at(&p).is_none() {
                     continue;
-                };
-                let [a, b, c] = [0, 1, 2].map(|k| gmesh.faces[f].vertices[k] as usize);
-                let (ma, mb, mc) = (
-                    gmesh.vertices[a].material,
-                    gmesh.vertices[b].material,
-                    gmesh.vertices[c].material,
-                );
-                let det = orient(&ma, &mb, &mc);
-                let l1 = orient(&ma, &p, &mc) / det;
-                let l2 = orient(&ma, &mb, &p) / det;
-                let l0 = 1.0 - l1 - l2;
-                let pos = Point3::from(
-                    gmesh.vertices[a].position.coords * l0
-                        + gmesh.vertices[b].position.coords * l1
-                        + gmesh.vertices[c].position.coords * l2,
-                );
+                }
                 self.material.push(p);
-                self.position.push(pos);
+                self.position.push(sample_position(gmesh, placement, &p));
                 self.kind.push(SampleKind::InteriorSample);
             }
         }
     }
 
+    /// The barycenter of each curved face with more than three corners (sec. 4,
+    /// fig. 4: it lets the FEM bend the face), at the mean of the corners' pattern
+    /// points.
+    fn add_barycenters(
+        &mut self,
+        curved_faces: &[Vec<Point2>],
+        position: &dyn Fn(&Point2) -> Point3,
+    ) {
+        for corners in curved_faces.iter().filter(|c| c.len() > 3) {
+            let sum: nalgebra::Vector2<f64> = corners.iter().map(|m| m.coords).sum();
+            let m = Point2::from(sum / corners.len() as f64);
+            self.material.push(m);
+            self.position.push(position(&m));
+            self.kind.push(SampleKind::Barycenter);
+        }
+    }
+
     /// The constrained Delaunay triangulation of the vertices so far with the
-    /// boundary (split at the samples) and every ruling and crease of S_G.
+    /// boundary (split at its samples) and the rulings and creases, each given as the
+    /// chain of S_P vertices along it.
     fn triangulate(
         &self,
-        gmesh: &GeometricMesh,
+        chains: &[Vec<u32>],
     ) -> Result<spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>, String> {
         let nb = self.boundary.len();
         let mut constraints: Vec<[usize; 2]> = (0..nb)
@@ -532,9 +334,9 @@ impl PhysicalMesh {
                 ]
             })
             .collect();
-        for (&(a, b), e) in &gmesh.edges {
-            if matches!(e.kind, EdgeKind::Ruling { .. } | EdgeKind::Crease { .. }) {
-                constraints.push([a as usize, b as usize]);
+        for chain in chains {
+            for w in chain.windows(2) {
+                constraints.push([w[0] as usize, w[1] as usize]);
             }
         }
         let pts: Vec<spade::Point2<f64>> = self
@@ -556,53 +358,29 @@ impl PhysicalMesh {
         Ok(cdt)
     }
 
-    /// The triangles: those of `cdt` outside the curved faces, then each curved face
-    /// as a fan around a new barycenter vertex (sec. 4, fig. 4), a triangle as itself.
+    /// The triangles of `cdt`; returns which vertices lie on a triangle inside one of
+    /// the `curved_faces` (pattern polygons of S_G's curved faces).
     fn add_triangles(
         &mut self,
         cdt: &spade::ConstrainedDelaunayTriangulation<spade::Point2<f64>>,
-        curved_faces: &[(Vec<u32>, Vec<Point2>)],
-    ) {
+        curved_faces: &[Vec<Point2>],
+    ) -> Vec<bool> {
         use spade::Triangulation;
-        let ng = self.geometric_vertices;
+        let mut curved = vec![false; self.material.len()];
         for face in cdt.inner_faces() {
             let vs = face.vertices().map(|v| v.fix().index() as u32);
             let m = vs.map(|v| self.material[v as usize]);
             let c = Point2::from((m[0].coords + m[1].coords + m[2].coords) / 3.0);
-            if curved_faces
-                .iter()
-                .any(|(_, p)| in_convex_polygon(p, &c, 0.0))
-            {
-                continue;
+            if curved_faces.iter().any(|p| in_convex_polygon(p, &c, 0.0)) {
+                for v in vs {
+                    curved[v as usize] = true;
+                }
             }
             self.triangles.push(vs);
         }
-        for (poly, _) in curved_faces {
-            if poly.len() == 3 {
-                self.triangles.push([poly[0], poly[1], poly[2]]);
-                continue;
-            }
-            // barycenter of the S_G face (its corners), not of the samples
-            let mut m = nalgebra::Vector2::zeros();
-            let mut p = Vector3::zeros();
-            let mut count = 0.0;
-            for &v in poly {
-                if (v as usize) < ng {
-                    m += self.material[v as usize].coords;
-                    p += self.position[v as usize].coords;
-                    count += 1.0;
-                }
-            }
-            let c = self.material.len() as u32;
-            self.material.push(Point2::from(m / count));
-            self.position.push(Point3::from(p / count));
-            self.kind.push(SampleKind::Barycenter);
-            for i in 0..poly.len() {
-                self.triangles
-                    .push([c, poly[i], poly[(i + 1) % poly.len()]]);
-            }
-        }
+        curved
     }
+
     /// Edges, hinges with rest angles (eq. 1, preset creases), lumped masses.
     fn finish_topology(
         &mut self,
@@ -729,6 +507,38 @@ impl PhysicalMesh {
             }
         }
     }
+}
+
+/// The position of a sample at pattern point `m` inside the sheet: interpolated, or
+/// on S_G's flat triangle there (barycentric; the paper's), m. A point in no flat
+/// triangle (a barycenter or a cap split, which only the interpolated placement
+/// makes) falls back to the mean of S_G's vertices around it: the nearest S_G vertex.
+fn sample_position(gmesh: &GeometricMesh, placement: Placement, m: &Point2) -> Point3 {
+    if let Placement::Interpolated(at) = placement {
+        return at(m);
+    }
+    let Some(f) = gmesh.flat_face_at(m) else {
+        return gmesh
+            .vertices
+            .iter()
+            .min_by(|a, b| (a.material - m).norm().total_cmp(&(b.material - m).norm()))
+            .map_or(Point3::new(m.x, m.y, 0.0), |v| v.position);
+    };
+    let [a, b, c] = [0, 1, 2].map(|k| gmesh.faces[f].vertices[k] as usize);
+    let (ma, mb, mc) = (
+        gmesh.vertices[a].material,
+        gmesh.vertices[b].material,
+        gmesh.vertices[c].material,
+    );
+    let det = orient(&ma, &mb, &mc);
+    let l1 = orient(&ma, m, &mc) / det;
+    let l2 = orient(&ma, &mb, m) / det;
+    let l0 = 1.0 - l1 - l2;
+    Point3::from(
+        gmesh.vertices[a].position.coords * l0
+            + gmesh.vertices[b].position.coords * l1
+            + gmesh.vertices[c].position.coords * l2,
+    )
 }
 
 /// The preset creases of S_G (pattern segments, m) with their rest angles (rad).
