@@ -153,6 +153,24 @@ fn a_stretched_paper_sheet_fails_the_suite() {
         r.strain_max_pct.unwrap() > stress::PAPER_STRAIN_MAX_PCT,
         "{r:#?}"
     );
+    // the table shows the strain beside the verdict
+    let shown = format!(
+        "{:.2} %; {:.1} %",
+        r.strain_max_pct.unwrap(),
+        r.strained_edges_pct.unwrap()
+    );
+    let md = stress::markdown(&stress::StressReport {
+        quick: true,
+        energy_relative_tolerance: stress::ENERGY_RELATIVE_TOLERANCE,
+        paper_energy_relative_tolerance: stress::PAPER_ENERGY_RELATIVE_TOLERANCE,
+        energy_absolute_tolerance_j: stress::ENERGY_ABSOLUTE_TOLERANCE,
+        unconverged_fraction: stress::UNCONVERGED_FRACTION,
+        passed: 0,
+        failed: 1,
+        results: vec![r],
+        wall_s: 0.0,
+    });
+    assert!(md.contains(&shown), "{shown} in {md}");
     // and the default keeps every edge within its 0.5 % limit
     let r = quick_with(&c, 0.1, RunTweaks::default());
     assert!(r.strain_max_pct.unwrap() < 1.0, "{r:#?}");
@@ -248,6 +266,8 @@ fn the_suite_table_lists_every_run_with_its_verdict() {
     };
     let md = stress::markdown(&report);
     assert!(md.contains("| handle_jump | 0.1 |"), "{md}");
+    // a ribbon has no edge strain column value
+    assert!(md.contains("| - |"), "{md}");
     assert!(md.contains("| pass |"), "{md}");
     assert!(md.contains("W(t)"), "the bound is stated: {md}");
 }
