@@ -12,7 +12,7 @@
 //! (in [`super::PaperSim`]), then the limit once more. See docs/paper_simulator.md.
 
 use super::physical::PhysicalMesh;
-use super::sparse::BlockSpd;
+use super::sparse::{row_major3, BlockSpd};
 use crate::geometry::{Matrix3, Point3, Vector3};
 
 /// What the length restoration did.
@@ -419,12 +419,11 @@ fn newton_system(
             rhs[(3 * j + c, 0)] -= g[c];
             rhs[(3 * i + c, 0)] += g[c];
         }
-        let k = w * excess_hessian(&u, excess, len, true);
-        let blk: Vec<f64> = (0..9).map(|r| k[(r / 3, r % 3)]).collect();
-        let neg: Vec<f64> = blk.iter().map(|x| -x).collect();
-        h.add_block(i, i, &blk);
-        h.add_block(j, j, &blk);
-        h.add_block(i, j, &neg);
+        h.add_edge_block(
+            i,
+            j,
+            &row_major3(&(w * excess_hessian(&u, excess, len, true))),
+        );
         diag_sum += 2.0 * w;
     }
     diag_sum / mesh.material.len().max(1) as f64

@@ -146,10 +146,7 @@ fn assemble(
                 block[3 * r + s] = g[r] * g[s];
             }
         }
-        a.add_block(i, i, &block);
-        a.add_block(j, j, &block);
-        let minus: Vec<f64> = block.iter().map(|x| -x).collect();
-        a.add_block(i, j, &minus);
+        a.add_edge_block(i, j, &block);
         for r in 0..3 {
             rhs[(3 * j + r, 0)] -= g[r] * c;
             rhs[(3 * i + r, 0)] += g[r] * c;

@@ -561,7 +561,7 @@ impl PaperSim {
                 stiffness: self.params.strain_limit_stiffness,
             };
             // a few Newton iterations: the relaxation smooths what the limit handed
-            // over, it need not converge (6 against the FEM's 20 met the stress
+            // over, it need not converge (6, against the FEM's then 20, met the stress
             // suite's energy bound on 59 of 60 runs, 2026-12-04)
             let params = PaperParams {
                 newton_max_iterations: RELAXATION_ITERATIONS,

@@ -9,6 +9,19 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMat};
 use faer::{Conj, MatMut, Par, Side};
 
+use crate::geometry::Matrix3;
+
+/// `m` row-major (the layout of [`BlockSpd::add_block`]).
+pub fn row_major3(m: &Matrix3) -> [f64; 9] {
+    let mut a = [0.0; 9];
+    for r in 0..3 {
+        for c in 0..3 {
+            a[3 * r + c] = m[(r, c)];
+        }
+    }
+    a
+}
+
 /// Lower triangle of a symmetric matrix over `n` nodes with `bs` x `bs` blocks.
 #[derive(Debug)]
 pub struct BlockSpd {
@@ -147,13 +160,26 @@ impl BlockSpd {
     /// Add the block `m` (bs x bs, row-major) at nodes (i, j) with i != j, or the
     /// lower triangle of a symmetric block when i == j.
     pub fn add_block(&mut self, i: usize, j: usize, m: &[f64]) {
+        self.add_block_times(i, j, m, 1.0);
+    }
+
+    /// Add an edge's stiffness: the symmetric block `k` (bs x bs, row-major) at (i, i)
+    /// and (j, j), -k at (i, j), i != j (a term of the edge vector p_j - p_i alone).
+    pub fn add_edge_block(&mut self, i: usize, j: usize, k: &[f64]) {
+        self.add_block_times(i, i, k, 1.0);
+        self.add_block_times(j, j, k, 1.0);
+        self.add_block_times(i, j, k, -1.0);
+    }
+
+    /// `sign` times `m` at (i, j), as [`BlockSpd::add_block`] (sign is +1 or -1: exact).
+    fn add_block_times(&mut self, i: usize, j: usize, m: &[f64], sign: f64) {
         let bs = self.bs;
         let col_ptr = self.symbolic.col_ptr();
         if i == j {
             for b in 0..bs {
                 let start = col_ptr[j * bs + b];
                 for a in b..bs {
-                    self.values[start + (a - b)] += m[a * bs + b];
+                    self.values[start + (a - b)] += sign * m[a * bs + b];
                 }
             }
             return;
@@ -171,7 +197,7 @@ impl BlockSpd {
                 } else {
                     m[a * bs + b]
                 };
-                self.values[base + a] += v;
+                self.values[base + a] += sign * v;
             }
         }
     }

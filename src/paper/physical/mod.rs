@@ -100,8 +100,7 @@ pub fn build_physical(
         sp.position.push(v.position);
         sp.kind.push(SampleKind::Geometric);
     }
-    sp.add_boundary_samples(gmesh, pattern, params, placement);
-    sp.add_interior_samples(gmesh, pattern, params, placement);
+    // the pattern polygons of S_G's curved faces
     let curved_faces: Vec<Vec<Point2>> = gmesh
         .faces
         .iter()
@@ -113,6 +112,8 @@ pub fn build_physical(
                 .collect()
         })
         .collect();
+    sp.add_boundary_samples(gmesh, pattern, params, placement);
+    sp.add_interior_samples(gmesh, pattern, params, placement, &curved_faces);
     let curved_of_vertex = match params.length_restoration {
         LengthRestoration::Paper => fans::triangulate(&mut sp, gmesh, pattern)?,
         LengthRestoration::StrainLimit => {
@@ -229,6 +230,7 @@ impl PhysicalMesh {
         pattern: &Pattern,
         params: &PaperParams,
         placement: Placement,
+        curved_polys: &[Vec<Point2>],
     ) {
         let d = (2.0 / (3f64.sqrt() * params.interior_density)).sqrt();
         let row = 0.5 * 3f64.sqrt() * d;
@@ -251,17 +253,6 @@ impl PhysicalMesh {
                 ]);
             }
         }
-        let curved_polys: Vec<Vec<Point2>> = gmesh
-            .faces
-            .iter()
-            .filter(|f| f.kind != FaceKind::Flat)
-            .map(|f| {
-                f.vertices
-                    .iter()
-                    .map(|&v| gmesh.vertices[v as usize].material)
-                    .collect()
-            })
-            .collect();
         let nrows = ((hi.y - lo.y) / row).ceil() as i64 + 1;
         let ncols = ((hi.x - lo.x) / d).ceil() as i64 + 2;
         for j in 0..nrows {
@@ -312,10 +303,21 @@ impl PhysicalMesh {
         for corners in curved_faces.iter().filter(|c| c.len() > 3) {
             let sum: nalgebra::Vector2<f64> = corners.iter().map(|m| m.coords).sum();
             let m = Point2::from(sum / corners.len() as f64);
-            self.material.push(m);
-            self.position.push(position(&m));
-            self.kind.push(SampleKind::Barycenter);
+            self.push_sample(m, position, SampleKind::Barycenter);
         }
+    }
+
+    /// A new vertex at pattern point `m`, placed by `position`; returns its index.
+    fn push_sample(
+        &mut self,
+        m: Point2,
+        position: &dyn Fn(&Point2) -> Point3,
+        kind: SampleKind,
+    ) -> u32 {
+        self.material.push(m);
+        self.position.push(position(&m));
+        self.kind.push(kind);
+        (self.material.len() - 1) as u32
     }
 
     /// The constrained Delaunay triangulation of the vertices so far with the

@@ -115,7 +115,7 @@ fn split_chain(
         let m = Point2::from(
             sp.material[a as usize].coords * (1.0 - t) + sp.material[b as usize].coords * t,
         );
-        let v = push_vertex(sp, m, position, SampleKind::CapSplit);
+        let v = sp.push_sample(m, position, SampleKind::CapSplit);
         chain.insert(i + 1, v);
         return true;
     }
@@ -148,25 +148,12 @@ fn split_boundary(
         return false;
     }
     let s = pattern.wrap(s0 + t * pattern.arc_ccw(s0, s1));
-    let v = push_vertex(sp, pattern.point_at(s), position, SampleKind::CapSplit);
+    let v = sp.push_sample(pattern.point_at(s), position, SampleKind::CapSplit);
     // the boundary stays in arc-length order
     let at = sp.boundary_arc.partition_point(|&x| x < s);
     sp.boundary.insert(at, v);
     sp.boundary_arc.insert(at, s);
     true
-}
-
-/// A new S_P vertex at pattern point `m`; returns its index.
-fn push_vertex(
-    sp: &mut PhysicalMesh,
-    m: Point2,
-    position: &dyn Fn(&Point2) -> Point3,
-    kind: SampleKind,
-) -> u32 {
-    sp.material.push(m);
-    sp.position.push(position(&m));
-    sp.kind.push(kind);
-    (sp.material.len() - 1) as u32
 }
 
 #[cfg(test)]
