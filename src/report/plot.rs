@@ -92,6 +92,7 @@ fn draw(plot: &LogLogPlot, buf: &mut [u8], (w, h): (u32, u32)) -> Result<(), Rep
         .configure_mesh()
         .x_desc(plot.x_desc)
         .y_desc(plot.y_desc)
+        // 8 labels: at the default 10 the log axis labels every 100 from 600 to 1000 and they overlap
         .x_labels(8)
         .x_label_formatter(&|v| format!("{v:.2e}"))
         .y_label_formatter(&|v| format!("{v:.0e}"))
