@@ -6,7 +6,7 @@
 //! (c_k, 1, 0). Every element is a rigid copy of the flat strip, so the mesh is exactly
 //! isometric by construction.
 
-use crate::geometry::{exp_so3, Matrix3, Point3, Pose, Vector3};
+use crate::geometry::{skew, Matrix3, Point3, Pose, Vector3};
 
 /// Ruling-bending coordinates of one ribbon.
 #[derive(Clone, Debug, PartialEq)]
@@ -104,9 +104,20 @@ pub fn crease_axis_derivative(c: f64) -> Vector3 {
 /// (station, 0, 0) with direction (c, 1, 0).
 #[inline]
 pub fn crease_transform(station: f64, c: f64, psi: f64) -> (Matrix3, Vector3) {
-    let r = exp_so3(&(crease_axis(c) * psi));
-    let p = Vector3::new(station, 0.0, 0.0);
-    (r, p - r * p)
+    let (sin, cos) = psi.sin_cos();
+    crease_transform_sin_cos(station, c, sin, cos)
+}
+
+/// [`crease_transform`] from sin psi and cos psi, so that one sin_cos per crease serves
+/// the frames and the twists of an evaluation. Rodrigues' formula on the unit crease
+/// axis d, with [d]x^2 = d d^T - I: R = cos psi I + sin psi [d]x + (1 - cos psi) d d^T.
+/// The axis passes through p = (station, 0, 0), so t = p - R p = p - station R e_x.
+#[inline]
+pub fn crease_transform_sin_cos(station: f64, c: f64, sin: f64, cos: f64) -> (Matrix3, Vector3) {
+    let d = crease_axis(c);
+    let r = Matrix3::identity() * cos + skew(&d) * sin + d * d.transpose() * (1.0 - cos);
+    let t = Vector3::new(station, 0.0, 0.0) - r.column(0) * station;
+    (r, t)
 }
 
 /// World geometry of a ribbon, rebuilt by [`reconstruct`]; buffers are reused.
@@ -122,6 +133,8 @@ pub struct Frames {
     pub rim_top: Vec<Point3>,
     /// n_e = R_e (0, 0, 1), e = 0..n-1 (eq. 3).
     pub normals: Vec<Vector3>,
+    /// (sin psi_k, cos psi_k) of every bending angle, k = 0..n-1 (entry 0 unused: (0, 1)).
+    pub bending_sin_cos: Vec<(f64, f64)>,
 }
 
 impl Frames {
@@ -140,16 +153,16 @@ pub fn reconstruct(strip: &Strip, q: &Coordinates, out: &mut Frames) {
     out.rim_bottom.resize(n + 1, Point3::origin());
     out.rim_top.resize(n + 1, Point3::origin());
     out.normals.resize(n, Vector3::z());
+    out.bending_sin_cos.resize(n, (0.0, 1.0));
 
     let mut r = *q.base.rotation.to_rotation_matrix().matrix();
     let mut t = q.base.translation.vector;
     for e in 0..n {
         if e > 0 {
-            let (rk, tk) = crease_transform(
-                strip.crease_station(e),
-                q.crease_direction[e],
-                q.bending_angle[e],
-            );
+            let (sin, cos) = q.bending_angle[e].sin_cos();
+            out.bending_sin_cos[e] = (sin, cos);
+            let (rk, tk) =
+                crease_transform_sin_cos(strip.crease_station(e), q.crease_direction[e], sin, cos);
             // world_from_element[e] = world_from_element[e-1] * T_e
             t += r * tk;
             r *= rk;

@@ -546,26 +546,25 @@ impl ChainModel {
             q[(j, i)] = v;
         }
         // element k-1 over y = (V_{k-1}, c_{k-1}, c_k = c_{k-1} + z_k): y_r = w_r for
-        // r < 7 and y_7 = w_6 + w_7
+        // r < 7 and y_7 = w_6 + w_7, so row and column 7 of G add to both 6 and 7
         let g = &self.blocks[k - 1];
-        let columns = |r: usize| -> &'static [usize] {
-            const W: [usize; 8] = [0, 1, 2, 3, 4, 5, 6, 7];
-            if r < 7 {
-                &W[r..r + 1]
-            } else {
-                &W[6..8]
-            }
-        };
-        for r in 0..8 {
-            for s in 0..8 {
-                let v = g[(r, s)];
-                for &u in columns(r) {
-                    for &w in columns(s) {
-                        q[(u, w)] += v;
-                    }
-                }
+        for s in 0..7 {
+            for r in 0..7 {
+                q[(r, s)] += g[(r, s)];
             }
         }
+        for r in 0..7 {
+            let (v, h) = (g[(r, 7)], g[(7, r)]);
+            q[(r, 6)] += v;
+            q[(r, 7)] += v;
+            q[(6, r)] += h;
+            q[(7, r)] += h;
+        }
+        let corner = g[(7, 7)];
+        q[(6, 6)] += corner;
+        q[(6, 7)] += corner;
+        q[(7, 6)] += corner;
+        q[(7, 7)] += corner;
         // crease k's own block over (c_k, psi_k)
         let l = &self.local[k];
         let rows = [[6usize, 7], [8, 8]];

@@ -39,44 +39,36 @@ impl Objective<'_> {
                 });
             }
         }
+        // One pass over the creases: the c_k twists go to [base, base + n - 1), the
+        // psi_k twists after them (the layout's order), with one sin_cos per crease
+        // (cached by `reconstruct`) and each crease's data computed once.
         let f = &ws.frames;
+        let first = ws.twists.len();
+        let zero = Twist {
+            angular: Vector3::zeros(),
+            linear: Vector3::zeros(),
+        };
+        ws.twists.resize(first + 2 * (n - 1), zero);
         ws.crease_extra.clear();
         ws.crease_extra
             .push((Vector3::zeros(), Vector3::zeros(), Vector3::zeros()));
         for k in 1..n {
             let r_prev = f.rotation[k - 1];
             let c = ws.coords.crease_direction[k];
-            let psi = ws.coords.bending_angle[k];
+            let (sin, cos) = f.bending_sin_cos[k];
             let a = r_prev * Vector3::new(self.strip.crease_station(k), 0.0, 0.0)
                 + f.translation[k - 1];
             let d = crease_axis(c);
             let dd = crease_axis_derivative(c);
             let s = 1.0 + c * c;
             let ddd = Vector3::new(-3.0 * c, 2.0 * c * c - 1.0, 0.0) / (s * s * s.sqrt());
-            let domega = ddd * psi.sin() + d.cross(&ddd) * (1.0 - psi.cos());
+            let domega = ddd * sin + d.cross(&ddd) * (1.0 - cos);
             ws.crease_extra.push((a, r_prev * dd, r_prev * domega));
-        }
-        // c_k twists, then psi_k twists (matching the layout order)
-        for pass in 0..2 {
-            for k in 1..n {
-                let r_prev = f.rotation[k - 1];
-                let t_prev = f.translation[k - 1];
-                let c = ws.coords.crease_direction[k];
-                let psi = ws.coords.bending_angle[k];
-                let axis_point = Point3::from(
-                    r_prev * Vector3::new(self.strip.crease_station(k), 0.0, 0.0) + t_prev,
-                );
-                let d = crease_axis(c);
-                let omega_local = if pass == 0 {
-                    // derivative of exp(psi d(c)) w.r.t. the axis at fixed angle
-                    let dd = crease_axis_derivative(c);
-                    dd * psi.sin() + d.cross(&dd) * (1.0 - psi.cos())
-                } else {
-                    d
-                };
-                ws.twists
-                    .push(Twist::rotation_about(r_prev * omega_local, &axis_point));
-            }
+            let axis_point = Point3::from(a);
+            // c_k: the derivative of exp(psi d(c)) w.r.t. the axis at fixed angle
+            let omega_c = dd * sin + d.cross(&dd) * (1.0 - cos);
+            ws.twists[first + k - 1] = Twist::rotation_about(r_prev * omega_c, &axis_point);
+            ws.twists[first + n - 1 + k - 1] = Twist::rotation_about(r_prev * d, &axis_point);
         }
     }
 

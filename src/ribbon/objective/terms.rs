@@ -4,7 +4,7 @@
 //! directly in (c, psi): bending, the crease regularizer, the end-crease bound.
 
 use super::accumulate::{direction_jacobian, point_jacobian, sliding_rate, Accumulator};
-use super::kinetic::mass_rate_coupling;
+use super::kinetic::add_mass_rate_coupling;
 use super::{Mat8, Objective, Workspace};
 use crate::geometry::{Matrix3, Point2, Point3, Vector3};
 use crate::ribbon::mass::element_mass;
@@ -120,7 +120,7 @@ impl Objective<'_> {
             let verts = [(e, false), (e, true), (e + 1, false), (e + 1, true)];
             let mut dvalue = 0.0;
             // for the Hessian: positions, the mass-rate force -m'_a g and the sliding
-            // of each vertex on a free crease (see `mass_rate_coupling`)
+            // of each vertex on a free crease (see `add_mass_rate_coupling`)
             let mut xs = [Vector3::zeros(); 4];
             let mut rate = [Vector3::zeros(); 4];
             let mut sigma = [Vector3::zeros(); 4];
@@ -156,7 +156,7 @@ impl Objective<'_> {
             }
             acc.add_local(e, -dvalue, dvalue);
             if let Some(hs) = acc.ws_hessian.as_deref_mut() {
-                hs[e] += mass_rate_coupling(&xs, &rate, &sigma, &column, 1.0);
+                add_mass_rate_coupling(&mut hs[e], &xs, &rate, &sigma, &column, 1.0);
             }
         }
         value
