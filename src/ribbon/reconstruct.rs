@@ -169,7 +169,7 @@ pub fn reconstruct(strip: &Strip, q: &Coordinates, out: &mut Frames) {
         }
         out.rotation[e] = r;
         out.translation[e] = t;
-        out.normals[e] = r.column(2).into_owned();
+        out.normals[e] = Vector3::new(r[(0, 2)], r[(1, 2)], r[(2, 2)]);
         // Vertices on crease e lie on the rotation axis of T_e, so element e-1 and
         // element e place them identically; take them from element e.
         out.rim_bottom[e] = out.to_world(e, &strip.material_bottom(e, q.crease_direction[e]));

@@ -22,7 +22,7 @@
 
 use nalgebra::{Cholesky, Matrix2, SMatrix, SVector};
 
-use super::hessian::suffix_sums;
+use super::hessian::geometric_suffix_sums;
 use super::{Mat8, Objective, Workspace};
 use crate::geometry::{Matrix3, Vector3};
 
@@ -93,11 +93,9 @@ impl Objective<'_> {
         );
         let n = self.strip.segments;
         let lay = self.layout;
-        suffix_sums(
-            &ws.element_hessian,
+        geometric_suffix_sums(
             &ws.element_gradient,
             &ws.element_second,
-            &mut ws.hessian_suffix,
             &mut ws.scratch_psuf,
         );
         model.segments = n;
@@ -256,12 +254,12 @@ impl ChainModel {
         for k in (1..n).rev() {
             // element k (it is moved by crease k and slid by c_k, c_{k+1})
             let g = &self.blocks[k];
-            let tt: Mat6 = g.fixed_view::<6, 6>(0, 0).into_owned();
+            let tt = Mat6::from_fn(|i, j| g[(i, j)]);
             let inner = k + 1 < n;
-            let mut gv: Vec6 = g.fixed_view::<6, 1>(0, 6).into_owned();
+            let mut gv = Vec6::from_fn(|i, _| g[(i, 6)]);
             let mut l = g[(6, 6)];
             if inner {
-                gv += g.fixed_view::<6, 1>(0, 7);
+                gv += Vec6::from_fn(|i, _| g[(i, 7)]);
                 l += 2.0 * g[(6, 7)] + g[(7, 7)];
             }
             let c = &prefix[k];
@@ -283,7 +281,7 @@ impl ChainModel {
                 + 2.0 * (w_moment - ang(cb).dot(&w_sum));
         }
         if self.floating {
-            let g0: Mat6 = self.blocks[0].fixed_view::<6, 6>(0, 0).into_owned();
+            let g0 = Mat6::from_fn(|i, j| self.blocks[0][(i, j)]);
             let s0 = s + g0;
             for (a, o) in out.iter_mut().enumerate().take(6) {
                 let x = self.base_twists.column(a);
@@ -457,13 +455,13 @@ impl ChainModel {
         self.pivot_inverse.clear();
         self.pivot_inverse.resize(n, Matrix2::zeros());
         // value Hessian after the last crease: element n-1 with c_n = 0
-        let mut p: Mat7 = self.blocks[n - 1].fixed_view::<7, 7>(0, 0).into_owned();
+        let mut p = Mat7::from_fn(|i, j| self.blocks[n - 1][(i, j)]);
         for k in (1..n).rev() {
             let q = self.stage_matrix(k, &p, shift);
             let (ic, ip) = (self.c_index(k), self.psi_index(k));
             let mask = [free[ic], free[ip]];
-            let mut quu = q.fixed_view::<2, 2>(7, 7).into_owned();
-            let mut qux: Mat2x7 = q.fixed_view::<2, 7>(7, 0).into_owned();
+            let mut quu = Matrix2::from_fn(|i, j| q[(7 + i, 7 + j)]);
+            let mut qux = Mat2x7::from_fn(|i, j| q[(7 + i, j)]);
             for (r, &f) in mask.iter().enumerate() {
                 if !f {
                     // a held control: its row and column drop out, its step is 0
@@ -477,15 +475,21 @@ impl ChainModel {
                 return false;
             };
             let gain = -(inv * qux);
-            let qxx: Mat7 = q.fixed_view::<7, 7>(0, 0).into_owned();
-            p = qxx + qux.transpose() * gain;
-            p = (p + p.transpose()) * 0.5;
+            // p = Q_xx + Q_ux^T K, symmetric (= Q_xx - Q_ux^T Q_uu^-1 Q_ux): the upper
+            // triangle, mirrored
+            for j in 0..7 {
+                for i in 0..=j {
+                    let v = q[(i, j)] + qux[(0, i)] * gain[(0, j)] + qux[(1, i)] * gain[(1, j)];
+                    p[(i, j)] = v;
+                    p[(j, i)] = v;
+                }
+            }
             self.gain[k] = gain;
             self.pivot_inverse[k] = inv;
         }
         self.root = None;
         if self.floating {
-            let pv: Mat6 = p.fixed_view::<6, 6>(0, 0).into_owned();
+            let pv = Mat6::from_fn(|i, j| p[(i, j)]);
             let x = self.base_twists;
             let mut r = x.transpose() * pv * x;
             for i in 0..3 {
@@ -517,11 +521,9 @@ impl ChainModel {
         // x_k = M w, M = [e_0 .. e_5, a, a, b] with a = (ξ_c, 1), b = (ξ_psi, 0): M is
         // the identity but for its last three columns, so M^T P M needs only P a and P b
         // (about 200 flops instead of the 2000 of the dense product)
-        let mut a = Vec7::zeros();
-        a.fixed_rows_mut::<6>(0).copy_from(&self.xi_c[k]);
-        a[6] = 1.0;
-        let mut b = Vec7::zeros();
-        b.fixed_rows_mut::<6>(0).copy_from(&self.xi_psi[k]);
+        let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
+        let a = Vec7::from_fn(|i, _| if i < 6 { xc[i] } else { 1.0 });
+        let b = Vec7::from_fn(|i, _| if i < 6 { xp[i] } else { 0.0 });
         let (pa, pb) = (p * a, p * b);
         let (aa, ab, bb) = (a.dot(&pa), a.dot(&pb), b.dot(&pb));
         let mut q = Mat9::zeros();
@@ -632,7 +634,7 @@ impl ChainModel {
         for k in (1..n).rev() {
             let (ic, ip) = (self.c_index(k), self.psi_index(k));
             let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
-            let pv = p.fixed_rows::<6>(0);
+            let pv = Vec6::from_fn(|i, _| p[i]);
             let along_c = xc.dot(&pv) + p[6];
             // q_x = M_x^T p, q_u = M_u^T p - rhs_u
             let mut qu = nalgebra::Vector2::new(along_c - rhs[ic], xp.dot(&pv) - rhs[ip]);
@@ -650,7 +652,7 @@ impl ChainModel {
         let mut x = Vec7::zeros();
         if self.floating {
             let mut r = Vec6::zeros();
-            let pv: Vec6 = p.fixed_rows::<6>(0).into_owned();
+            let pv = Vec6::from_fn(|i, _| p[i]);
             let force = self.base_twists.transpose() * pv;
             for i in 0..6 {
                 r[i] = if self.free[i] { rhs[i] - force[i] } else { 0.0 };
@@ -667,8 +669,9 @@ impl ChainModel {
             let u = self.gain[k] * x + self.feedforward[k];
             let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
             let c = x[6] + u[0];
-            let v = x.fixed_rows::<6>(0) + xc * c + xp * u[1];
-            x.fixed_rows_mut::<6>(0).copy_from(&v);
+            for i in 0..6 {
+                x[i] += xc[i] * c + xp[i] * u[1];
+            }
             x[6] = c;
             out[self.c_index(k)] = u[0];
             out[self.psi_index(k)] = u[1];

@@ -187,18 +187,33 @@ pub(super) fn suffix_sums(
     let n = element_hessian.len();
     hessian_suffix.clear();
     hessian_suffix.resize(n + 1, Mat6::zeros());
+    for e in (0..n).rev() {
+        let g = &element_hessian[e];
+        hessian_suffix[e] = hessian_suffix[e + 1] + Mat6::from_fn(|i, j| g[(i, j)]);
+    }
+    geometric_suffix_sums(element_gradient, element_second, psuf);
+}
+
+/// The geometric part of [`suffix_sums`] alone (P_m, F_m, M_m): all the chain model
+/// needs, since it folds the twist blocks along its own sweep.
+pub(super) fn geometric_suffix_sums(
+    element_gradient: &[Vec8],
+    element_second: &[SecondOrder],
+    psuf: &mut Vec<(Matrix3, Vector3, Vector3)>,
+) {
+    let n = element_gradient.len();
     psuf.clear();
     psuf.resize(
         n + 1,
         (Matrix3::zeros(), Vector3::zeros(), Vector3::zeros()),
     );
     for e in (0..n).rev() {
-        hessian_suffix[e] = hessian_suffix[e + 1] + element_hessian[e].fixed_view::<6, 6>(0, 0);
         let (p, f, m) = psuf[e + 1];
+        let g = &element_gradient[e];
         psuf[e] = (
             p + element_second[e].p_gamma,
-            f + element_gradient[e].fixed_rows::<3>(3),
-            m + element_gradient[e].fixed_rows::<3>(0),
+            f + Vector3::new(g[3], g[4], g[5]),
+            m + Vector3::new(g[0], g[1], g[2]),
         );
     }
 }

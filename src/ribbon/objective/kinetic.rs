@@ -88,7 +88,7 @@ impl Objective<'_> {
         for e in 0..n {
             let mass = element_mass(self.strip.length, w, n, c[e + 1] - c[e]);
             let verts = [(e, false), (e, true), (e + 1, false), (e + 1, true)];
-            let d: [Vector3; 4] = verts.map(|(j, top)| if top { res_t[j] } else { res_b[j] });
+            let d = [res_b[e], res_t[e], res_b[e + 1], res_t[e + 1]];
             let mut gamma = [Vector3::zeros(); 4];
             let mut dmass = 0.0;
             for a in 0..4 {
