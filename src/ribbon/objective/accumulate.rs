@@ -72,6 +72,10 @@ pub(super) struct Accumulator<'b> {
     pub(super) second: Option<&'b mut Vec<SecondOrder>>,
     pub(super) frames: &'b Frames,
     pub(super) coords: &'b Coordinates,
+    /// Whether generalized forces are collected at all: not for the value-only
+    /// evaluations of a line search's backtracking (a third of all evaluations at
+    /// n = 800 on the torsion), which need f alone.
+    pub(super) forces: bool,
 }
 
 impl Accumulator<'_> {
@@ -88,6 +92,9 @@ impl Accumulator<'_> {
         gamma: &Vector3,
         vertex: Option<(usize, f64)>,
     ) {
+        if !self.forces {
+            return;
+        }
         let g = &mut self.ws_gradient[e];
         let moment = p.coords.cross(gamma);
         g[0] += moment.x;
@@ -129,6 +136,9 @@ impl Accumulator<'_> {
         d: &Vector3,
         gamma: &Vector3,
     ) {
+        if !self.forces {
+            return;
+        }
         let g = &mut self.ws_gradient[e];
         let moment = d.cross(gamma);
         g[0] += moment.x;
@@ -149,6 +159,9 @@ impl Accumulator<'_> {
 
     /// Explicit derivative w.r.t. c_e (col 6) and c_{e+1} (col 7) of element e.
     pub(super) fn add_local(&mut self, e: usize, d_ce: f64, d_ce1: f64) {
+        if !self.forces {
+            return;
+        }
         let n = self.strip.segments;
         if e != 0 {
             self.ws_gradient[e][6] += d_ce;

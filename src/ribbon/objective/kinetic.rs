@@ -90,15 +90,23 @@ impl Objective<'_> {
             let verts = [(e, false), (e, true), (e + 1, false), (e + 1, true)];
             let d = [res_b[e], res_t[e], res_b[e + 1], res_t[e + 1]];
             let mut gamma = [Vector3::zeros(); 4];
-            let mut dmass = 0.0;
             for a in 0..4 {
                 for b in 0..4 {
                     gamma[a] += d[b] * (t.density * mass.k[a][b]);
-                    dmass += 0.5 * t.density * mass.dk_ddelta_c[a][b] * d[a].dot(&d[b]);
                 }
                 value += 0.5 * d[a].dot(&gamma[a]);
             }
+            if !acc.forces {
+                // f alone (a backtracking trial): nothing below changes it
+                continue;
+            }
             // explicit mass dependence on Δc = c_{e+1} - c_e
+            let mut dmass = 0.0;
+            for a in 0..4 {
+                for b in 0..4 {
+                    dmass += 0.5 * t.density * mass.dk_ddelta_c[a][b] * d[a].dot(&d[b]);
+                }
+            }
             acc.add_local(e, -dmass, dmass);
             // per vertex: world position and the sliding column σ_a of dD_a/dc_j (zero
             // for the fixed end creases), for the Gauss-Newton block

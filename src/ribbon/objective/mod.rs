@@ -175,7 +175,8 @@ impl<'a> Objective<'a> {
         if let Some((g, _)) = grad_out.as_mut() {
             g.iter_mut().for_each(|x| *x = 0.0);
         }
-        ws.parts = self.point_terms(ws, second_order, record_points);
+        let forces = grad_out.is_some() || second_order;
+        ws.parts = self.point_terms(ws, forces, second_order, record_points);
         // terms written directly in (c, psi): bending, regularizer, end-crease bound
         let (coords, parts) = (&ws.coords, &mut ws.parts);
         self.crease_terms(coords, parts, grad_out.as_mut().map(|(g, _)| &mut **g));
@@ -197,12 +198,13 @@ impl<'a> Objective<'a> {
     }
 
     /// Every term that acts through points and directions of the elements (kinetic,
-    /// gravity, normal guiding, point forces, equalities): their values, and their
-    /// per-element generalized forces (and second-order data when `second_order`)
-    /// collected in `ws`.
+    /// gravity, normal guiding, point forces, equalities): their values, and, with
+    /// `forces`, their per-element generalized forces (and second-order data when
+    /// `second_order`) collected in `ws`.
     fn point_terms(
         &self,
         ws: &mut Workspace,
+        forces: bool,
         second_order: bool,
         record_points: bool,
     ) -> ObjectiveParts {
@@ -226,6 +228,7 @@ impl<'a> Objective<'a> {
             second: second_order.then_some(&mut ws.element_second),
             frames: &ws.frames,
             coords: &ws.coords,
+            forces,
         };
 
         // --- kinetic term (sec. 4) ---
