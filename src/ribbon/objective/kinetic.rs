@@ -47,9 +47,18 @@ where
         + std::ops::Mul<f64, Output = T>
         + std::ops::Add<Output = T>,
 {
-    // segment k with us[k] <= u < us[k+1] (clamped to the ends), walking from `hint`:
-    // a new rim vertex sits next to the old one of the same index (the crease bounds
-    // keep it within one element), so this is O(1) and the kinetic term stays O(n).
+    let (k, inv_span, offset) = rim_segment(us, u, hint);
+    interpolate_on(values, k, inv_span, offset)
+}
+
+/// The segment k with us[k] <= u < us[k+1] (clamped to the ends), 1 / (us[k+1] - us[k])
+/// and u - us[k]: what every interpolation at `u` on this rim shares (the kinetic term
+/// interpolates positions and velocities at the same station).
+#[inline]
+fn rim_segment(us: &[f64], u: f64, hint: usize) -> (usize, f64, f64) {
+    // walking from `hint`: a new rim vertex sits next to the old one of the same index
+    // (the crease bounds keep it within one element), so this is O(1) and the kinetic
+    // term stays O(n).
     let last = us.len() - 2;
     let mut k = hint.min(last);
     while k > 0 && u < us[k] {
@@ -58,9 +67,20 @@ where
     while k < last && u >= us[k + 1] {
         k += 1;
     }
-    let span = us[k + 1] - us[k];
-    let slope = (values[k + 1] - values[k]) * (1.0 / span);
-    (values[k] + slope * (u - us[k]), slope)
+    (k, 1.0 / (us[k + 1] - us[k]), u - us[k])
+}
+
+/// Value and slope of `values` on segment k (from [`rim_segment`]).
+#[inline]
+fn interpolate_on<T>(values: &[T], k: usize, inv_span: f64, offset: f64) -> (T, T)
+where
+    T: Copy
+        + std::ops::Sub<Output = T>
+        + std::ops::Mul<f64, Output = T>
+        + std::ops::Add<Output = T>,
+{
+    let slope = (values[k + 1] - values[k]) * inv_span;
+    (values[k] + slope * offset, slope)
 }
 
 impl Objective<'_> {
@@ -187,8 +207,9 @@ impl Objective<'_> {
                 } else {
                     (&hist.u_bottom, &hist.x_bottom, &hist.v_bottom)
                 };
-                let (rx, drx) = interpolate(us, xs, m.x, j);
-                let (rv, drv) = interpolate(us, vs, m.x, j);
+                let (k, inv_span, offset) = rim_segment(us, m.x, j);
+                let (rx, drx) = interpolate_on(xs, k, inv_span, offset);
+                let (rv, drv) = interpolate_on(vs, k, inv_span, offset);
                 let x = if top {
                     frames.rim_top[j]
                 } else {
