@@ -258,9 +258,10 @@ impl Objective<'_> {
     }
 }
 
-/// Adds to `block` the coupling of an element's mass rate with its motion, over [twist; c_e; c_{e+1}]:
-/// a term Σ_b w_b(q) . ∂y_b/∂q_{Δc} whose w_b = ∂²(...)/∂Δc∂y_b at vertex b gives the
-/// row r = Σ_b [x_b × w_b; w_b] `scale` + w_b . σ_b (sliding column of b), and the
+/// Adds to `block` the coupling of an element's mass rate with its motion, over
+/// [twist; c_e; c_{e+1}]: a term Σ_b w_b(q) . ∂y_b/∂q_{Δc} whose
+/// w_b = ∂²(...)/∂Δc∂y_b at vertex b gives the row
+/// r = Σ_b [x_b × w_b; w_b] `scale` + w_b . σ_b (sliding column of b), and the
 /// symmetric block e r^T + r e^T with e = ∂Δc/∂(c_e, c_{e+1}) = (-1, +1). `scale` is
 /// ∂y/∂x (1/h for the kinetic residual, 1 for a position); `sigma` is ∂y_b/∂c_j.
 pub(super) fn add_mass_rate_coupling(
@@ -291,7 +292,8 @@ pub(super) fn add_mass_rate_coupling(
     }
 }
 
-/// The Gauss-Newton block of one element's kinetic term over [twist; c_e; c_{e+1}]:
+/// Adds to `block` the Gauss-Newton block of one element's kinetic term over
+/// [twist; c_e; c_{e+1}]:
 /// G = rho Σ_ab K_ab J_a^T J_b with J_a = [-[x_a]×/h, I/h | σ_a] for its vertices at
 /// world positions `xs` (m), sliding columns `sigma` (local column `column`, 6 or 7,
 /// for vertices on a free crease), mass pattern `k` (element mass / rho, m^2).
