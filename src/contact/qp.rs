@@ -223,10 +223,11 @@ impl DualActiveSet {
             let mut v = a[j * m + self.free[r]];
             let row = &self.l[r * cap..r * cap + r];
             let y = &self.l[k * cap..k * cap + r];
-            v -= row.iter().zip(y).map(|(x, y)| x * y).sum::<f64>();
+            v -= dot(row, y);
             self.l[k * cap + r] = v / self.l[r * cap + r];
         }
-        let yy: f64 = self.l[k * cap..k * cap + k].iter().map(|v| v * v).sum();
+        let y = &self.l[k * cap..k * cap + k];
+        let yy = dot(y, y);
         let ajj = a[j * m + j];
         let d2 = ajj - yy;
         if !(d2 > 1e-10 * ajj.abs().max(1e-300)) {
@@ -263,8 +264,8 @@ impl DualActiveSet {
         // L y = b_P
         for r in 0..k {
             let row = &self.l[r * cap..r * cap + r];
-            let dot: f64 = row.iter().zip(&self.rhs[..r]).map(|(x, y)| x * y).sum();
-            self.rhs[r] = (self.rhs[r] - dot) / self.l[r * cap + r];
+            let d = dot(row, &self.rhs[..r]);
+            self.rhs[r] = (self.rhs[r] - d) / self.l[r * cap + r];
         }
         // L^T s = y, column-oriented over the rows of L
         for r in (0..k).rev() {
@@ -278,6 +279,31 @@ impl DualActiveSet {
         self.s.clear();
         self.s.extend_from_slice(&self.rhs);
     }
+}
+
+/// Σ a_i b_i over the common length, in eight interleaved partial sums. A single
+/// running sum is one dependent chain of additions (one term per add latency, ~4
+/// cycles); eight independent ones let the compiler use SIMD lanes and keep the adder
+/// busy. The append and the solves of the factor are these dot products: at a resting
+/// contact patch of m = 600 constraints they were 42 % of a step (2026-12-06).
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
+    let tail: f64 = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    let mut acc = [0.0f64; 8];
+    for (x, y) in ca.zip(cb) {
+        for i in 0..8 {
+            acc[i] += x[i] * y[i];
+        }
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
 #[cfg(test)]
@@ -357,6 +383,62 @@ mod tests {
                     (g - w).abs() < 1e-6 * (1.0 + w.abs()),
                     "trial {trial}: {lam:?} vs {want:?}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn dot_matches_the_plain_sum_at_every_length() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for n in 0..40 {
+            let a: Vec<f64> = (0..n).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let b: Vec<f64> = (0..n + 3).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let plain: f64 = a.iter().zip(&b).map(|(x, y)| x * y).sum();
+            assert!(
+                (dot(&a, &b) - plain).abs() <= 1e-14 * n.max(1) as f64,
+                "n = {n}"
+            );
+        }
+    }
+
+    /// Large enough for the factor's dot products to run through their eight-lane
+    /// loop (the brute-force test above stays below eight constraints): the KKT
+    /// conditions of the dual at the returned λ.
+    #[test]
+    fn satisfies_the_kkt_conditions_on_large_problems() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let mut solver = DualActiveSet::new();
+        for trial in 0..20 {
+            let m = rng.random_range(20..=60);
+            let n = m + 10;
+            let c = nalgebra::DMatrix::from_fn(m, n, |_, _| rng.random_range(-1.0..1.0));
+            let mut h = nalgebra::DMatrix::<f64>::identity(n, n);
+            for i in 0..n - 1 {
+                let k = 10.0;
+                h[(i, i)] += k;
+                h[(i + 1, i + 1)] += k;
+                h[(i, i + 1)] -= k;
+                h[(i + 1, i)] -= k;
+            }
+            let a_mat = &c * h.clone().cholesky().unwrap().inverse() * c.transpose();
+            let b: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let mut lam = vec![0.0; m];
+            let tol = 1e-10;
+            let out = solver.solve(a_mat.as_slice(), &b, &mut lam, tol, 10_000);
+            assert!(out.converged, "trial {trial}");
+            assert!(out.active >= 8, "trial {trial}: only {} active", out.active);
+            let w = nalgebra::DVector::from_vec(b.clone())
+                - &a_mat * nalgebra::DVector::from_vec(lam.clone());
+            for i in 0..m {
+                assert!(lam[i] >= 0.0, "trial {trial}: λ_{i} = {}", lam[i]);
+                assert!(w[i] <= tol, "trial {trial}: violation {} at {i}", w[i]);
+                if lam[i] > 0.0 {
+                    assert!(
+                        w[i].abs() <= 1e-8,
+                        "trial {trial}: λ_{i} > 0 with w = {}",
+                        w[i]
+                    );
+                }
             }
         }
     }
