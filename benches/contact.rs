@@ -6,7 +6,9 @@
 //! - `scene`: one whole step (optimization + contact) of the falling ribbon, the double
 //!   chain and the Moebius chain mid-motion;
 //! - `closeness`: the double chain with the stiff (Pan et al.) and the plain (Harmon et
-//!   al.) closeness measure.
+//!   al.) closeness measure;
+//! - `resting_vs_n`: one step of the falling ribbon at rest on the ground, n = 150, 300
+//!   and 600 elements (the contact stage against n).
 //!
 //! Run: `cargo bench --bench contact` (add `-- overhead` etc. to filter).
 
@@ -73,5 +75,17 @@ fn closeness(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, overhead, scenes, closeness);
+/// One step of ribbon_falling at rest on the ground (t = 1.2 s: every contact of the
+/// patch active) against the number of elements: the contact stage's cost against n.
+fn resting_vs_n(c: &mut Criterion) {
+    let mut group = c.benchmark_group("resting_vs_n");
+    group.sample_size(10);
+    for n in [150usize, 300, 600] {
+        let base = warmed("ribbon_falling", &[format!("ribbon.segments={n}")], 120);
+        group.bench_function(BenchmarkId::from_parameter(n), step_from(&base));
+    }
+    group.finish();
+}
+
+criterion_group!(benches, overhead, scenes, closeness, resting_vs_n);
 criterion_main!(benches);
