@@ -421,12 +421,13 @@ mod tests {
         Motion { x0: x, x1: x }
     }
 
-    /// The separating-axis early exit never rejects a pair that comes within the margin:
-    /// on random motions, whenever it says "apart", the distance sampled along the
-    /// motion (vertex-triangle and segment-segment, by parry) stays above the margin;
-    /// and it does reject some pairs (it is not vacuous).
+    /// Neither early exit of the crossing test rejects a pair that comes within the
+    /// margin: on random motions, whenever the swept boxes or the end distance minus
+    /// the travel say "apart", the distance sampled along the motion (vertex-triangle
+    /// and segment-segment, by parry) stays above the margin; and each exit does reject
+    /// some pairs (neither is vacuous).
     #[test]
-    fn swept_apart_only_rejects_pairs_that_stay_apart() {
+    fn early_exits_only_reject_pairs_that_stay_apart() {
         use parry3d_f64::query::PointQuery;
         use parry3d_f64::shape::Segment;
         use rand::{Rng, SeedableRng};
@@ -437,14 +438,23 @@ mod tests {
             Motion { x0, x1 }
         };
         let margin = 0.05;
-        let mut rejected = [0; 2];
+        // rejections by [box, travel] for [vertex-face, edge-edge]
+        let mut rejected = [[0; 2]; 2];
         for _ in 0..2000 {
             let pts = [(); 4].map(|_| point(&mut rng));
             for (k, split) in [1, 2].into_iter().enumerate() {
-                if !swept_apart(&pts, split, margin) {
+                let end = if split == 1 {
+                    vertex_face_at(&pts, 1.0).0
+                } else {
+                    edge_edge_at(&pts, 1.0).0
+                };
+                let by_box = swept_apart(&pts, split, margin);
+                let by_travel = end - travel(&pts, split) > margin;
+                rejected[0][k] += by_box as usize;
+                rejected[1][k] += by_travel as usize;
+                if !(by_box || by_travel) {
                     continue;
                 }
-                rejected[k] += 1;
                 for i in 0..=50 {
                     let t = i as f64 / 50.0;
                     let p = pts.map(|m| Point3::from(m.at(t)));
@@ -464,7 +474,7 @@ mod tests {
                 }
             }
         }
-        assert!(rejected.iter().all(|&r| r > 100), "{rejected:?}");
+        assert!(rejected.iter().flatten().all(|&r| r > 100), "{rejected:?}");
     }
 
     #[test]
