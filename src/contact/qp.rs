@@ -349,6 +349,25 @@ mod tests {
         f
     }
 
+    /// A = C H^-1 C^T (m x m) with H = I + K L the closeness metric of a chain of n
+    /// vertices (K = 10) and C random: the dual matrix of m random constraints.
+    fn random_dual(
+        rng: &mut rand_chacha::ChaCha8Rng,
+        m: usize,
+        n: usize,
+    ) -> nalgebra::DMatrix<f64> {
+        let c = nalgebra::DMatrix::from_fn(m, n, |_, _| rng.random_range(-1.0..1.0));
+        let mut h = nalgebra::DMatrix::<f64>::identity(n, n);
+        let k = 10.0;
+        for i in 0..n - 1 {
+            h[(i, i)] += k;
+            h[(i + 1, i + 1)] += k;
+            h[(i, i + 1)] -= k;
+            h[(i + 1, i)] -= k;
+        }
+        &c * h.cholesky().expect("positive definite").inverse() * c.transpose()
+    }
+
     #[test]
     fn matches_brute_force_on_random_problems() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
@@ -356,17 +375,7 @@ mod tests {
         for trial in 0..300 {
             let m = rng.random_range(1..=7);
             let n = rng.random_range(m..=m + 6);
-            // A = C H^-1 C^T with H = I + K L of a random chain, C random
-            let c = nalgebra::DMatrix::from_fn(m, n, |_, _| rng.random_range(-1.0..1.0));
-            let mut h = nalgebra::DMatrix::<f64>::identity(n, n);
-            for i in 0..n - 1 {
-                let k = 10.0;
-                h[(i, i)] += k;
-                h[(i + 1, i + 1)] += k;
-                h[(i, i + 1)] -= k;
-                h[(i + 1, i)] -= k;
-            }
-            let a_mat = &c * h.clone().cholesky().unwrap().inverse() * c.transpose();
+            let a_mat = random_dual(&mut rng, m, n);
             let a: Vec<f64> = a_mat.as_slice().to_vec();
             let b: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
             let mut lam = vec![0.0; m];
@@ -411,16 +420,7 @@ mod tests {
         for trial in 0..20 {
             let m = rng.random_range(20..=60);
             let n = m + 10;
-            let c = nalgebra::DMatrix::from_fn(m, n, |_, _| rng.random_range(-1.0..1.0));
-            let mut h = nalgebra::DMatrix::<f64>::identity(n, n);
-            for i in 0..n - 1 {
-                let k = 10.0;
-                h[(i, i)] += k;
-                h[(i + 1, i + 1)] += k;
-                h[(i, i + 1)] -= k;
-                h[(i + 1, i)] -= k;
-            }
-            let a_mat = &c * h.clone().cholesky().unwrap().inverse() * c.transpose();
+            let a_mat = random_dual(&mut rng, m, n);
             let b: Vec<f64> = (0..m).map(|_| rng.random_range(-1.0..1.0)).collect();
             let mut lam = vec![0.0; m];
             let tol = 1e-10;
