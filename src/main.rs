@@ -13,6 +13,7 @@ use clap::{Parser, Subcommand};
 use developable_sim::cli::args::{
     NodeArgs, RenderArgs, ReplayArgs, ReportArgs, RunArgs, StressArgs,
 };
+use developable_sim::cli::stop::{on_stop_signal, stop_message, StopAction, FORCED_EXIT_STATUS};
 use developable_sim::cli::{bag_name, banner, node_launch, summary, CheckFailed, CliObserver};
 use developable_sim::record::bag::{BagOptions, Compression};
 use developable_sim::record::recorder::RunRecorder;
@@ -180,13 +181,18 @@ fn render_command(a: RenderArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// A flag set by Ctrl-C or SIGTERM (and `wake` called, for the node's poll loop).
+/// A flag set by the first Ctrl-C or SIGTERM (and `wake` called, for the node's poll
+/// loop); a second one exits at once (`cli::stop`).
 fn stop_flag(wake: impl Fn() + Send + 'static) -> anyhow::Result<Arc<AtomicBool>> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&stop);
     ctrlc::set_handler(move || {
-        flag.store(true, Ordering::SeqCst);
-        wake();
+        let action = on_stop_signal(&flag);
+        eprintln!("{}", stop_message(action));
+        match action {
+            StopAction::Stop => wake(),
+            StopAction::ExitNow => std::process::exit(FORCED_EXIT_STATUS),
+        }
     })
     .context("installing the Ctrl-C / SIGTERM handler")?;
     Ok(stop)

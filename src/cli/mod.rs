@@ -8,6 +8,7 @@ pub mod args;
 pub mod bag_name;
 pub mod banner;
 pub mod node_launch;
+pub mod stop;
 pub mod summary;
 
 use crate::record::recorder::RunRecorder;
