@@ -1,9 +1,10 @@
 //! What Ctrl-C and SIGTERM do to `run` and `node`.
 //!
 //! The first signal asks for a clean stop: the run or node stops after its current step
-//! (or tick) and closes its bag. A second signal exits at once: one step can take
-//! minutes (a contact stage stalled on a fold finer than its thickness, docs/contact.md),
-//! and a user who asks twice wants the process gone. The bag is then left as after
+//! (or tick) and closes its bag. A second signal exits at once: one step can take long
+//! (seconds for a long ribbon at its iteration limit; minutes for the contact stage of an
+//! unlanded experiment in docs/contact.md), and a user who asks twice wants the process
+//! gone. The bag is then left as after
 //! `kill -9`: readable by streaming readers up to its last flush, and
 //! `developable_sim bag reindex DIR` completes it (docs/ros2_interop.md).
 
