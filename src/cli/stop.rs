@@ -2,7 +2,7 @@
 //!
 //! The first signal asks for a clean stop: the run or node stops after its current step
 //! (or tick) and closes its bag. A second signal exits at once: one step can take long
-//! (seconds for a long ribbon at its iteration limit; minutes for the contact stage of an
+//! (up to 0.8 s at n = 1600 on the extreme torsion, 2026-12-06; minutes for the contact stage of an
 //! unlanded experiment in docs/contact.md), and a user who asks twice wants the process
 //! gone. The bag is then left as after
 //! `kill -9`: readable by streaming readers up to its last flush, and
