@@ -2,11 +2,10 @@
 //!
 //! The first signal asks for a clean stop: the run or node stops after its current step
 //! (or tick) and closes its bag. A second signal exits at once: one step can take long
-//! (up to 0.8 s at n = 1600 on the extreme torsion, 2026-12-06; minutes for the contact stage of an
-//! unlanded experiment in docs/contact.md), and a user who asks twice wants the process
-//! gone. The bag is then left as after
-//! `kill -9`: readable by streaming readers up to its last flush, and
-//! `developable_sim bag reindex DIR` completes it (docs/ros2_interop.md).
+//! (up to 0.8 s on the extreme torsion at n = 1600, 2026-12-06; minutes in an unlanded
+//! contact experiment, docs/contact.md), and a user who asks twice wants the process
+//! gone. The bag is then left as after `kill -9`: readable by streaming readers up to its
+//! last flush, and `developable_sim bag reindex DIR` completes it (docs/ros2_interop.md).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
