@@ -10,20 +10,16 @@
 // are meant, so clippy's style lints against them are off for the whole crate.
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
-pub mod baseline;
+// The simulation core, its own crate (core/): re-exported so that `crate::ribbon::...`
+// reads the same in the edges and in a library user's code.
+pub use developable_core::{baseline, contact, geometry, metrics, optim, paper, ribbon, sim};
+
 pub mod cli;
-pub mod contact;
-pub mod geometry;
-pub mod metrics;
-pub mod optim;
-pub mod paper;
 pub mod record;
 pub mod render;
 pub mod report;
-pub mod ribbon;
 pub mod ros;
 pub mod runner;
 pub mod scene;
-pub mod sim;
 pub mod stats;
 pub mod stress;

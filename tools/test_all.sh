@@ -12,13 +12,13 @@ cd "$(dirname "$0")/.."
 # this crate alone.
 echo "== cargo fmt --check, cargo clippy =="
 cargo fmt --check
-cargo clippy --release --all-targets -- -D warnings
+cargo clippy --release --workspace --all-targets -- -D warnings
 
 echo "== cargo test =="
-cargo test --release --lib --bins --tests -- --test-threads=2
+cargo test --release --workspace --lib --bins --tests -- --test-threads=2
 # benchmarks and the debugging examples (examples/) must keep compiling (criterion's
 # own runner does not take test flags)
-cargo build --release --benches --examples
+cargo build --release --workspace --benches --examples
 # error against run time on short scenes (issue 6): the binary `cargo test` built
 echo "== report --quick =="
 ./target/release/developable_sim report --quick --out target/report

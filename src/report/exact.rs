@@ -1,5 +1,5 @@
 //! Exact-solution scenes in the report (issue 15): the error of every run is measured
-//! against the exact solution of the planar elastica (src/metrics/elastica.rs), not
+//! against the exact solution of the planar elastica (core/src/metrics/elastica.rs), not
 //! against a reference run of our own code. Pure: the problems, their plans, the
 //! errors, the orders and the pass criterion of `report --quick`.
 //!

@@ -130,7 +130,7 @@ const DEFAULT_SCENES: [ReportScene; 3] = [
               so no window within reach converges at first order. The solver's stop is \
               not the cause: tolerances 1e-10 and 1e-13 give identical runs (1e-8: 6 um \
               away over 20 ms at dt 62.5 us), and without the relative-decrease stop \
-              (FTOL 0 instead of 1e-12 in src/ribbon/step.rs) the 2 ms halvings change \
+              (FTOL 0 instead of 1e-12 in core/src/ribbon/step.rs) the 2 ms halvings change \
               by < 4 % while the Newton iterations a step roughly double. R resamples the previous rim piecewise linearly at the new \
               rim vertices, which slide along the rim as the crease directions c turn, \
               so its slope jumps where a new vertex crosses an old one: over 20 ms the \

@@ -349,7 +349,7 @@ fn summary_header(
          `conforming_fem` (the conventional baseline of Pan et al. table 1: a triangle \
          mesh n x 10, Green-strain stretching with stiffness 1e8 N, discrete-shell \
          bending with the ribbon's alpha, handles eliminated as hard constraints; see \
-         src/baseline/conforming_fem.rs), `paper_newton` (Schreck et al.'s simulator). \
+         core/src/baseline/conforming_fem.rs), `paper_newton` (Schreck et al.'s simulator). \
          Resolution: ribbon elements along (FEM: quads along, 10 across; a helix start \
          keeps its shape: psi per crease scaled by n0/n); paper: boundary sample \
          density, samples/m.\n"
