@@ -19,7 +19,7 @@ use developable_sim::record::bag::{BagOptions, Compression};
 use developable_sim::record::recorder::RunRecorder;
 use developable_sim::record::{read, replay};
 use developable_sim::ros::node::SimNode;
-use developable_sim::ros::params;
+use developable_sim::session::params;
 use developable_sim::sim::ReachWatch;
 use developable_sim::{render, runner, scene};
 
@@ -121,11 +121,12 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
                 write_json(&path, &report, "")?;
             }
             if !report.identical {
-                return Err(CheckFailed(format!(
-                    "replay of {}: the outputs differ from the recording",
-                    report.bag
-                ))
-                .into());
+                let why = if report.topics.iter().all(|t| t.compared == 0) {
+                    "no recorded output could be compared"
+                } else {
+                    "the outputs differ from the recording"
+                };
+                return Err(CheckFailed(format!("replay of {}: {why}", report.bag)).into());
             }
             Ok(())
         }

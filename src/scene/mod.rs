@@ -55,7 +55,10 @@ pub struct Scene {
     pub world: World,
     /// The fixed frame of every pose and marker (REP 103), e.g. `world`.
     pub frame_id: String,
-    /// ROS topic of each handle (same order as `world.handles()`).
+    /// Input topic of each handle before name resolution (same order as
+    /// `world.handles()`): the scene's absolute `topic:`, or `handles/<name>`, relative
+    /// to the node's namespace. The one source of handle topics (`session::names`
+    /// resolves them).
     pub handle_topics: Vec<String>,
     pub outputs: Outputs,
     /// TF frame each handle follows instead of its topic (same order as
