@@ -32,6 +32,9 @@ mod snapshot;
 pub mod tint;
 pub mod truth;
 
+#[cfg(test)]
+mod tests;
+
 pub use frame::{Frame, CLOUD_FIELDS, CLOUD_POINT_STEP};
 pub use noise::{Noise, NoiseKey, D435_BASELINE, D435_DROPOUT, D435_MIN_RANGE, D435_SUBPIXEL};
 pub use raster::Renderer;
@@ -49,9 +52,9 @@ pub enum CameraError {
 /// The pinhole model and depth range of a camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Intrinsics {
-    /// Image width, px (1..=16384).
+    /// Image width, px (1..=[`MAX_SIDE`]).
     pub width: u32,
-    /// Image height, px (1..=16384).
+    /// Image height, px (1..=[`MAX_SIDE`]).
     pub height: u32,
     /// Vertical field of view, rad, in (0, pi): from the top edge of the image to the
     /// bottom edge.
@@ -62,8 +65,9 @@ pub struct Intrinsics {
     pub far: f64,
 }
 
-/// The largest image side accepted, px (a 16384 x 16384 frame is 5 GB of buffers).
-pub const MAX_SIDE: u32 = 16384;
+/// The largest image side accepted, px (as `render --size`; an 8192 x 8192 frame holds
+/// 2 GB of buffers, 31 bytes a pixel).
+pub const MAX_SIDE: u32 = 8192;
 
 impl Intrinsics {
     /// Checked intrinsics (see the fields for the ranges).
@@ -194,7 +198,7 @@ pub struct Camera {
 }
 
 #[cfg(test)]
-mod tests {
+mod pose_tests {
     use super::*;
 
     #[test]
@@ -217,7 +221,7 @@ mod tests {
     fn bad_intrinsics_are_refused() {
         for (w, h, fov, near, far) in [
             (0, 480, 0.75, 0.1, 4.0),
-            (640, 20000, 0.75, 0.1, 4.0),
+            (640, 8193, 0.75, 0.1, 4.0),
             (640, 480, 0.0, 0.1, 4.0),
             (640, 480, 3.2, 0.1, 4.0),
             (640, 480, f64::NAN, 0.1, 4.0),
