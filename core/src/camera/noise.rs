@@ -5,8 +5,8 @@
 //! nothing nearer than the minimum range 0.28 m is returned.
 //!
 //! Seeded: each image row draws from its own ChaCha8 stream keyed by the scene's seed,
-//! the camera, the frame index and the row, two 64-bit words a pixel whatever the
-//! scene shows, so a frame's noise depends on nothing else (not the thread count, not
+//! the camera, the frame index and the row, one 32-bit word a pixel whatever the scene
+//! shows, so a frame's noise depends on nothing else (not the thread count, not
 //! the previous frames): a recording replays bit for bit.
 
 use rand::{RngCore, SeedableRng};
@@ -74,27 +74,73 @@ impl RowNoise {
 
     /// The D435 measurement of true depth `z` (m; NaN: no return) with focal length
     /// `focal` (px): NaN when nearer than the minimum range or dropped out, else `z`
-    /// plus a normal error of sigma(z). Always draws the pixel's two words.
+    /// plus a normal error of sigma(z). Always draws the pixel's one 32-bit word w: the
+    /// return drops out when w < 1 % of 2^32; otherwise w is uniform over the rest, and
+    /// its place there is the error's quantile.
     pub(crate) fn d435(&mut self, z: f64, focal: f64) -> f64 {
-        let a = self.rng.next_u64();
-        let b = self.rng.next_u64();
-        // a uniform in [0, 1) from the top 53 bits
-        let dropout = (a >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
-        if !(z >= D435_MIN_RANGE) || dropout < D435_DROPOUT {
+        let w = self.rng.next_u32();
+        if !(z >= D435_MIN_RANGE) || w < DROPOUT_BELOW {
             return f64::NAN;
         }
-        z + Noise::D435.sigma(z, focal) * standard_normal(b)
+        let p = ((w - DROPOUT_BELOW) as f64 + 0.5) / (TWO_TO_32 - DROPOUT_BELOW as f64);
+        z + Noise::D435.sigma(z, focal) * inverse_normal_cdf(p)
     }
 }
 
-/// A standard normal sample from one 64-bit word (Box-Muller, the cosine branch): u1 in
-/// (0, 1] from the high 32 bits, u2 in [0, 1) from the low 32, so the tails reach
-/// sqrt(-2 ln 2^-32) = 6.7 sigma.
-fn standard_normal(word: u64) -> f64 {
-    const SCALE: f64 = 1.0 / 4_294_967_296.0;
-    let u1 = ((word >> 32) as f64 + 1.0) * SCALE;
-    let u2 = (word & 0xffff_ffff) as f64 * SCALE;
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+const TWO_TO_32: f64 = 4_294_967_296.0;
+
+/// A word below this drops the return: round(0.01 x 2^32), a share of 0.01 + 9e-12.
+const DROPOUT_BELOW: u32 = (D435_DROPOUT * TWO_TO_32 + 0.5) as u32;
+
+/// The standard normal quantile at p in (0, 1) (Acklam's rational approximation,
+/// relative error below 1.15e-9): a uniform p gives a standard normal sample without a
+/// logarithm or a cosine in the central 95 % (p from a 32-bit word reaches 6.2 sigma).
+fn inverse_normal_cdf(p: f64) -> f64 {
+    const A: [f64; 6] = [
+        -3.969683028665376e+01,
+        2.209460984245205e+02,
+        -2.759285104469687e+02,
+        1.383577518672690e+02,
+        -3.066479806614716e+01,
+        2.506628277459239e+00,
+    ];
+    const B: [f64; 5] = [
+        -5.447609879822406e+01,
+        1.615858368580409e+02,
+        -1.556989798598866e+02,
+        6.680131188771972e+01,
+        -1.328068155288572e+01,
+    ];
+    const C: [f64; 6] = [
+        -7.784894002430293e-03,
+        -3.223964580411365e-01,
+        -2.400758277161838e+00,
+        -2.549732539343734e+00,
+        4.374664141464968e+00,
+        2.938163982698783e+00,
+    ];
+    const D: [f64; 4] = [
+        7.784695709041462e-03,
+        3.224671290700398e-01,
+        2.445134137142996e+00,
+        3.754408661907416e+00,
+    ];
+    const LOW: f64 = 0.02425;
+    let tail = |q: f64| {
+        let q = (-2.0 * q.ln()).sqrt();
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    };
+    if p < LOW {
+        tail(p)
+    } else if p > 1.0 - LOW {
+        -tail(1.0 - p)
+    } else {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    }
 }
 
 #[cfg(test)]
@@ -110,6 +156,22 @@ mod tests {
     }
 
     #[test]
+    fn the_quantiles_are_the_normal_ones() {
+        // Phi^-1 at 0.975 (central branch), 0.01 and 1e-6 (tails), to the
+        // approximation's 1.15e-9 relative error
+        for (p, x) in [
+            (0.975, 1.959963984540054),
+            (0.01, -2.326347874040841),
+            (1e-6, -4.753424308822899),
+            (1.0 - 1e-6, 4.753424308822899),
+        ] {
+            let got = inverse_normal_cdf(p);
+            assert!((got - x).abs() < 1.15e-9 * x.abs(), "{p}: {got} vs {x}");
+        }
+        assert_eq!(inverse_normal_cdf(0.5), 0.0);
+    }
+
+    #[test]
     fn the_normal_samples_have_unit_variance() {
         // 2e5 samples: the mean's standard error is 1 / sqrt(2e5) = 2.2e-3, the
         // variance's sqrt(2 / 2e5) = 3.2e-3; 4 standard errors each
@@ -117,7 +179,7 @@ mod tests {
         let n = 200_000;
         let (mut s, mut s2) = (0.0, 0.0);
         for _ in 0..n {
-            let x = standard_normal(rng.next_u64());
+            let x = inverse_normal_cdf((rng.next_u32() as f64 + 0.5) / TWO_TO_32);
             s += x;
             s2 += x * x;
         }

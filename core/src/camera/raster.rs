@@ -186,9 +186,7 @@ impl Band<'_> {
                     // the checker in the half-space's frame
                     let qx = t * (p.ex.x * rx + xr) - p.origin_x;
                     let qy = t * (p.ey.x * rx + yr) - p.origin_y;
-                    let parity = ((qx / tint::CHECKER).floor() as i64
-                        + (qy / tint::CHECKER).floor() as i64)
-                        & 1;
+                    let parity = (floor(qx * INV_CHECKER) + floor(qy * INV_CHECKER)) & 1;
                     color[3 * at..3 * at + 3].copy_from_slice(&p.colors[parity as usize]);
                 }
             }
@@ -257,7 +255,13 @@ impl Band<'_> {
         let near = self.view.intrinsics.near;
         let mut noise = (self.noise == Noise::D435).then(|| RowNoise::new(self.key, j as u32));
         let ry = self.ray_y[j];
-        for (i, &t) in z.iter().enumerate() {
+        let pixels = z
+            .iter()
+            .zip(self.ray_x)
+            .zip(color.chunks_exact(3))
+            .zip(depth.chunks_exact_mut(4))
+            .zip(cloud.chunks_exact_mut(CLOUD_POINT_STEP));
+        for ((((&t, &rx), c), d_out), p_out) in pixels {
             let mut d = if t <= far { t } else { f64::NAN };
             if let Some(n) = noise.as_mut() {
                 d = n.d435(d, self.view.focal);
@@ -266,15 +270,11 @@ impl Band<'_> {
                 }
             }
             let df = d as f32;
-            depth[4 * i..4 * i + 4].copy_from_slice(&df.to_le_bytes());
+            d_out.copy_from_slice(&df.to_le_bytes());
             let zf = df as f64;
-            let point = [(zf * self.ray_x[i]) as f32, (zf * ry) as f32, df];
-            let rgb = pack_rgb([color[3 * i], color[3 * i + 1], color[3 * i + 2]]);
-            let out = &mut cloud[CLOUD_POINT_STEP * i..CLOUD_POINT_STEP * (i + 1)];
-            for (o, v) in out
-                .chunks_exact_mut(4)
-                .zip([point[0], point[1], point[2], rgb])
-            {
+            let rgb = pack_rgb([c[0], c[1], c[2]]);
+            let point = [(zf * rx) as f32, (zf * ry) as f32, df, rgb];
+            for (o, v) in p_out.chunks_exact_mut(4).zip(point) {
                 o.copy_from_slice(&v.to_le_bytes());
             }
         }
@@ -302,6 +302,16 @@ fn span(edges: &[[f64; 3]; 4], r: &[f64; 4], cols: [u32; 2]) -> Option<(usize, u
         }
     }
     (lo <= hi).then_some((lo as usize, hi as usize))
+}
+
+/// Checker squares per metre.
+const INV_CHECKER: f64 = 1.0 / tint::CHECKER;
+
+/// floor(x) as an integer without a libm call (x86-64's baseline has no rounding
+/// instruction): truncate, then step down for negative non-integers. Saturates far out.
+fn floor(x: f64) -> i64 {
+    let t = x as i64;
+    t - i64::from((t as f64) > x)
 }
 
 /// Where the ray t (x/z, y/z, 1) first enters the points within `radius` of the
