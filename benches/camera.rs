@@ -16,6 +16,8 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use developable_sim::camera::{world_colliders, NoiseKey, Renderer, Snapshot};
 use developable_sim::scene::{CameraMount, Scene};
 
+// the shared helpers; this benchmark uses `warmed` only
+#[allow(dead_code)]
 mod common;
 use common::warmed;
 

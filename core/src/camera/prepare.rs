@@ -288,7 +288,7 @@ impl Prepared {
                 view.focal * (q.y / q.z) + view.center[1],
             ];
         }
-        let Some((edges, cols, rows)) = polygon_edges(&screen[..count], &view.intrinsics) else {
+        let Some((edges, (cols, rows))) = polygon_edges(&screen[..count], &view.intrinsics) else {
             return;
         };
         self.polygons.push(Polygon {
@@ -354,7 +354,7 @@ type Bounds = ([u32; 2], [u32; 2]);
 
 /// The edge functions of a convex screen polygon (u, v px) with inside >= 0, and its
 /// pixel bounds (columns, rows); None when it is degenerate or off the image.
-fn polygon_edges(s: &[[f64; 2]], intr: &Intrinsics) -> Option<([[f64; 3]; 4], [u32; 2], [u32; 2])> {
+fn polygon_edges(s: &[[f64; 2]], intr: &Intrinsics) -> Option<([[f64; 3]; 4], Bounds)> {
     let n = s.len();
     let mut area = 0.0;
     for k in 0..n {
@@ -382,8 +382,7 @@ fn polygon_edges(s: &[[f64; 2]], intr: &Intrinsics) -> Option<([[f64; 3]; 4], [u
     }
     let lo = |k: usize| s.iter().map(|p| p[k]).fold(f64::INFINITY, f64::min);
     let hi = |k: usize| s.iter().map(|p| p[k]).fold(f64::NEG_INFINITY, f64::max);
-    let (cols, rows) = pixel_bounds([lo(0), hi(0)], [lo(1), hi(1)], intr)?;
-    Some((edges, cols, rows))
+    Some((edges, pixel_bounds([lo(0), hi(0)], [lo(1), hi(1)], intr)?))
 }
 
 /// The pixels whose centres lie in [u0, u1] x [v0, v1], clipped to the image.
