@@ -52,7 +52,7 @@ fn the_default_scenes_declare_their_cameras() {
     assert_eq!((c.rate, c.camera.noise), (15.0, Noise::None));
     let expected = look_at(
         Vector3::new(0.45, -0.95, 0.35),
-        Vector3::new(0.4, 0.0, -0.05),
+        Vector3::new(0.4, 0.0, 0.0),
     )
     .unwrap();
     assert_eq!(fixed_pose(&s, 0), expected);
