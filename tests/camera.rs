@@ -50,11 +50,7 @@ fn the_default_scenes_declare_their_cameras() {
         (640, 480, 0.75, 0.1, 4.0)
     );
     assert_eq!((c.rate, c.camera.noise), (15.0, Noise::None));
-    let expected = look_at(
-        Vector3::new(0.45, -0.95, 0.35),
-        Vector3::new(0.4, 0.0, 0.0),
-    )
-    .unwrap();
+    let expected = look_at(Vector3::new(0.45, -0.95, 0.35), Vector3::new(0.4, 0.0, 0.0)).unwrap();
     assert_eq!(fixed_pose(&s, 0), expected);
     let push = load("ribbon_gripper_push", &[]);
     assert_eq!(push.cameras[0].camera.noise, Noise::D435);
