@@ -12,7 +12,9 @@
 
 // The simulation core, its own crate (core/): re-exported so that `crate::ribbon::...`
 // reads the same in the edges and in a library user's code.
-pub use developable_core::{baseline, contact, geometry, metrics, optim, paper, ribbon, sim};
+pub use developable_core::{
+    baseline, camera, contact, geometry, metrics, optim, paper, ribbon, sim,
+};
 
 // The edges, in layers (ARCHITECTURE.md, "Layers"; tests/layers.rs): each module
 // imports only the core and the modules of the layers below its own.

@@ -167,6 +167,23 @@ fn real_main(cli: Cli, ros: params::RosArgs) -> anyhow::Result<()> {
 fn render_command(a: RenderArgs) -> anyhow::Result<()> {
     let mut loaded = scene::load(&a.scene, &a.scene_overrides())?;
     runner::run(&mut loaded, &mut (), &|| false)?;
+    if let Some(name) = &a.camera {
+        let frame = render::camera_frame(&loaded, name)?;
+        render::write_png(&render::color_image(&frame), &a.out)?;
+        let depth_out = render::depth_path(&a.out);
+        let (depth, range) = render::depth_image(&frame);
+        render::write_png(&depth, &depth_out)?;
+        let range = match range {
+            Some([lo, hi]) => format!("depth {lo:.3} .. {hi:.3} m"),
+            None => "no depth".into(),
+        };
+        println!(
+            "wrote {} and {} ({range})",
+            a.out.display(),
+            depth_out.display()
+        );
+        return Ok(());
+    }
     let (width, height) = render::parse_size(&a.size)?;
     anyhow::ensure!(a.view.len() == 3, "--view takes three numbers x,y,z");
     let meshes: Vec<_> = (0..loaded.world.object_names().len())

@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[(&str, u32)] = &[
     // 0: the simulation core
     ("baseline", 0),
+    ("camera", 0),
     ("contact", 0),
     ("geometry", 0),
     ("metrics", 0),
@@ -22,12 +23,12 @@ const LAYERS: &[(&str, u32)] = &[
     ("paper", 0),
     ("ribbon", 0),
     ("sim", 0),
-    // 1: scene files, offline pictures, run statistics
+    // 1: scene files, run statistics
     ("scene", 1),
-    ("render", 1),
     ("stats", 1),
-    // 2: messages, CDR, schemas, QoS, the stamping clock
+    // 2: messages, CDR, schemas, QoS, the stamping clock; offline pictures of a scene
     ("wire", 2),
+    ("render", 2),
     // 3: a simulation as the node runs it (no transport); headless runs
     ("session", 3),
     ("runner", 3),

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::camera_file::{build_cameras, CameraFile};
 use super::check::Check;
 use super::contact::{build_stage, ColliderFile, ContactFile};
 use super::handle_file::{parse_handle, ForceFile, HandleFile};
@@ -78,6 +79,9 @@ pub struct SceneFile {
     /// What is published / recorded.
     #[serde(default)]
     pub outputs: OutputsFile,
+    /// Simulated RGB-D cameras (see [`CameraFile`]). Default none.
+    #[serde(default)]
+    pub cameras: Vec<CameraFile>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -204,10 +208,18 @@ enum Prepared {
 }
 
 impl SceneFile {
+    /// Validate and build the scene: the world, then the cameras.
+    pub fn build(self, file: &Path) -> Result<Scene, SceneError> {
+        let cameras = build_cameras(&Check { file }, &self.cameras)?;
+        let mut scene = self.build_world(file)?;
+        scene.cameras = cameras;
+        Ok(scene)
+    }
+
     /// Validate and build the world: the objects (each kind validates its section and
     /// the handles on it, then is built with the scene's handle list), then the contact
     /// stage if the scene declares one.
-    pub fn build(self, file: &Path) -> Result<Scene, SceneError> {
+    fn build_world(self, file: &Path) -> Result<Scene, SceneError> {
         let ck = Check { file };
         let (duration, dt, gravity) = self.time_and_frame(&ck)?;
         let solver = self.solver_settings(&ck)?;
@@ -491,6 +503,7 @@ impl SceneFile {
                 markers_rate: self.outputs.markers_rate,
             },
             handle_tf_frames: self.handles.iter().map(|h| h.tf_frame.clone()).collect(),
+            cameras: Vec::new(),
             source: self,
         }
     }

@@ -4,6 +4,7 @@
 //!
 //! This is an edge module: it reads files; the core never sees serde.
 
+mod camera_file;
 mod check;
 mod contact;
 mod file;
@@ -15,6 +16,7 @@ mod ribbon_file;
 
 use std::path::{Path, PathBuf};
 
+pub use camera_file::{CameraFile, CameraMount, SceneCamera};
 pub use contact::{ColliderFile, ContactFile};
 pub use file::{OutputsFile, SceneFile};
 pub use mesh_file::load_mesh;
@@ -64,6 +66,8 @@ pub struct Scene {
     /// TF frame each handle follows instead of its topic (same order as
     /// `world.handles()`; None: the topic).
     pub handle_tf_frames: Vec<Option<String>>,
+    /// The simulated RGB-D cameras (`cameras:`), in file order.
+    pub cameras: Vec<SceneCamera>,
     /// The scene as parsed after overrides, for provenance (stats, bags).
     pub source: SceneFile,
 }
