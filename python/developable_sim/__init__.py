@@ -1,0 +1,35 @@
+"""developable_sim: developable ribbons (Pan et al.) and paper (Schreck et al.) from
+Python, without ROS.
+
+>>> import developable_sim as ds
+>>> sim = ds.Scene.load("config/scenes/ribbon_gripper.yaml").build(seed=0)
+>>> sim.step(targets={"gripper": ([0.8, 0.0, 0.3], [0, 0, 0, 1])})
+>>> sim.state("ribbon").vertices.shape
+(102, 3)
+
+Units are SI (m, s, kg, rad, J, N) as in the scene files; quaternions are
+(x, y, z, w). The API is in docs/python.md; `developable_sim.gym` has a gymnasium
+environment (`pip install developable_sim[gym]`).
+"""
+
+from ._native import (
+    CameraFrame,
+    ObjectState,
+    Scene,
+    SceneError,
+    Simulation,
+    SimulationError,
+    __version__,
+    step_many,
+)
+
+__all__ = [
+    "CameraFrame",
+    "ObjectState",
+    "Scene",
+    "SceneError",
+    "Simulation",
+    "SimulationError",
+    "__version__",
+    "step_many",
+]
