@@ -3,7 +3,8 @@ Python, without ROS.
 
 >>> import developable_sim as ds
 >>> sim = ds.Scene.load("config/scenes/ribbon_gripper.yaml").build(seed=0)
->>> sim.step(targets={"gripper": ([0.8, 0.0, 0.3], [0, 0, 0, 1])})
+>>> p0, q0 = sim.targets()["gripper"]          # m, quaternion (x, y, z, w)
+>>> sim.step(targets={"gripper": (p0 + [-0.002, 0.0, 0.003], q0)})
 >>> sim.state("ribbon").vertices.shape
 (102, 3)
 
