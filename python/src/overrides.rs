@@ -47,7 +47,12 @@ fn yaml(value: &Bound<'_, PyAny>, top: bool) -> PyResult<String> {
     if value.is_instance_of::<PyFloat>() {
         return Ok(float(value.extract()?));
     }
-    // NumPy scalars: integers have `__index__`, floats `__float__` only
+    // NumPy scalars: booleans (`numpy.bool`, which also has `__index__`), integers
+    // (`__index__`), floats (`__float__` only)
+    let type_name = value.get_type().name()?.to_string();
+    if !is_sequence(value) && (type_name == "bool" || type_name == "bool_") {
+        return Ok(if value.is_truthy()? { "true" } else { "false" }.into());
+    }
     if !is_sequence(value) && value.hasattr("__index__")? {
         return Ok(value.call_method0("__index__")?.str()?.to_string());
     }

@@ -86,9 +86,11 @@ pub fn pose(value: &Bound<'_, PyAny>, keep: &Rotation) -> Result<Pose, String> {
             let x = numbers(value, 7, "pose")?;
             (x[..3].to_vec(), Some(x[3..].to_vec()))
         }
-        n => return Err(format!(
+        n => {
+            return Err(format!(
             "expected (position, quaternion), a position (3 numbers) or 7 numbers, got {n} items"
-        )),
+        ))
+        }
     };
     if p.iter().any(|x| !x.is_finite()) {
         return Err(format!("position {p:?} is not finite"));

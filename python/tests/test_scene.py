@@ -33,6 +33,7 @@ def test_overrides_are_written_as_set_specs_and_change_the_scene():
             "ribbon.base.position": np.array([0.0, 0.1, 0.0]),
             "handles.0.point": (1.0, 0.0),
             "name": "renamed",
+            "ribbon.settle": np.False_,  # a NumPy boolean is a boolean, not 0
         },
     )
     assert scene.overrides == [
@@ -42,6 +43,7 @@ def test_overrides_are_written_as_set_specs_and_change_the_scene():
         "ribbon.base.position=[0.0, 0.1, 0.0]",
         "handles.0.point=[1.0, 0.0]",
         "name=renamed",
+        "ribbon.settle=false",
     ]
     assert scene.dt == 0.005 and scene.name == "renamed"
     sim = scene.build()
