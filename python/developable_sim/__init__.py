@@ -9,12 +9,16 @@ Python, without ROS.
 (102, 3)
 
 Units are SI (m, s, kg, rad, J, N) as in the scene files; quaternions are
-(x, y, z, w). The API is in docs/python.md; `developable_sim.gym` has a gymnasium
+(x, y, z, w). Grippers grasp and release at run time (`sim.grasp`, `sim.release`) and
+report the wrench the object exerts on them (`sim.wrench`). The API is in docs/python.md; `developable_sim.gym` has a gymnasium
 environment (`pip install developable_sim[gym]`).
 """
 
 from ._native import (
     CameraFrame,
+    Grasp,
+    GraspError,
+    HandleState,
     ObjectState,
     Scene,
     SceneError,
@@ -26,6 +30,9 @@ from ._native import (
 
 __all__ = [
     "CameraFrame",
+    "Grasp",
+    "GraspError",
+    "HandleState",
     "ObjectState",
     "Scene",
     "SceneError",

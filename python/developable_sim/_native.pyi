@@ -26,6 +26,10 @@ class SimulationError(RuntimeError):
     """An internal error caught at the boundary (reset the simulation), a save that
     does not replay, or a simulation used after such an error."""
 
+class GraspError(ValueError):
+    """A grasp or release the world refused (off the object, out of reach, a sheet
+    point off its boundary, a handle that drives a prescribed base); nothing changed."""
+
 class Scene:
     """A scene file with overrides applied, checked and built once."""
 
@@ -118,6 +122,35 @@ class CameraFrame:
     world_from_optical: npt.NDArray[np.float64]
     """(4, 4)."""
 
+class Grasp:
+    """What `Simulation.grasp` did."""
+
+    object: str
+    material_point: npt.NDArray[np.float64]
+    """(2,) [u, v] held, m."""
+    distance: float
+    """From the point asked for to the point held, m (0 by material point)."""
+    changed: bool
+    """False when the handle already held exactly this."""
+
+class HandleState:
+    """What a handle holds now and what it feels."""
+
+    name: str
+    attached: bool
+    object: str
+    material_point: npt.NDArray[np.float64]
+    """(2,) [u, v] held (or held last), m."""
+    generation: int
+    """0: the scene's own hold; + 1 at each grasp that changed it."""
+    grasp_radius: float
+    """m."""
+    force: Optional[npt.NDArray[np.float64]]
+    """(3,) N, scene frame: the object on the gripper, last step; None when open or
+    not stepped since the grasp."""
+    torque: Optional[npt.NDArray[np.float64]]
+    """(3,) N m, scene frame, about the grasp point; None as force."""
+
 class Simulation:
     """One simulated world."""
 
@@ -126,6 +159,28 @@ class Simulation:
     def state(self, object: Union[str, int, None] = None) -> ObjectState: ...
     def targets(self) -> dict[str, Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]]:
         """Each handle's current target (position m, quaternion x y z w)."""
+    def grasp(
+        self,
+        handle: str,
+        object: Union[str, int, None] = None,
+        *,
+        point: Optional[Vector] = None,
+        near: Optional[Vector] = None,
+        max_distance: Optional[float] = None,
+        hold: Optional[str] = None,
+    ) -> Grasp:
+        """Close `handle` on `point` ([u, v], m), or the graspable point nearest `near`
+        ([x, y, z], m) within `max_distance` (m, default its grasp_radius), or with
+        neither the point nearest its current target; `hold` 'position' | 'normal' |
+        'full' (default the scene's). Raises GraspError when refused."""
+    def release(self, handle: str) -> bool:
+        """Open `handle`; False when it held nothing."""
+    def handle_state(self, handle: str) -> HandleState: ...
+    def wrench(
+        self, handle: str
+    ) -> Optional[Tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]]:
+        """(force N, torque N m about the grasp point), scene frame, the object on the
+        gripper in the last step; None when open or not stepped since the grasp."""
     def reset(self, seed: Optional[int] = None) -> None: ...
     def save(self) -> bytes: ...
     @staticmethod

@@ -12,11 +12,11 @@ Needs gymnasium (`pip install developable_sim[gym]`).
     obs, info = env.reset(seed=0)
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
 
-Grasp and release: the handles of a scene hold the object for the whole episode (a
-handle grasps at the material point its scene file names). SoftGym's fourth action
-component (pick / drop) needs run-time grasp and release in the simulator, which is
-not there yet (docs/python.md, "Grasp and release"); until then the action is the
-displacement alone.
+Grasp and release: each picker's fourth action component is SoftGym's pick flag. Above
+0.5 an open picker closes on the graspable point nearest its target within the
+handle's `grasp_radius` (nothing there: it stays open), a closed one keeps its hold; at
+0.5 or below a closed picker lets go. Then the pickers move. `grasping=False` drops the
+fourth component: the handles hold what the scene says for the whole episode.
 """
 
 from __future__ import annotations
@@ -34,10 +34,11 @@ except ImportError as e:  # pragma: no cover - the message is the point
         "developable_sim.gym needs gymnasium: pip install developable_sim[gym]"
     ) from e
 
-from ._native import Scene, Simulation
+from ._native import GraspError, Scene, Simulation
 
 #: reward(sim, action) -> float, called after each step with the simulation and the
-#: action as given (each row a picker's displacement in [-1, 1]^3).
+#: action as given, clipped to [-1, 1] (each row a picker's displacement, then its pick
+#: flag when grasping).
 RewardFn = Callable[[Simulation, np.ndarray], float]
 
 
@@ -50,10 +51,14 @@ def relaxed(sim: Simulation, action: np.ndarray) -> float:
 class PickerEnv(gym.Env):
     """Pickers (the scene's handles) moving a developable object.
 
-    - action: `(P * 3,)` float32 in [-1, 1]: picker p moves its target position by
-      `max_displacement * action[3p:3p+3]` m per step (scene frame), its orientation
-      kept; the new position is clipped to `workspace` (low, high corners, m) when
-      given. Handles that are not pickers follow their scripted trajectories.
+    - action: `(P * 4,)` float32 in [-1, 1] (`(P * 3,)` with `grasping=False`): picker
+      p first grasps or releases by its pick flag `action[4p+3]` (above 0.5: close on
+      the graspable point nearest its target within its `grasp_radius`, or keep
+      holding; otherwise open), then moves its target position by
+      `max_displacement * action[4p:4p+3]` m (scene frame), its orientation kept; the
+      new position is clipped to `workspace` (low, high corners, m) when given.
+      Handles that are not pickers follow their scripted trajectories and scripted
+      grasps.
     - observation `"vertices"`: `(N, 3)` float64 vertex positions of `object`, m (the
       vertex count must not change: ribbons; a paper sheet remeshes, use
       `"point_cloud"`); `"point_cloud"`: `(num_points, 3)` float64 points in the scene
@@ -84,6 +89,7 @@ class PickerEnv(gym.Env):
         camera: Optional[str] = None,
         num_points: int = 1024,
         render_mode: Optional[str] = None,
+        grasping: bool = True,
     ) -> None:
         self.scene = scene if isinstance(scene, Scene) else Scene.load(scene)
         self.sim = self.scene.build()
@@ -114,7 +120,11 @@ class PickerEnv(gym.Env):
             raise ValueError("a point cloud or rgb_array rendering needs a camera in the scene")
         self.num_points = int(num_points)
         self.render_mode = render_mode
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(3 * len(self.pickers),), dtype=np.float32)
+        self.grasping = bool(grasping)
+        self._width = 4 if self.grasping else 3
+        self.action_space = spaces.Box(
+            -1.0, 1.0, shape=(self._width * len(self.pickers),), dtype=np.float32
+        )
         if observation == "vertices":
             n = self.sim.state(object).vertices.shape[0]
             shape: Tuple[int, ...] = (n, 3)
@@ -135,14 +145,16 @@ class PickerEnv(gym.Env):
         return self._observe(), self._info()
 
     def step(self, action: np.ndarray) -> Tuple[np.ndarray, float, bool, bool, Dict[str, Any]]:
-        a = np.asarray(action, dtype=np.float64).reshape(len(self.pickers), 3)
+        a = np.asarray(action, dtype=np.float64).reshape(len(self.pickers), self._width)
         if not np.all(np.isfinite(a)):
             raise ValueError(f"action must be finite, got {action}")
         a = np.clip(a, -1.0, 1.0)
+        if self.grasping:
+            self._pick_or_drop(a[:, 3] > 0.5)
         current = self.sim.targets()
         targets = {}
         for p, name in enumerate(self.pickers):
-            position = current[name][0] + self.max_displacement * a[p]
+            position = current[name][0] + self.max_displacement * a[p, :3]
             if self.workspace is not None:
                 position = np.clip(position, self.workspace[0], self.workspace[1])
             targets[name] = position
@@ -151,6 +163,21 @@ class PickerEnv(gym.Env):
         reward = float(self.reward_fn(self.sim, a))
         truncated = self._steps >= self.horizon
         return self._observe(), reward, False, truncated, self._info()
+
+    def _pick_or_drop(self, pick: np.ndarray) -> None:
+        """SoftGym's pick flag: an open picker that picks closes on the nearest point in
+        reach (none: it stays open); a closed one that does not pick opens."""
+        for name, wants in zip(self.pickers, pick):
+            attached = self.sim.handle_state(name).attached
+            try:
+                if wants and not attached:
+                    self.sim.grasp(name)
+                elif not wants and attached:
+                    self.sim.release(name)
+            except GraspError:
+                # nothing within grasp_radius, or a handle that drives a ribbon's
+                # prescribed base (it cannot let go): the hold stays as it was
+                pass
 
     def render(self) -> Optional[np.ndarray]:
         if self.render_mode != "rgb_array":
@@ -186,4 +213,5 @@ class PickerEnv(gym.Env):
             "time": self.sim.time,
             "scene_seed": self.sim.seed,
             "converged": all(s.converged is not False for s in states),
+            "attached": {p: self.sim.handle_state(p).attached for p in self.pickers},
         }

@@ -29,11 +29,22 @@ create_exception!(
      does not replay to the state it recorded, or a simulation used after such an error."
 );
 
+create_exception!(
+    developable_sim,
+    GraspError,
+    PyValueError,
+    "A grasp or release the world refused, and why: the point is off the object (a sheet \
+     of paper is held on its boundary only), the nearest graspable point is farther than \
+     max_distance, the object has no surface, or the handle drives a ribbon's prescribed \
+     base and cannot let go. Nothing changed."
+);
+
 /// Add the exceptions to the module.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("SceneError", py.get_type::<SceneError>())?;
     m.add("SimulationError", py.get_type::<SimulationError>())?;
+    m.add("GraspError", py.get_type::<GraspError>())?;
     Ok(())
 }
 

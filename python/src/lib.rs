@@ -12,6 +12,7 @@
 mod batch;
 mod camera;
 mod errors;
+mod grasp;
 mod origin;
 mod overrides;
 mod save;
@@ -28,6 +29,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<simulation::Simulation>()?;
     m.add_class::<state::ObjectState>()?;
     m.add_class::<camera::CameraFrame>()?;
+    m.add_class::<grasp::GraspResult>()?;
+    m.add_class::<grasp::HandleState>()?;
     m.add_function(wrap_pyfunction!(batch::step_many, m)?)?;
     m.add_function(wrap_pyfunction!(errors::_panic_for_test, m)?)?;
     errors::register(m)?;

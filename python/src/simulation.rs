@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use developable_sim::geometry::Pose;
 use developable_sim::scene::Scene as LoadedScene;
+use developable_sim::sim::{GraspAt, GraspError as RustGraspError, Grasped, Hold};
 use developable_sim::sim::{ObjectStepReport, World};
 use numpy::PyArray1;
 use pyo3::exceptions::{PyIndexError, PyKeyError, PyTypeError, PyValueError};
@@ -15,8 +16,9 @@ use pyo3::types::{PyBytes, PyDict, PyTuple};
 
 use crate::camera::{frame_to_py, CameraFrame, Cameras};
 use crate::errors::{guarded, simulation_error};
+use crate::grasp::{self, GraspResult, HandleState};
 use crate::origin::Origin;
-use crate::save::{self, Saved};
+use crate::save::{self, Entry, Saved};
 use crate::state::{object_state, ObjectState};
 use crate::targets;
 
@@ -27,8 +29,9 @@ pub struct Inner {
     /// The scene as built, at t = 0 (reset clones its world).
     pristine: LoadedScene,
     pub(crate) world: World,
-    /// Every step's targets since t = 0 (`save`).
-    log: Vec<Vec<Option<Pose>>>,
+    /// Every command since t = 0: steps with their targets, grasps and releases that
+    /// changed a hold (`save`).
+    log: Vec<Entry>,
     /// Each object's report of the last step (empty before the first).
     last: Vec<ObjectStepReport>,
     /// Wall time of the last world step, s (measured around `World::step` alone).
@@ -71,13 +74,69 @@ impl Inner {
             Ok(report) => {
                 self.last_step_s = start.elapsed().as_secs_f64();
                 self.last = report.objects;
-                self.log.push(targets);
+                self.log.push(Entry::Step(targets));
                 Ok(())
             }
             Err(e) => {
                 self.broken = Some(e.clone());
                 Err(e)
             }
+        }
+    }
+
+    /// `World::grasp`, logged when it changed the hold. The outer error is a panic
+    /// (the simulation is then unusable), the inner one the world's refusal.
+    pub fn grasp(
+        &mut self,
+        handle: usize,
+        object: usize,
+        at: GraspAt,
+        hold: Option<Hold>,
+    ) -> Result<Result<Grasped, RustGraspError>, String> {
+        self.usable()?;
+        let world = &mut self.world;
+        let r = guarded("grasp", || world.grasp(handle, object, at, hold))
+            .inspect_err(|e| self.broken = Some(e.clone()))?;
+        if matches!(r, Ok(Grasped { changed: true, .. })) {
+            self.log.push(Entry::Grasp {
+                handle,
+                object,
+                at,
+                hold,
+            });
+        }
+        Ok(r)
+    }
+
+    /// `World::release`, logged when it let go of something; errors as [`Inner::grasp`].
+    pub fn release(&mut self, handle: usize) -> Result<Result<bool, RustGraspError>, String> {
+        self.usable()?;
+        let world = &mut self.world;
+        let r = guarded("release", || world.release(handle))
+            .inspect_err(|e| self.broken = Some(e.clone()))?;
+        if r == Ok(true) {
+            self.log.push(Entry::Release { handle });
+        }
+        Ok(r)
+    }
+
+    /// Apply a saved command again (`Simulation.load`): it must do what it did.
+    fn replay(&mut self, entry: Entry) -> Result<(), String> {
+        match entry {
+            Entry::Step(targets) => self.step(targets),
+            Entry::Grasp {
+                handle,
+                object,
+                at,
+                hold,
+            } => match self.grasp(handle, object, at, hold)? {
+                Ok(Grasped { changed: true, .. }) => Ok(()),
+                other => Err(format!("a saved grasp did not replay: {other:?}")),
+            },
+            Entry::Release { handle } => match self.release(handle)? {
+                Ok(true) => Ok(()),
+                other => Err(format!("a saved release did not replay: {other:?}")),
+            },
         }
     }
 
@@ -190,6 +249,81 @@ impl Simulation {
         Ok(out)
     }
 
+    /// Close handle `handle` on an object, at the next step boundary (now, between
+    /// steps). Where: `point`, [u, v] of the object's flat pattern (m); or the graspable
+    /// point nearest `near` ([x, y, z], m, scene frame) within `max_distance` (m, default
+    /// the handle's `grasp_radius`); with neither, the point nearest the handle's
+    /// current target within its `grasp_radius` (a gripper that closes). `object`: its
+    /// name or index (default the handle's object in the scene). `hold`: 'position',
+    /// 'normal' or 'full' (default the handle's scene setting). Nothing snaps: the
+    /// point is held where it is, relative to the handle's current target. Grasping
+    /// what the handle already holds changes nothing (`changed` False); elsewhere moves
+    /// the hold. A refusal raises GraspError and changes nothing. Logged for `save`.
+    #[pyo3(signature = (handle, object = None, *, point = None, near = None, max_distance = None, hold = None))]
+    #[allow(clippy::too_many_arguments)] // the Python keywords
+    fn grasp(
+        &mut self,
+        py: Python<'_>,
+        handle: &str,
+        object: Option<&Bound<'_, PyAny>>,
+        point: Option<&Bound<'_, PyAny>>,
+        near: Option<&Bound<'_, PyAny>>,
+        max_distance: Option<f64>,
+        hold: Option<&str>,
+    ) -> PyResult<GraspResult> {
+        self.inner.usable().map_err(simulation_error)?;
+        let world = &self.inner.world;
+        let h = grasp::handle_index(world, handle)?;
+        let o = match object.filter(|o| !o.is_none()) {
+            Some(o) => self.inner.object_index(Some(o))?,
+            None => world.handles()[h].object,
+        };
+        let at = grasp::at(world, h, point, near, max_distance)?;
+        let hold = grasp::hold(world, h, hold)?;
+        let g = self
+            .inner
+            .grasp(h, o, at, hold)
+            .map_err(simulation_error)?
+            .map_err(|e| grasp::refused(&e))?;
+        Ok(GraspResult::new(py, &self.inner.world, &g))
+    }
+
+    /// Open handle `handle`: it lets go of what it holds. Returns False when it held
+    /// nothing (nothing changed). A handle that drives a ribbon's prescribed base
+    /// cannot let go (GraspError). Logged for `save`.
+    fn release(&mut self, handle: &str) -> PyResult<bool> {
+        self.inner.usable().map_err(simulation_error)?;
+        let h = grasp::handle_index(&self.inner.world, handle)?;
+        self.inner
+            .release(h)
+            .map_err(simulation_error)?
+            .map_err(|e| grasp::refused(&e))
+    }
+
+    /// What handle `handle` holds (attached, object, material point, generation) and
+    /// the wrench it feels (`HandleState`).
+    fn handle_state(&self, py: Python<'_>, handle: &str) -> PyResult<HandleState> {
+        self.inner.usable().map_err(simulation_error)?;
+        let h = grasp::handle_index(&self.inner.world, handle)?;
+        Ok(HandleState::new(py, &self.inner.world, h))
+    }
+
+    /// `(force (3,), torque (3,))`: what the object exerts on handle `handle` in the
+    /// last step, N and N m, scene frame, the torque about the grasp point (docs/grasp.md,
+    /// the convention of `final.handles` in `--stats`); None when the handle holds
+    /// nothing or has not stepped since it grasped.
+    fn wrench<'py>(&self, py: Python<'py>, handle: &str) -> PyResult<Option<Bound<'py, PyTuple>>> {
+        self.inner.usable().map_err(simulation_error)?;
+        let h = grasp::handle_index(&self.inner.world, handle)?;
+        match self.inner.world.handle_wrench(h) {
+            None => Ok(None),
+            Some(w) => {
+                let (f, t) = grasp::wrench_arrays(py, &w);
+                Ok(Some(PyTuple::new(py, [f, t])?))
+            }
+        }
+    }
+
     /// Back to t = 0. With a `seed`, the scene is built again with that seed (a new
     /// imperfection, new paper singular points, new camera noise); None keeps the
     /// simulation's seed. Clears the command log `save` stores.
@@ -232,8 +366,8 @@ impl Simulation {
         }
         let mut inner = Inner::new(origin, scene);
         let log = saved.log;
-        py.detach(|| log.into_iter().try_for_each(|step| inner.step(step)))
-            .map_err(simulation_error)?;
+        py.detach(|| log.into_iter().try_for_each(|entry| inner.replay(entry)))
+            .map_err(|e| simulation_error(format!("load: {e}")))?;
         if save::fingerprint(&inner.world) != saved.fingerprint {
             return Err(simulation_error(
                 "load: the replay did not reach the saved state (saved by another version?)",

@@ -1,6 +1,7 @@
 """A Python run and `developable_sim run` of the same scene give bit-identical states:
-every vertex of the `--stats` JSON's `final` section (serde_json writes the shortest
-digits that round-trip, Python's json reads them back exactly)."""
+every vertex of the `--stats` JSON's `final` section, and every handle's hold and
+wrench (serde_json writes the shortest digits that round-trip, Python's json reads
+them back exactly)."""
 
 from __future__ import annotations
 
@@ -41,6 +42,9 @@ def python_final(scene: ds.Scene) -> ds.Simulation:
         ("ribbon_gripper_push", {"duration": 0.6}),
         # the paper simulator (remeshing, singular vertices)
         ("paper_first_singularity", {"duration": 1.2}),
+        # a scripted grasp at 1 s (an open gripper closes on the ribbon, contact with
+        # the table), held at 3 s: the wrench
+        ("ribbon_pick_and_place", {"duration": 3.0}),
     ],
 )
 def test_python_and_cli_runs_are_bit_identical(cli, tmp_path, name, overrides):
@@ -60,6 +64,19 @@ def test_python_and_cli_runs_are_bit_identical(cli, tmp_path, name, overrides):
             assert same_bits(values, np.array(o[key], dtype=np.float64)), key
         sp = np.array(o["singular_points"], dtype=np.float64).reshape(-1, 3)
         assert same_bits(state.singular_positions, sp)
+    assert [h["name"] for h in final["handles"]] == sim.handles
+    for h in final["handles"]:
+        state = sim.handle_state(h["name"])
+        assert (state.attached, state.object) == (h["attached"], h["object"])
+        assert same_bits(state.material_point, np.array(h["material_point"], dtype=np.float64))
+        for key in ("force", "torque"):
+            ours = getattr(state, key)
+            if key not in h:  # absent while open or when it feels nothing
+                assert ours is None, key
+            else:
+                assert same_bits(ours, np.array(h[key], dtype=np.float64)), key
+    if name == "ribbon_pick_and_place":
+        assert final["handles"][0]["attached"] and "force" in final["handles"][0]
 
 
 def test_the_comparison_sees_a_difference_of_one_step(cli, tmp_path):

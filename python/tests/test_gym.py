@@ -1,5 +1,6 @@
 """developable_sim.gym.PickerEnv: gymnasium's own checker, the action's effect on the
-handle targets, a pluggable reward, seeds honoured, point-cloud observations."""
+handle targets, SoftGym's pick flag (grasp and release), a pluggable reward, seeds
+honoured, point-cloud observations."""
 
 from __future__ import annotations
 
@@ -24,8 +25,9 @@ def test_gymnasium_accepts_the_environment(scene):
     env = PickerEnv(scene, horizon=5)
     check_env(env, skip_render_check=True)
     assert isinstance(env, gymnasium.Env)
-    assert env.action_space.shape == (3,)
+    assert env.action_space.shape == (4,)  # the displacement and the pick flag
     assert env.observation_space.shape == (34, 3)
+    assert PickerEnv(scene, grasping=False).action_space.shape == (3,)
 
 
 def test_an_action_moves_the_picker_target_by_the_scaled_displacement(scene):
@@ -33,24 +35,53 @@ def test_an_action_moves_the_picker_target_by_the_scaled_displacement(scene):
     env.reset(seed=1)
     before = env.sim.targets()["gripper"]
     # inwards (-x): the straight ribbon cannot be pulled beyond its length (+x)
-    action = np.array([-0.5, -1.0, 0.25], dtype=np.float32)
+    action = np.array([-0.5, -1.0, 0.25, 1.0], dtype=np.float32)  # and keep holding
     obs, reward, terminated, truncated, info = env.step(action)
     after = env.sim.targets()["gripper"]
-    assert same_bits(after[0], before[0] + 0.02 * action.astype(np.float64))
+    assert same_bits(after[0], before[0] + 0.02 * action[:3].astype(np.float64))
     assert same_bits(after[1], before[1])  # orientation kept
     assert not terminated and not truncated and info["converged"]
+    assert info["attached"] == {"gripper": True}
     assert obs.shape == (34, 3) and same_bits(obs, env.sim.state().vertices)
     assert reward == relaxed(env.sim, action) < 0
     # actions beyond [-1, 1] are clipped; the workspace clips positions
     env = PickerEnv(scene, max_displacement=0.5, workspace=([0.0, -0.1, 0.0], [1.0, 0.1, 0.2]))
     env.reset(seed=1)
-    env.step(np.array([3.0, 3.0, 3.0]))
+    env.step(np.array([3.0, 3.0, 3.0, 1.0]))
     assert same_bits(env.sim.targets()["gripper"][0], np.array([1.0, 0.1, 0.2]))
-    env.step(np.array([0.0, 0.0, 0.0]))
-    _, _, _, truncated, _ = env.step(np.zeros(3))
+    env.step(np.array([0.0, 0.0, 0.0, 1.0]))
+    _, _, _, truncated, _ = env.step(np.array([0.0, 0.0, 0.0, 1.0]))
     assert not truncated
     with pytest.raises(ValueError, match="finite"):
-        env.step(np.array([np.nan, 0.0, 0.0]))
+        env.step(np.array([np.nan, 0.0, 0.0, 1.0]))
+    # without grasping the action is the displacement alone
+    env = PickerEnv(scene, grasping=False, max_displacement=0.02)
+    env.reset(seed=1)
+    env.step(action[:3])
+    assert same_bits(env.sim.targets()["gripper"][0], after[0])
+
+
+def test_the_pick_flag_releases_and_grasps_again(scene):
+    env = PickerEnv(scene, max_displacement=0.01, horizon=50)
+    env.reset(seed=0)
+    # a flag at 0.5 or below opens the gripper; the ribbon's free end drops away
+    _, _, _, _, info = env.step(np.array([0.0, 0.0, 0.0, 0.5]))
+    assert info["attached"] == {"gripper": False}
+    assert env.sim.handle_state("gripper").generation == 0
+    # above 0.5 it closes again on the nearest point in reach (its grasp_radius, 0.02 m)
+    _, _, _, _, info = env.step(np.array([0.0, 0.0, 0.0, 0.6]))
+    h = env.sim.handle_state("gripper")
+    assert info["attached"] == {"gripper": True} and h.generation == 1
+    # and keeps that hold while the flag stays up (no new attachment every step)
+    env.step(np.array([0.0, 0.0, 0.0, 1.0]))
+    assert env.sim.handle_state("gripper").generation == 1
+    # out of reach a pick does nothing: open, lift the picker 0.1 m, pick
+    env.step(np.array([0.0, 0.0, 0.0, -1.0]))
+    for _ in range(10):
+        env.step(np.array([0.0, 0.0, 1.0, -1.0]))
+    _, _, _, _, info = env.step(np.array([0.0, 0.0, 0.0, 1.0]))
+    assert info["attached"] == {"gripper": False}
+    assert env.sim.handle_state("gripper").generation == 1
 
 
 def test_the_reward_is_pluggable_and_episodes_truncate(scene):
@@ -62,10 +93,10 @@ def test_the_reward_is_pluggable_and_episodes_truncate(scene):
 
     env = PickerEnv(scene, reward=height, horizon=2)
     env.reset(seed=0)
-    _, r1, _, t1, _ = env.step(np.array([0.0, 0.0, 1.0]))
-    _, r2, _, t2, _ = env.step(np.array([0.0, 0.0, 1.0]))
+    _, r1, _, t1, _ = env.step(np.array([0.0, 0.0, 1.0, 1.0]))
+    _, r2, _, t2, _ = env.step(np.array([0.0, 0.0, 1.0, 1.0]))
     assert [round(t, 9) for t, _ in calls] == [0.01, 0.02]
-    assert same_bits(calls[0][1], np.array([[0.0, 0.0, 1.0]]))
+    assert same_bits(calls[0][1], np.array([[0.0, 0.0, 1.0, 1.0]]))
     assert r2 > r1 > 0 and (t1, t2) == (False, True)
 
 
@@ -78,7 +109,8 @@ def rollout(env, seed, actions):
 
 
 def test_seeds_are_honoured(scene):
-    actions = np.random.default_rng(0).uniform(-1, 1, size=(4, 3))
+    # with pick flags at random: grasps and releases are part of what must repeat
+    actions = np.random.default_rng(0).uniform(-1, 1, size=(6, 4))
     env = PickerEnv(scene)
     a, sa = rollout(env, 7, actions)
     b, sb = rollout(PickerEnv(scene), 7, actions)
