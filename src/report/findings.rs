@@ -1,0 +1,352 @@
+//! What a reader wants from a scene's runs, in words: the Pareto front as "for an
+//! error under 1 mm, chain at dt = 5 ms is the cheapest", and, where a method's error
+//! rises while its dt falls, the measured reason. Pure: the runs' numbers in,
+//! sentences out (index.html prints them).
+
+use super::axis::{engineering, Unit};
+use super::errors::pareto_front;
+
+/// What the sentences need of one run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunFacts {
+    /// The method's name (`chain`, `lbfgsb`, ...) and, for exact scenes, its clamp.
+    pub label: String,
+    /// Whether this is the default solver's run (`chain`; `paper_newton` on paper).
+    pub default: bool,
+    /// Time step, s.
+    pub dt: f64,
+    /// Resolution: ribbon elements n, or the paper's samples/m.
+    pub n: f64,
+    pub tolerance: f64,
+    pub steps: usize,
+    /// Process CPU time of the run, s.
+    pub cpu_s: f64,
+    /// Simulated time, s.
+    pub duration: f64,
+    /// RMS error over time, m (None: not compared, e.g. not finite).
+    pub error: Option<f64>,
+    pub unconverged: usize,
+    pub stuck: usize,
+    pub iterations_median: f64,
+    /// RMS distance over time to the default solver's run at the same dt and n, m
+    /// (None where there is none, or for the default itself).
+    pub to_default: Option<f64>,
+}
+
+impl RunFacts {
+    /// CPU time of one step, s.
+    fn per_step(&self) -> f64 {
+        self.cpu_s / self.steps.max(1) as f64
+    }
+}
+
+/// `v` seconds or metres in engineering units, 3 significant digits.
+fn s(v: f64) -> String {
+    engineering(v, Unit::Second)
+}
+fn m(v: f64) -> String {
+    engineering(v, Unit::Metre)
+}
+
+/// A run as the sentences name it: "chain at dt = 5 ms (n = 50)".
+fn run_name(r: &RunFacts) -> String {
+    format!("{} at dt = {} (n = {})", r.label, s(r.dt), r.n)
+}
+
+/// The decades (m) an error threshold runs over: every power of ten above the
+/// smallest error, up to the first one above the largest.
+fn thresholds(errors: &[f64]) -> Vec<f64> {
+    let finite: Vec<f64> = errors
+        .iter()
+        .copied()
+        .filter(|e| e.is_finite() && *e > 0.0)
+        .collect();
+    let (Some(lo), Some(hi)) = (
+        finite.iter().copied().reduce(f64::min),
+        finite.iter().copied().reduce(f64::max),
+    ) else {
+        return Vec::new();
+    };
+    let first = (lo.log10() + 1e-9).ceil() as i32;
+    let last = (hi.log10() - 1e-9).floor() as i32 + 1;
+    (first..=last).rev().map(|e| 10f64.powi(e)).collect()
+}
+
+/// The Pareto front in words: for each decade of error (coarse to fine) the cheapest
+/// run under it, its cost a step and per simulated second; `resolved`, when known, is
+/// the smallest error the comparison resolves (the reference's own error): thresholds
+/// below it say so. Runs on the front are those no other run beats in both cost and
+/// error ([`pareto_front`]).
+pub fn front_in_words(runs: &[RunFacts], resolved: Option<f64>) -> Vec<String> {
+    let pts: Vec<(f64, f64)> = runs
+        .iter()
+        .map(|r| (r.cpu_s, r.error.unwrap_or(f64::INFINITY)))
+        .collect();
+    let front = pareto_front(&pts);
+    let errors: Vec<f64> = front.iter().map(|&i| pts[i].1).collect();
+    let mut out = Vec::new();
+    for t in thresholds(&errors) {
+        // the front is sorted by cost: its first run under t is the cheapest overall
+        let Some(&i) = front.iter().find(|&&i| pts[i].1 < t) else {
+            continue;
+        };
+        let r = &runs[i];
+        let mut line = format!(
+            "For an error under {}, {} is the cheapest: {} a step, {} of CPU time per \
+             simulated second (error {}).",
+            m(t),
+            run_name(r),
+            s(r.per_step()),
+            s(r.cpu_s / r.duration),
+            m(pts[i].1)
+        );
+        if resolved.is_some_and(|b| t < b) {
+            line.push_str(&format!(
+                " Not resolved: the reference's own error ({}) is larger than this \
+                 threshold.",
+                m(resolved.unwrap_or(0.0))
+            ));
+        }
+        out.push(line);
+    }
+    out
+}
+
+/// What a sweep refines: the time step (falling) or the number of elements (rising).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Refines {
+    Dt,
+    N,
+}
+
+impl Refines {
+    /// Where a run sits on the sweep: "dt = 5 ms" or "n = 20".
+    fn at(self, r: &RunFacts) -> String {
+        match self {
+            Refines::Dt => format!("dt = {}", s(r.dt)),
+            Refines::N => format!("n = {}", r.n),
+        }
+    }
+}
+
+/// What a rise is judged against besides the runs themselves.
+pub struct RiseContext<'a> {
+    pub refines: Refines,
+    /// The default solver's error at a dt (compared scenes), m.
+    pub default_error: &'a dyn Fn(f64) -> Option<f64>,
+    /// The reference's own error (None for an exact solution), m.
+    pub resolved: Option<f64>,
+    /// Whether the reference's halvings converge.
+    pub reference_converged: bool,
+}
+
+/// Where a method's error rises while its sweep refines (dt falls or n rises), and why
+/// (measured): `sweep` is one method's sweep, in any order. One sentence per rise.
+pub fn rises_in_words(sweep: &[RunFacts], cx: &RiseContext) -> Vec<String> {
+    let mut runs: Vec<&RunFacts> = sweep.iter().filter(|r| r.error.is_some()).collect();
+    match cx.refines {
+        Refines::Dt => runs.sort_by(|a, b| b.dt.total_cmp(&a.dt)),
+        Refines::N => runs.sort_by(|a, b| a.n.total_cmp(&b.n)),
+    }
+    let mut out = Vec::new();
+    for w in runs.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let (ea, eb) = (a.error.unwrap_or(0.0), b.error.unwrap_or(0.0));
+        if eb <= ea {
+            continue;
+        }
+        let reasons = rise_reasons(a, b, cx);
+        out.push(format!(
+            "{}: the error rises from {} at {} to {} at {}. Measured: {}.",
+            b.label,
+            m(ea),
+            cx.refines.at(a),
+            m(eb),
+            cx.refines.at(b),
+            reasons.join("; ")
+        ));
+    }
+    out
+}
+
+/// The measured facts that explain a rise from run `a` to the finer run `b`.
+fn rise_reasons(a: &RunFacts, b: &RunFacts, cx: &RiseContext) -> Vec<String> {
+    let mut reasons = Vec::new();
+    let (ea, eb) = (a.error.unwrap_or(0.0), b.error.unwrap_or(0.0));
+    let at = |r: &RunFacts| cx.refines.at(r);
+    if let Some(bound) = cx.resolved {
+        if ea.max(eb) < 3.0 * bound {
+            reasons.push(format!(
+                "both errors are within 3x the reference's own error ({}{}), so the \
+                 reference does not rank these runs",
+                m(bound),
+                if cx.reference_converged {
+                    ""
+                } else {
+                    ", a lower bound: its halvings do not converge"
+                }
+            ));
+        }
+    }
+    for r in [a, b].into_iter().filter(|r| r.unconverged > 0) {
+        reasons.push(format!(
+            "at {}, {} of its {} steps stopped unconverged{}",
+            at(r),
+            r.unconverged,
+            r.steps,
+            if r.stuck > 0 {
+                format!(" ({} stuck at their start)", r.stuck)
+            } else {
+                String::new()
+            }
+        ));
+    }
+    if b.iterations_median <= 1.0 && a.iterations_median > 1.0 {
+        reasons.push(format!(
+            "at {} its solver stops after a median of {} iteration a step (at {}: {}), \
+             so its steps barely move the state",
+            at(b),
+            b.iterations_median,
+            at(a),
+            a.iterations_median
+        ));
+    }
+    if let (Some(d), Some(e)) = (b.to_default, (cx.default_error)(b.dt)) {
+        if d > 2.0 * e {
+            reasons.push(format!(
+                "at {} its run is {} from the default solver's at the same dt, \
+                 whose own error is {}: its steps end on another state than the \
+                 default's (a difference between solutions of the step problem, which \
+                 a smaller dt does not remove)",
+                at(b),
+                m(d),
+                m(e)
+            ));
+        }
+    }
+    if reasons.is_empty() {
+        reasons.push(
+            "no cause found among the measured quantities (convergence, iterations, \
+             distance to the default solver, the reference's own error)"
+                .to_string(),
+        );
+    }
+    reasons
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(label: &str, dt: f64, cpu_s: f64, error: f64) -> RunFacts {
+        RunFacts {
+            label: label.into(),
+            default: label == "chain",
+            dt,
+            n: 50.0,
+            tolerance: 1e-6,
+            steps: (0.4 / dt).round() as usize,
+            cpu_s,
+            duration: 0.4,
+            error: Some(error),
+            unconverged: 0,
+            stuck: 0,
+            iterations_median: 8.0,
+            to_default: None,
+        }
+    }
+
+    #[test]
+    fn the_front_names_the_cheapest_run_under_each_decade() {
+        let runs = vec![
+            run("chain", 0.04, 0.02, 2.5e-2),
+            run("chain", 0.02, 0.03, 1.2e-2),
+            run("chain", 0.005, 0.05, 4e-3),
+            // dominated: slower and less accurate than chain at 5 ms
+            run("lbfgsb", 0.005, 1.5, 1.7e-2),
+        ];
+        let words = front_in_words(&runs, Some(3e-3));
+        assert_eq!(words.len(), 2, "{words:?}");
+        assert!(
+            words[0].starts_with("For an error under 0.1 m, chain at dt = 40 ms"),
+            "{words:?}"
+        );
+        assert!(
+            words[1].contains("under 10 mm, chain at dt = 5 ms"),
+            "{words:?}"
+        );
+        assert!(words[1].contains("0.625 ms a step"), "{words:?}");
+        assert!(!words.iter().any(|w| w.contains("lbfgsb")));
+        // a threshold under the reference's own error is flagged
+        let fine = front_in_words(&runs, Some(2e-2));
+        assert!(fine[1].contains("Not resolved"), "{fine:?}");
+    }
+
+    #[test]
+    fn a_rise_is_explained_by_what_was_measured() {
+        let mut a = run("lbfgsb", 0.01, 1.5, 1.49e-2);
+        a.iterations_median = 1623.0;
+        a.unconverged = 1;
+        let mut b = run("lbfgsb", 0.005, 0.003, 1.72e-2);
+        b.iterations_median = 1.0;
+        b.to_default = Some(1.6e-2);
+        let default_error = |_: f64| Some(4.1e-3);
+        let cx = RiseContext {
+            refines: Refines::Dt,
+            default_error: &default_error,
+            resolved: Some(4.4e-3),
+            reference_converged: true,
+        };
+        let words = rises_in_words(&[b.clone(), a.clone()], &cx);
+        assert_eq!(words.len(), 1, "{words:?}");
+        let w = &words[0];
+        assert!(
+            w.starts_with("lbfgsb: the error rises from 14.9 mm at dt = 10 ms"),
+            "{w}"
+        );
+        assert!(w.contains("1 of its 40 steps stopped unconverged"), "{w}");
+        assert!(w.contains("median of 1 iteration"), "{w}");
+        assert!(w.contains("16 mm from the default solver's"), "{w}");
+        assert!(!w.contains("within 3x"), "{w}");
+        // falling errors: nothing to explain
+        let mut c = b.clone();
+        c.error = Some(1e-2);
+        let none = |_: f64| None;
+        let bare = RiseContext {
+            refines: Refines::Dt,
+            default_error: &none,
+            resolved: None,
+            reference_converged: true,
+        };
+        assert!(rises_in_words(&[a.clone(), c], &bare).is_empty());
+        // a rise with none of the measured causes says so
+        let plain_b = run("chain", 0.005, 0.05, 2e-2);
+        let plain_a = run("chain", 0.01, 0.03, 1e-2);
+        let w = rises_in_words(&[plain_a.clone(), plain_b.clone()], &bare);
+        assert!(w[0].contains("no cause found"), "{w:?}");
+        // errors within 3x the reference's own: not resolved
+        let w = rises_in_words(
+            &[plain_a.clone(), plain_b.clone()],
+            &RiseContext {
+                resolved: Some(1e-2),
+                ..bare
+            },
+        );
+        assert!(
+            w[0].contains("within 3x the reference's own error (10 mm)"),
+            "{w:?}"
+        );
+        // along n: a finer mesh with a larger error
+        let (mut c10, mut c20) = (plain_a, plain_b);
+        (c10.n, c20.n) = (10.0, 20.0);
+        c20.dt = c10.dt;
+        let w = rises_in_words(
+            &[c20, c10],
+            &RiseContext {
+                refines: Refines::N,
+                ..bare
+            },
+        );
+        assert!(w[0].contains("at n = 10 to 20 mm at n = 20"), "{w:?}");
+    }
+}
