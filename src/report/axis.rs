@@ -153,12 +153,14 @@ pub fn log_ticks(values: impl IntoIterator<Item = f64>) -> Option<Ticks> {
         })?;
     let (mut a, mut b) = ((lo / 1.5).log10(), (hi * 1.5).log10());
     let decades = |a: f64, b: f64| (b + 1e-9).floor() as i64 - (a - 1e-9).ceil() as i64 + 1;
+    // a decade reached by widening sits 0.06 decade inside the edge, so its label is
+    // not in the corner where the other axis's last label is
     while decades(a, b) < 2 {
         let (fa, cb) = ((a + 1e-9).floor(), (b - 1e-9).ceil());
         if a - fa <= cb - b {
-            a = fa;
+            a = fa - 0.06;
         } else {
-            b = cb;
+            b = cb + 0.06;
         }
     }
     let first = (a - 1e-9).ceil() as i64;

@@ -12,7 +12,7 @@ use super::exact_output::{lines, series, xy};
 use super::exact_run::ExactSceneReport;
 use super::findings::RunFacts;
 use super::output::{color, Row, SceneReport};
-use super::plan::{Method, Sweep};
+use super::plan::{Method, SceneKind, Sweep};
 use super::plot::{Axis, Figure, Level, Series, Style};
 
 /// The Pareto front's colour (drawn translucent under the markers).
@@ -40,14 +40,23 @@ fn front(points: &[(f64, f64)]) -> Series {
     }
 }
 
+/// A run's resolution in words: "n = 50" (ribbon elements) or "120 samples/m" (the
+/// paper's boundary density).
+pub(crate) fn resolution_words(kind: SceneKind, resolution: f64) -> String {
+    match kind {
+        SceneKind::Ribbon => format!("n = {resolution}"),
+        SceneKind::Paper => format!("{resolution} samples/m"),
+    }
+}
+
 /// A scene's reference, in words: "chain, dt = 2.5 ms, n = 50, tolerance 1e-10".
 fn reference_words(s: &SceneReport) -> String {
     let r = &s.reference.run.spec;
     format!(
-        "{}, dt = {}, n = {}, tolerance {:e}",
+        "{}, dt = {}, {}, tolerance {:e}",
         r.method.name(),
         engineering(r.dt, Unit::Second),
-        r.resolution,
+        resolution_words(s.plan.defaults.kind, r.resolution),
         r.tolerance
     )
 }
@@ -213,6 +222,7 @@ pub(crate) fn row_facts(s: &SceneReport, r: &Row) -> RunFacts {
         default: x.spec.method == s.fast_method(),
         dt: x.spec.dt,
         n: x.spec.resolution,
+        resolution: resolution_words(s.plan.defaults.kind, x.spec.resolution),
         tolerance: x.spec.tolerance,
         steps: x.steps,
         cpu_s: x.cpu_s,

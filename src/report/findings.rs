@@ -17,6 +17,8 @@ pub struct RunFacts {
     pub dt: f64,
     /// Resolution: ribbon elements n, or the paper's samples/m.
     pub n: f64,
+    /// The resolution in words: "n = 50", "120 samples/m".
+    pub resolution: String,
     pub tolerance: f64,
     pub steps: usize,
     /// Process CPU time of the run, s.
@@ -50,11 +52,11 @@ fn m(v: f64) -> String {
 
 /// A run as the sentences name it: "chain at dt = 5 ms (n = 50)".
 fn run_name(r: &RunFacts) -> String {
-    format!("{} at dt = {} (n = {})", r.label, s(r.dt), r.n)
+    format!("{} at dt = {} ({})", r.label, s(r.dt), r.resolution)
 }
 
-/// The decades (m) an error threshold runs over: every power of ten above the
-/// smallest error, up to the first one above the largest.
+/// The error thresholds (m) the front is read at: 1, 2 and 5 times each power of ten
+/// above the smallest error, up to the first one above the largest, coarse to fine.
 fn thresholds(errors: &[f64]) -> Vec<f64> {
     let finite: Vec<f64> = errors
         .iter()
@@ -67,9 +69,19 @@ fn thresholds(errors: &[f64]) -> Vec<f64> {
     ) else {
         return Vec::new();
     };
-    let first = (lo.log10() + 1e-9).ceil() as i32;
-    let last = (hi.log10() - 1e-9).floor() as i32 + 1;
-    (first..=last).rev().map(|e| 10f64.powi(e)).collect()
+    let mut out = Vec::new();
+    for e in ((lo.log10().floor() as i32)..=(hi.log10().floor() as i32 + 1)).rev() {
+        for m in [5.0, 2.0, 1.0] {
+            // decimal text, so that 2e-3 is exactly the double "2e-3"
+            let t: f64 = format!("{m}e{e}").parse().unwrap_or(f64::NAN);
+            if t > lo {
+                out.push(t);
+            }
+        }
+    }
+    // from the first threshold above the largest error down
+    let first_above = out.iter().rposition(|t| *t >= hi).unwrap_or(0);
+    out.split_off(first_above)
 }
 
 /// The Pareto front in words: for each decade of error (coarse to fine) the cheapest
@@ -84,7 +96,7 @@ pub fn front_in_words(runs: &[RunFacts], resolved: Option<f64>) -> Vec<String> {
         .collect();
     let front = pareto_front(&pts);
     let errors: Vec<f64> = front.iter().map(|&i| pts[i].1).collect();
-    let mut out = Vec::new();
+    let mut out: Vec<(usize, String)> = Vec::new();
     for t in thresholds(&errors) {
         // the front is sorted by cost: its first run under t is the cheapest overall
         let Some(&i) = front.iter().find(|&&i| pts[i].1 < t) else {
@@ -100,16 +112,20 @@ pub fn front_in_words(runs: &[RunFacts], resolved: Option<f64>) -> Vec<String> {
             s(r.cpu_s / r.duration),
             m(pts[i].1)
         );
-        if resolved.is_some_and(|b| t < b) {
+        if let Some(b) = resolved.filter(|b| t < *b) {
             line.push_str(&format!(
                 " Not resolved: the reference's own error ({}) is larger than this \
                  threshold.",
-                m(resolved.unwrap_or(0.0))
+                m(b)
             ));
         }
-        out.push(line);
+        // a finer threshold with the same answer replaces the coarser one
+        match out.last_mut() {
+            Some(last) if last.0 == i => last.1 = line,
+            _ => out.push((i, line)),
+        }
     }
-    out
+    out.into_iter().map(|(_, l)| l).collect()
 }
 
 /// What a sweep refines: the time step (falling) or the number of elements (rising).
@@ -124,7 +140,7 @@ impl Refines {
     fn at(self, r: &RunFacts) -> String {
         match self {
             Refines::Dt => format!("dt = {}", s(r.dt)),
-            Refines::N => format!("n = {}", r.n),
+            Refines::N => r.resolution.clone(),
         }
     }
 }
@@ -244,6 +260,7 @@ mod tests {
             default: label == "chain",
             dt,
             n: 50.0,
+            resolution: "n = 50".into(),
             tolerance: 1e-6,
             steps: (0.4 / dt).round() as usize,
             cpu_s,
@@ -266,20 +283,27 @@ mod tests {
             run("lbfgsb", 0.005, 1.5, 1.7e-2),
         ];
         let words = front_in_words(&runs, Some(3e-3));
-        assert_eq!(words.len(), 2, "{words:?}");
+        // 50 mm: chain at 40 ms (error 25 mm); 20 mm: 20 ms; 10 and 5 mm: 5 ms (one
+        // answer for both: the finer threshold is kept)
+        assert_eq!(words.len(), 3, "{words:?}");
         assert!(
-            words[0].starts_with("For an error under 0.1 m, chain at dt = 40 ms"),
+            words[0].starts_with("For an error under 50 mm, chain at dt = 40 ms"),
             "{words:?}"
         );
         assert!(
-            words[1].contains("under 10 mm, chain at dt = 5 ms"),
+            words[1].contains("under 20 mm, chain at dt = 20 ms"),
             "{words:?}"
         );
-        assert!(words[1].contains("0.625 ms a step"), "{words:?}");
+        assert!(
+            words[2].contains("under 5 mm, chain at dt = 5 ms"),
+            "{words:?}"
+        );
+        assert!(words[2].contains("0.625 ms a step"), "{words:?}");
         assert!(!words.iter().any(|w| w.contains("lbfgsb")));
         // a threshold under the reference's own error is flagged
-        let fine = front_in_words(&runs, Some(2e-2));
-        assert!(fine[1].contains("Not resolved"), "{fine:?}");
+        let fine = front_in_words(&runs, Some(1e-2));
+        assert!(fine[2].contains("Not resolved"), "{fine:?}");
+        assert!(!fine[1].contains("Not resolved"), "{fine:?}");
     }
 
     #[test]
@@ -339,6 +363,7 @@ mod tests {
         // along n: a finer mesh with a larger error
         let (mut c10, mut c20) = (plain_a, plain_b);
         (c10.n, c20.n) = (10.0, 20.0);
+        (c10.resolution, c20.resolution) = ("n = 10".into(), "n = 20".into());
         c20.dt = c10.dt;
         let w = rises_in_words(
             &[c20, c10],

@@ -13,7 +13,7 @@ use super::axis::{engineering, Unit};
 use super::exact::CLAMPS;
 use super::exact_output::orders;
 use super::exact_run::{ExactRow, ExactSceneReport};
-use super::figures::{reference_band, row_facts};
+use super::figures::{reference_band, resolution_words, row_facts};
 use super::findings::{front_in_words, rises_in_words, Refines, RiseContext, RunFacts};
 use super::output::SceneReport;
 use super::plan::{Method, Sweep};
@@ -262,12 +262,12 @@ fn scene_rises(sc: &SceneReport, facts: &[RunFacts], band: Option<(f64, bool)>) 
 fn reference_paragraph(sc: &SceneReport) -> String {
     let r = &sc.reference.run;
     let mut h = format!(
-        "<p>Reference: <code>{}</code> at dt = {} (the sample interval / {}), n = {}, \
+        "<p>Reference: <code>{}</code> at dt = {} (the sample interval / {}), {}, \
          tolerance {:e}; {} of its steps converged, {} of CPU time. ",
         r.spec.method.name(),
         s(r.spec.dt),
         (sc.plan.sample_times[0] / r.spec.dt).round(),
-        r.spec.resolution,
+        resolution_words(sc.plan.defaults.kind, r.spec.resolution),
         r.spec.tolerance,
         converged(r.steps, r.unconverged_steps, r.stuck_steps),
         s(r.cpu_s)
@@ -337,7 +337,7 @@ fn runs_table(sc: &SceneReport) -> String {
         "method",
         "sweep",
         "dt",
-        "n",
+        "resolution",
         "tolerance",
         "error (RMS over time)",
         "distance to the default solver at the same dt",
@@ -358,7 +358,7 @@ fn runs_table(sc: &SceneReport) -> String {
                     format!("<code>{}</code>", r.spec.method.name()),
                     r.spec.sweep.name().to_string(),
                     s(r.spec.dt),
-                    format!("{}", r.spec.resolution),
+                    resolution_words(sc.plan.defaults.kind, r.spec.resolution),
                     format!("{:e}", r.spec.tolerance),
                     row.error.map_or("-".into(), |e| m(e.rms_over_time)),
                     row.to_default.map_or("-".into(), |e| m(e.rms_over_time)),
@@ -382,6 +382,7 @@ fn exact_facts(e: &ExactSceneReport, r: &ExactRow) -> RunFacts {
         default: spec.method == Method::Chain && r.spec.clamp == e.clamp,
         dt: spec.dt,
         n: spec.resolution,
+        resolution: format!("n = {}", spec.resolution),
         tolerance: spec.tolerance,
         steps: x.steps,
         cpu_s: x.cpu_s,

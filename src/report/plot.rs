@@ -390,6 +390,10 @@ fn draw_series<DB: DrawingBackend>(
                     c.mix(0.3).stroke_width(9),
                 )))
                 .map_err(plot_err)?;
+            // a halo on each run of the front: a front of one run is seen too
+            chart
+                .draw_series(pts.iter().map(|p| Circle::new(*p, 10, c.mix(0.3).filled())))
+                .map_err(plot_err)?;
         }
     }
     Ok(())
