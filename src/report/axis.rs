@@ -203,7 +203,11 @@ pub fn linear_ticks(values: impl IntoIterator<Item = f64>, with_zero: bool) -> O
         .map(|m| m * base)
         .find(|s| (hi - lo) / s <= 8.0)
         .unwrap_or(10.0 * base);
-    let (first, last) = ((lo / step).floor() as i64, (hi / step).ceil() as i64);
+    // a value a rounding error past a step (1.0000000002 s) does not add a step
+    let (first, last) = (
+        (lo / step + 1e-9).floor() as i64,
+        (hi / step - 1e-9).ceil() as i64,
+    );
     let major: Vec<f64> = (first..=last).map(|k| k as f64 * step).collect();
     let minor = (2 * first..=2 * last)
         .filter(|k| k % 2 != 0)
@@ -265,6 +269,8 @@ mod tests {
         let step = t.major[1] - t.major[0];
         assert!((step - 0.01).abs() < 1e-15, "{t:?}");
         assert!(t.range.0 <= -0.013 && t.range.1 >= 0.041);
+        let t = linear_ticks([0.0, 1.0 + 1e-12], true).unwrap();
+        assert_eq!(t.range, (0.0, 1.0), "{t:?}");
         let flat = linear_ticks([0.0, 0.0], false).unwrap();
         assert!(flat.range.1 > flat.range.0);
         assert!(linear_ticks([f64::NAN], false).is_none());

@@ -27,6 +27,8 @@ pub(crate) enum Style {
     /// A line through filled markers (a sweep); `bold`: thicker and larger (the
     /// default solver).
     Line { bold: bool },
+    /// A line without markers (a time series).
+    Plain,
     /// A dashed line without markers (a theory, a bound).
     Dashed,
     /// Hollow circles (a resolution sweep).
@@ -359,6 +361,11 @@ fn draw_series<DB: DrawingBackend>(
                 .draw_series(pts.iter().map(|p| Circle::new(*p, radius, c.filled())))
                 .map_err(plot_err)?;
         }
+        Style::Plain => {
+            chart
+                .draw_series(LineSeries::new(pts, c.stroke_width(2)))
+                .map_err(plot_err)?;
+        }
         Style::Dashed => {
             chart
                 .draw_series(DashedLineSeries::new(pts, 10, 6, c.stroke_width(2)))
@@ -466,6 +473,7 @@ fn legend_sample<DB: DrawingBackend>(
             area.draw(&Circle::new(mid, r, c.filled()))
                 .map_err(plot_err)?;
         }
+        Style::Plain => area.draw(&line(c.stroke_width(2))).map_err(plot_err)?,
         Style::Dashed => {
             for k in [0, 16] {
                 area.draw(&PathElement::new(
