@@ -80,6 +80,45 @@ impl ExactProblem {
         }
     }
 
+    /// The problem in words, with its parameters in SI units.
+    pub fn describe(&self) -> String {
+        match *self {
+            ExactProblem::HeavyCantilever {
+                length,
+                bending,
+                weight_per_length,
+            } => format!(
+                "A strip clamped at one end, free at the other, under its own weight: L = \
+                 {length} m, bending stiffness B = {bending:.4} N m^2, weight q = \
+                 {weight_per_length:.4} N/m (q L^3 / B = {:.2}); the exact solution is the \
+                 heavy elastica B theta'' = q (L - s) cos theta",
+                weight_per_length * length.powi(3) / bending
+            ),
+            ExactProblem::BuckledStrip {
+                length,
+                bending,
+                end_distance,
+            } => format!(
+                "A strip clamped at both ends, pushed to {end_distance} m apart: L = {length} \
+                 m, B = {bending:.4} N m^2; the exact solution is the Euler elastica's first \
+                 buckling mode (midpoint rise {:.4} m)",
+                self.scale()
+            ),
+            ExactProblem::VibratingCantilever {
+                length,
+                bending,
+                mass_per_length,
+                tip,
+            } => format!(
+                "A cantilever released from rest in its first bending mode: L = {length} m, \
+                 B = {bending:.4} N m^2, mass {mass_per_length:.4} kg/m, tip amplitude \
+                 {tip} m; the exact solution is w = A phi(s) cos(omega t), omega = {:.3} \
+                 rad/s",
+                self.angular_frequency().unwrap_or(f64::NAN)
+            ),
+        }
+    }
+
     pub fn length(&self) -> f64 {
         match *self {
             ExactProblem::HeavyCantilever { length, .. }

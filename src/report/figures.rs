@@ -124,8 +124,12 @@ pub(crate) fn scene_figure(s: &SceneReport) -> Figure {
             },
         });
     }
+    let resolution = match s.plan.defaults.kind {
+        SceneKind::Ribbon => "n sweep",
+        SceneKind::Paper => "resolution (samples/m) sweep",
+    };
     for (sweep, style, what) in [
-        (Sweep::Resolution, Style::HollowCircle, "n sweep"),
+        (Sweep::Resolution, Style::HollowCircle, resolution),
         (Sweep::Tolerance, Style::HollowSquare, "tolerance sweep"),
     ] {
         let points = cost_points(s, fast, sweep);
@@ -152,7 +156,7 @@ pub(crate) fn scene_figure(s: &SceneReport) -> Figure {
         engineering(min_dt(s, true), Unit::Second),
         engineering(min_dt(s, false), Unit::Second),
         if series.iter().any(|x| x.style == Style::HollowCircle) {
-            format!(", and {}'s n and tolerance (hollow)", fast.name())
+            format!(", and {}'s resolution and tolerance (hollow)", fast.name())
         } else {
             String::new()
         },
@@ -232,6 +236,8 @@ pub(crate) fn row_facts(s: &SceneReport, r: &Row) -> RunFacts {
         stuck: x.stuck_steps,
         iterations_median: x.iterations_median,
         to_default: r.to_default.map(|e| e.rms_over_time),
+        relative: None,
+        static_solve: false,
     }
 }
 

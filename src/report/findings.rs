@@ -33,6 +33,11 @@ pub struct RunFacts {
     /// RMS distance over time to the default solver's run at the same dt and n, m
     /// (None where there is none, or for the default itself).
     pub to_default: Option<f64>,
+    /// The error over the problem's displacement scale (exact solutions: the tip's
+    /// deflection, the midpoint rise), where there is one.
+    pub relative: Option<f64>,
+    /// A static solve (no time error): named by n only, its cost a run's.
+    pub static_solve: bool,
 }
 
 impl RunFacts {
@@ -50,15 +55,50 @@ fn m(v: f64) -> String {
     engineering(v, Unit::Metre)
 }
 
-/// A run as the sentences name it: "chain at dt = 5 ms (n = 50)".
+/// A run as the sentences name it: "chain at dt = 5 ms (n = 50)", or for a static
+/// solve "chain (moment_matched) at n = 50".
 fn run_name(r: &RunFacts) -> String {
-    format!("{} at dt = {} ({})", r.label, s(r.dt), r.resolution)
+    if r.static_solve {
+        format!("{} at {}", r.label, r.resolution)
+    } else {
+        format!("{} at dt = {} ({})", r.label, s(r.dt), r.resolution)
+    }
 }
 
-/// The error thresholds (m) the front is read at: 1, 2 and 5 times each power of ten
-/// above the smallest error, up to the first one above the largest, coarse to fine.
-fn thresholds(errors: &[f64]) -> Vec<f64> {
-    let finite: Vec<f64> = errors
+/// What a run costs: "0.39 ms a step, 15.4 ms of CPU time per simulated second", or
+/// for a static solve its CPU time.
+fn cost(r: &RunFacts) -> String {
+    if r.static_solve {
+        format!("{} of CPU time", s(r.cpu_s))
+    } else {
+        format!(
+            "{} a step, {} of CPU time per simulated second",
+            s(r.per_step()),
+            s(r.cpu_s / r.duration)
+        )
+    }
+}
+
+/// `v` rounded up, strictly, to 2 significant digits (17.22 mm -> 18 mm, 25 mm -> 26
+/// mm), or to more where that is not below `below`.
+fn round_up(v: f64, below: f64) -> f64 {
+    for digits in 2..=6 {
+        let scale = 10f64.powi(digits - 1 - v.log10().floor() as i32);
+        let up = (v * scale * (1.0 + 1e-12)).ceil() / scale;
+        if up < below {
+            return up;
+        }
+    }
+    v * (1.0 + 1e-9)
+}
+
+/// The error thresholds (m) the front is read at, coarse to fine, each with whether it
+/// is a round one: 1, 2 and 5 times each power of ten from the first above the largest
+/// front error down to the smallest; and each front run's error rounded up (so every
+/// run of the front is named even when no round threshold falls between it and the
+/// next).
+fn thresholds(front_errors: &[f64]) -> Vec<(f64, bool)> {
+    let finite: Vec<f64> = front_errors
         .iter()
         .copied()
         .filter(|e| e.is_finite() && *e > 0.0)
@@ -69,26 +109,53 @@ fn thresholds(errors: &[f64]) -> Vec<f64> {
     ) else {
         return Vec::new();
     };
-    let mut out = Vec::new();
-    for e in ((lo.log10().floor() as i32)..=(hi.log10().floor() as i32 + 1)).rev() {
-        for m in [5.0, 2.0, 1.0] {
+    let mut out: Vec<(f64, bool)> = Vec::new();
+    for e in (lo.log10().floor() as i32)..=(hi.log10().floor() as i32 + 1) {
+        for m in [1.0, 2.0, 5.0] {
             // decimal text, so that 2e-3 is exactly the double "2e-3"
             let t: f64 = format!("{m}e{e}").parse().unwrap_or(f64::NAN);
             if t > lo {
-                out.push(t);
+                out.push((t, true));
             }
         }
     }
-    // from the first threshold above the largest error down
-    let first_above = out.iter().rposition(|t| *t >= hi).unwrap_or(0);
-    out.split_off(first_above)
+    out.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let first_above = out.iter().rposition(|t| t.0 >= hi).unwrap_or(0);
+    let mut out = out.split_off(first_above);
+    // the front's errors fall with cost: each run's, rounded up below the one before
+    for (k, e) in finite.iter().enumerate() {
+        let below = if k == 0 { f64::INFINITY } else { finite[k - 1] };
+        out.push((round_up(*e, below), false));
+    }
+    out.sort_by(|a, b| b.0.total_cmp(&a.0));
+    out
 }
 
-/// The Pareto front in words: for each decade of error (coarse to fine) the cheapest
-/// run under it, its cost a step and per simulated second; `resolved`, when known, is
-/// the smallest error the comparison resolves (the reference's own error): thresholds
-/// below it say so. Runs on the front are those no other run beats in both cost and
-/// error ([`pareto_front`]).
+/// What a reader should know about a run before picking it: unconverged steps, a
+/// solver that barely iterates.
+fn caveats(r: &RunFacts) -> String {
+    let mut c = String::new();
+    if r.unconverged > 0 {
+        c.push_str(&format!(
+            " Caution: {} of its {} steps stopped unconverged.",
+            r.unconverged, r.steps
+        ));
+    }
+    if r.iterations_median <= 1.0 {
+        c.push_str(&format!(
+            " Caution: its solver stops after a median of {} iteration a step.",
+            r.iterations_median
+        ));
+    }
+    c
+}
+
+/// The Pareto front in words: for each error threshold (coarse to fine) the cheapest
+/// run under it, its cost a step and per simulated second; one sentence per run of the
+/// front, at the finest round threshold it answers (else its own error rounded up).
+/// `resolved`, when known, is the smallest error the comparison resolves (the
+/// reference's own error): thresholds below it say so. Runs on the front are those no
+/// other run beats in both cost and error ([`pareto_front`]).
 pub fn front_in_words(runs: &[RunFacts], resolved: Option<f64>) -> Vec<String> {
     let pts: Vec<(f64, f64)> = runs
         .iter()
@@ -96,36 +163,45 @@ pub fn front_in_words(runs: &[RunFacts], resolved: Option<f64>) -> Vec<String> {
         .collect();
     let front = pareto_front(&pts);
     let errors: Vec<f64> = front.iter().map(|&i| pts[i].1).collect();
-    let mut out: Vec<(usize, String)> = Vec::new();
-    for t in thresholds(&errors) {
+    // (front run, threshold, round)
+    let mut picks: Vec<(usize, f64, bool)> = Vec::new();
+    for (t, round) in thresholds(&errors) {
         // the front is sorted by cost: its first run under t is the cheapest overall
         let Some(&i) = front.iter().find(|&&i| pts[i].1 < t) else {
             continue;
         };
-        let r = &runs[i];
-        let mut line = format!(
-            "For an error under {}, {} is the cheapest: {} a step, {} of CPU time per \
-             simulated second (error {}).",
-            m(t),
-            run_name(r),
-            s(r.per_step()),
-            s(r.cpu_s / r.duration),
-            m(pts[i].1)
-        );
-        if let Some(b) = resolved.filter(|b| t < *b) {
-            line.push_str(&format!(
-                " Not resolved: the reference's own error ({}) is larger than this \
-                 threshold.",
-                m(b)
-            ));
-        }
-        // a finer threshold with the same answer replaces the coarser one
-        match out.last_mut() {
-            Some(last) if last.0 == i => last.1 = line,
-            _ => out.push((i, line)),
+        match picks.last_mut() {
+            // the same answer: a finer round threshold replaces the one kept
+            Some(last) if last.0 == i => {
+                if round || !last.2 {
+                    *last = (i, t, round);
+                }
+            }
+            _ => picks.push((i, t, round)),
         }
     }
-    out.into_iter().map(|(_, l)| l).collect()
+    picks
+        .into_iter()
+        .map(|(i, t, _)| {
+            let r = &runs[i];
+            let mut line = format!(
+                "For an error under {}, {} is the cheapest: {} (error {}).",
+                m(t),
+                run_name(r),
+                cost(r),
+                m(pts[i].1)
+            );
+            line.push_str(&caveats(r));
+            if let Some(b) = resolved.filter(|b| t < *b) {
+                line.push_str(&format!(
+                    " Not resolved: the reference's own error ({}) is larger than this \
+                     threshold.",
+                    m(b)
+                ));
+            }
+            line
+        })
+        .collect()
 }
 
 /// What a sweep refines: the time step (falling) or the number of elements (rising).
@@ -227,6 +303,14 @@ fn rise_reasons(a: &RunFacts, b: &RunFacts, cx: &RiseContext) -> Vec<String> {
             a.iterations_median
         ));
     }
+    if let Some(rel) = b.relative.filter(|rel| *rel > 0.5) {
+        reasons.push(format!(
+            "at {} its error is {:.2} times the displacement it should have (the tip's \
+             deflection or the midpoint rise): it has hardly left its start",
+            at(b),
+            rel
+        ));
+    }
     if let (Some(d), Some(e)) = (b.to_default, (cx.default_error)(b.dt)) {
         if d > 2.0 * e {
             reasons.push(format!(
@@ -270,6 +354,8 @@ mod tests {
             stuck: 0,
             iterations_median: 8.0,
             to_default: None,
+            relative: None,
+            static_solve: false,
         }
     }
 
@@ -304,6 +390,29 @@ mod tests {
         let fine = front_in_words(&runs, Some(1e-2));
         assert!(fine[2].contains("Not resolved"), "{fine:?}");
         assert!(!fine[1].contains("Not resolved"), "{fine:?}");
+        // a front within one decade: every run of it named, at its error rounded up
+        // where no round threshold separates it from the next; a run that barely
+        // iterates is flagged
+        let mut close = vec![
+            run("lbfgsb", 0.005, 0.004, 17.22e-3),
+            run("chain", 0.01, 0.008, 14.6e-3),
+            run("fem", 0.02, 2.5, 10.05e-3),
+            run("fem", 0.005, 4.0, 9.9e-3),
+        ];
+        close[0].iterations_median = 1.0;
+        let words = front_in_words(&close, None);
+        assert_eq!(words.len(), 4, "{words:?}");
+        assert!(
+            words[0].starts_with("For an error under 20 mm, lbfgsb"),
+            "{words:?}"
+        );
+        assert!(words[0].contains("Caution: its solver stops after a median of 1"));
+        assert!(
+            words[1].starts_with("For an error under 15 mm, chain"),
+            "{words:?}"
+        );
+        assert!(words[2].starts_with("For an error under 11 mm, fem at dt = 20 ms"));
+        assert!(words[3].starts_with("For an error under 10 mm, fem at dt = 5 ms"));
     }
 
     #[test]
@@ -366,12 +475,28 @@ mod tests {
         (c10.resolution, c20.resolution) = ("n = 10".into(), "n = 20".into());
         c20.dt = c10.dt;
         let w = rises_in_words(
-            &[c20, c10],
+            &[c20.clone(), c10.clone()],
             &RiseContext {
                 refines: Refines::N,
                 ..bare
             },
         );
         assert!(w[0].contains("at n = 10 to 20 mm at n = 20"), "{w:?}");
+        assert!(w[0].contains("no cause found"), "{w:?}");
+        // a run that stays near its start says so
+        let (mut s10, mut s20) = (c10.clone(), c20.clone());
+        s20.relative = Some(1.1);
+        (s10.static_solve, s20.static_solve) = (true, true);
+        let n_cx = RiseContext {
+            refines: Refines::N,
+            ..bare
+        };
+        let w = rises_in_words(&[s10.clone(), s20.clone()], &n_cx);
+        assert!(w[0].contains("1.10 times the displacement"), "{w:?}");
+        let words = front_in_words(&[s10], None);
+        assert!(
+            words[0].contains("chain at n = 10 is the cheapest: 30 ms of CPU time"),
+            "{words:?}"
+        );
     }
 }

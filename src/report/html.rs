@@ -392,6 +392,8 @@ fn exact_facts(e: &ExactSceneReport, r: &ExactRow) -> RunFacts {
         stuck: x.stuck_steps,
         iterations_median: x.iterations_median,
         to_default: None,
+        relative: r.error.map(|err| err.relative),
+        static_solve: e.problem.is_static(),
     }
 }
 
@@ -409,7 +411,7 @@ fn exact_section(e: &ExactSceneReport, (cost, conv): &(String, String)) -> Strin
     let _ = writeln!(
         h,
         "<p>{}; the scene's clamp rule: <code>{}</code>. Sample times: {}.</p>",
-        escape(&format!("{:?}", e.problem)),
+        escape(&e.problem.describe()),
         e.clamp,
         e.sample_times
             .iter()

@@ -75,9 +75,13 @@ pub(crate) struct Figure {
 
 /// Figure width, px.
 const WIDTH: u32 = 1000;
-/// Chart height (title, plot area, tick labels, axis descriptions), px; the caption
-/// adds [`LINE`] per line below it.
+/// Chart height (title, plot area, tick labels, axis descriptions), px, unless the
+/// legend needs more; the caption adds [`LINE`] per line below it.
 const CHART_HEIGHT: u32 = 560;
+/// The legend starts this far below the top, px.
+const LEGEND_TOP: u32 = 40;
+/// Width of a legend entry's sample and the gap after it, px.
+const SAMPLE: (i32, i32) = (34, 8);
 /// Width of the chart's area; the legend takes the rest, px.
 const CHART_WIDTH: u32 = 670;
 /// Font sizes (plotters' size: the layout height of a line, px).
@@ -128,10 +132,35 @@ impl Figure {
         wrap(&self.caption, fits(WIDTH - 24))
     }
 
+    /// The legend's entries: (the series, or None for a level; its label's lines).
+    fn legend(&self) -> Vec<(Option<&Series>, Option<&Level>, Vec<String>)> {
+        let chars = fits(WIDTH - CHART_WIDTH - (SAMPLE.0 + SAMPLE.1) as u32 - 10);
+        self.series
+            .iter()
+            .filter(|s| !s.points.is_empty())
+            .map(|s| (Some(s), None, wrap(&s.label, chars)))
+            .chain(
+                self.levels
+                    .iter()
+                    .map(|l| (None, Some(l), wrap(&l.label, chars))),
+            )
+            .collect()
+    }
+
+    /// The chart's height: [`CHART_HEIGHT`], or more for a long legend.
+    fn chart_height(&self) -> u32 {
+        let legend: u32 = self
+            .legend()
+            .iter()
+            .map(|e| LINE * e.2.len() as u32 + 6)
+            .sum();
+        CHART_HEIGHT.max(LEGEND_TOP + legend + 12)
+    }
+
     fn size(&self) -> (u32, u32) {
         (
             WIDTH,
-            CHART_HEIGHT + LINE * self.caption_lines().len() as u32 + 12,
+            self.chart_height() + LINE * self.caption_lines().len() as u32 + 12,
         )
     }
 
@@ -227,20 +256,18 @@ fn draw<DB: DrawingBackend>(
     root.fill(&WHITE).map_err(plot_err)?;
     let (w, _) = fig.size();
     let (xt, yt) = fig.ticks()?;
-    let chart_area = root.clone().shrink((0, 0), (CHART_WIDTH, CHART_HEIGHT));
-    let legend_area = root
-        .clone()
-        .shrink((CHART_WIDTH, 40), (w - CHART_WIDTH, CHART_HEIGHT - 40));
+    let chart_h = fig.chart_height();
+    let chart_area = root.clone().shrink((0, 0), (CHART_WIDTH, chart_h));
+    let legend_area = root.clone().shrink(
+        (CHART_WIDTH, LEGEND_TOP),
+        (w - CHART_WIDTH, chart_h - LEGEND_TOP),
+    );
     draw_chart(&chart_area, fig, &xt, &yt)?;
     draw_legend(&legend_area, fig)?;
     let caption = text_style(FONT);
     for (i, line) in fig.caption_lines().iter().enumerate() {
-        root.draw_text(
-            line,
-            &caption,
-            (12, (CHART_HEIGHT + 4 + LINE * i as u32) as i32),
-        )
-        .map_err(plot_err)?;
+        root.draw_text(line, &caption, (12, (chart_h + 4 + LINE * i as u32) as i32))
+            .map_err(plot_err)?;
     }
     Ok(())
 }
@@ -412,18 +439,10 @@ fn draw_legend<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     fig: &Figure,
 ) -> Result<(), ReportError> {
-    let (w, _) = area.dim_in_pixel();
     let text = text_style(FONT);
-    let (sample_w, gap) = (34i32, 8i32);
-    let chars = fits(w.saturating_sub((sample_w + gap + 10) as u32));
+    let (sample_w, gap) = SAMPLE;
     let mut y = 6i32;
-    let entries = fig
-        .series
-        .iter()
-        .filter(|s| !s.points.is_empty())
-        .map(|s| (Some(s), None, s.label.as_str()))
-        .chain(fig.levels.iter().map(|l| (None, Some(l), l.label.as_str())));
-    for (series, level, label) in entries {
+    for (series, level, lines) in fig.legend() {
         let mid = y + (LINE as i32) / 2;
         let x0 = 2;
         match (series, level) {
@@ -446,7 +465,7 @@ fn draw_legend<DB: DrawingBackend>(
             }
             _ => {}
         }
-        for line in wrap(label, chars) {
+        for line in lines {
             area.draw_text(&line, &text, (x0 + sample_w + gap, y + 1))
                 .map_err(plot_err)?;
             y += LINE as i32;
@@ -583,4 +602,114 @@ pub fn write_lines(
     write_png(path, &fig)?;
     let svg_path = path.with_extension("svg");
     std::fs::write(&svg_path, svg(&fig)?).map_err(io("cannot write", &svg_path))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::svg_check::{axis_labels, label_value, overlapping, text_boxes};
+    use super::*;
+
+    fn figure(series: Vec<Series>) -> Figure {
+        Figure {
+            title: "t".into(),
+            x: Axis {
+                desc: "run time".into(),
+                unit: Unit::Second,
+                scale: Scale::Log,
+            },
+            y: Axis {
+                desc: "error".into(),
+                unit: Unit::Metre,
+                scale: Scale::Log,
+            },
+            series,
+            levels: vec![Level {
+                y: 1e-6,
+                label: "a level".into(),
+                band: true,
+            }],
+            caption: "Swept: something. ".repeat(30),
+        }
+    }
+
+    fn line(label: &str, points: Vec<(f64, f64)>) -> Series {
+        Series {
+            label: label.into(),
+            color: RGBColor(0, 0, 0),
+            points,
+            style: Style::Line { bold: false },
+        }
+    }
+
+    /// Twelve decades on x and eleven on y: the x labels are thinned to every other
+    /// decade, still decades, and no text overlaps, the long caption wrapped.
+    #[test]
+    fn many_decades_are_thinned_and_nothing_overlaps() {
+        let fig = figure(vec![line("wide", vec![(1e-9, 1e-11), (1e3, 1.0)])]);
+        let boxes = text_boxes(&svg(&fig).unwrap()).unwrap();
+        assert!(overlapping(&boxes).is_empty(), "{:#?}", overlapping(&boxes));
+        let (x, y) = axis_labels(&boxes);
+        let values: Vec<f64> = x.iter().map(|b| label_value(&b.text).unwrap()).collect();
+        assert!(values.len() >= 4, "{x:?}");
+        let ratio = values[1] / values[0];
+        assert!(ratio == 100.0 || ratio == 10.0, "{values:?}");
+        for w in values.windows(2) {
+            assert!((w[1] / w[0] / ratio - 1.0).abs() < 1e-9, "{values:?}");
+        }
+        assert!(y.len() >= 6, "{y:?}");
+    }
+
+    /// A legend longer than the chart makes the figure taller, not its text collide.
+    #[test]
+    fn a_long_legend_grows_the_figure() {
+        let series: Vec<Series> = (0..30)
+            .map(|i| {
+                line(
+                    &format!("series {i} with a long label"),
+                    vec![(1.0, 1.0 + i as f64)],
+                )
+            })
+            .collect();
+        let fig = figure(series);
+        assert!(fig.chart_height() > CHART_HEIGHT);
+        let boxes = text_boxes(&svg(&fig).unwrap()).unwrap();
+        assert!(overlapping(&boxes).is_empty());
+        let bottom = boxes.iter().map(|b| b.y1).fold(0.0, f64::max);
+        assert!(bottom <= fig.size().1 as f64, "{bottom} > {}", fig.size().1);
+    }
+
+    #[test]
+    fn a_figure_without_a_drawable_point_is_refused() {
+        let fig = figure(vec![line(
+            "bad",
+            vec![(0.0, 1.0), (1.0, f64::NAN), (-1.0, 2.0)],
+        )]);
+        let err = svg(&fig).unwrap_err();
+        assert_eq!(err.to_string(), "t: no run to plot");
+    }
+
+    #[test]
+    fn write_lines_writes_a_png_and_an_svg() {
+        let dir = std::env::temp_dir().join(format!("plot_lines_test_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("lines.png");
+        let series = [
+            ("a".to_string(), vec![(50.0, 0.8), (100.0, 1.6)]),
+            ("b".to_string(), vec![(50.0, 0.9), (100.0, 4.0)]),
+        ];
+        write_lines(&path, "t", ("n", "ms"), &series).unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let svg = std::fs::read_to_string(dir.join("lines.svg")).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+        let texts: Vec<String> = text_boxes(&svg)
+            .unwrap()
+            .into_iter()
+            .map(|b| b.text)
+            .collect();
+        assert!(
+            texts.iter().any(|t| t == "a") && texts.iter().any(|t| t == "b"),
+            "{texts:?}"
+        );
+    }
 }
