@@ -59,9 +59,18 @@ fn m(v: f64) -> String {
 /// solve "chain (moment_matched) at n = 50".
 fn run_name(r: &RunFacts) -> String {
     if r.static_solve {
-        format!("{} at {}", r.label, r.resolution)
+        format!(
+            "{} at {} (tolerance {:e})",
+            r.label, r.resolution, r.tolerance
+        )
     } else {
-        format!("{} at dt = {} ({})", r.label, s(r.dt), r.resolution)
+        format!(
+            "{} at dt = {} ({}, tolerance {:e})",
+            r.label,
+            s(r.dt),
+            r.resolution,
+            r.tolerance
+        )
     }
 }
 
@@ -132,7 +141,8 @@ fn thresholds(front_errors: &[f64]) -> Vec<(f64, bool)> {
 }
 
 /// What a reader should know about a run before picking it: unconverged steps, a
-/// solver that barely iterates.
+/// solver that barely iterates (not said of a static solve, whose later load steps
+/// start at their equilibrium).
 fn caveats(r: &RunFacts) -> String {
     let mut c = String::new();
     if r.unconverged > 0 {
@@ -141,7 +151,7 @@ fn caveats(r: &RunFacts) -> String {
             r.unconverged, r.steps
         ));
     }
-    if r.iterations_median <= 1.0 {
+    if r.iterations_median <= 1.0 && !r.static_solve {
         c.push_str(&format!(
             " Caution: its solver stops after a median of {} iteration a step.",
             r.iterations_median
@@ -373,7 +383,9 @@ mod tests {
         // answer for both: the finer threshold is kept)
         assert_eq!(words.len(), 3, "{words:?}");
         assert!(
-            words[0].starts_with("For an error under 50 mm, chain at dt = 40 ms"),
+            words[0].starts_with(
+                "For an error under 50 mm, chain at dt = 40 ms (n = 50, tolerance 1e-6)"
+            ),
             "{words:?}"
         );
         assert!(
@@ -495,7 +507,8 @@ mod tests {
         assert!(w[0].contains("1.10 times the displacement"), "{w:?}");
         let words = front_in_words(&[s10], None);
         assert!(
-            words[0].contains("chain at n = 10 is the cheapest: 30 ms of CPU time"),
+            words[0]
+                .contains("chain at n = 10 (tolerance 1e-6) is the cheapest: 30 ms of CPU time"),
             "{words:?}"
         );
     }
