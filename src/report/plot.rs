@@ -347,10 +347,17 @@ fn draw_chart<DB: DrawingBackend>(
             chart.draw_series(std::iter::once(band)).map_err(plot_err)?;
         }
     }
-    // the Pareto front under every marker
-    let (fronts, marks): (Vec<&Series>, Vec<&Series>) =
-        fig.series.iter().partition(|s| s.style == Style::Front);
-    for s in fronts.into_iter().chain(marks) {
+    // the Pareto front under every marker, the default solver (bold) over the rest:
+    // where another series has its errors (L-BFGS-B on the heavy cantilever), the
+    // default's line stays in sight
+    let rank = |s: &Series| match s.style {
+        Style::Front => 0,
+        Style::Line { bold: true } => 2,
+        _ => 1,
+    };
+    let mut order: Vec<&Series> = fig.series.iter().collect();
+    order.sort_by_key(|s| rank(s));
+    for s in order {
         let pts: Vec<(f64, f64)> = s.points.iter().filter_map(to).collect();
         draw_series(&mut chart, s, pts)?;
     }
