@@ -347,13 +347,13 @@ fn draw_chart<DB: DrawingBackend>(
             chart.draw_series(std::iter::once(band)).map_err(plot_err)?;
         }
     }
-    // the Pareto front under every marker, the default solver (bold) over the rest:
-    // where another series has its errors (L-BFGS-B on the heavy cantilever), the
-    // default's line stays in sight
+    // the Pareto front under every marker; the default solver (bold: a wider line and
+    // larger markers) under the others, so a series that shares its errors (L-BFGS-B
+    // on the heavy cantilever) shows on top of it with the default's edges in sight
     let rank = |s: &Series| match s.style {
         Style::Front => 0,
-        Style::Line { bold: true } => 2,
-        _ => 1,
+        Style::Line { bold: true } => 1,
+        _ => 2,
     };
     let mut order: Vec<&Series> = fig.series.iter().collect();
     order.sort_by_key(|s| rank(s));
