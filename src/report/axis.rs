@@ -63,9 +63,10 @@ fn short(v: f64) -> String {
     }
 }
 
-/// `v` in engineering units: the prefix 1000^k with k = round(log10 |v| / 3), so the
-/// number is 0.1 to 100 (`0.1 ms`, `1 ms`, `10 ms`, `0.1 s`), within the prefixes the
-/// unit allows; counts are plain numbers.
+/// `v` in engineering units: below the base unit the prefix 1000^k with k =
+/// round(log10 |v| / 3), so the number is 0.1 to 100 (`0.1 ms`, `1 ms`, `10 ms`,
+/// `0.1 s`); from the base unit up k = floor(log10 |v| / 3) (`100 J`, `1.5 kJ`), within
+/// the prefixes the unit allows; counts are plain numbers.
 pub fn engineering(v: f64, unit: Unit) -> String {
     if !v.is_finite() {
         return format!("{v}");
@@ -78,9 +79,12 @@ pub fn engineering(v: f64, unit: Unit) -> String {
     }
     // the decade, robust to 1e-3 being 0.000999... in binary
     let e = (v.abs().log10() + 1e-9).floor() as i32;
-    let k = ((e as f64) / 3.0)
-        .round()
-        .clamp(PREFIXES[0].0 as f64, unit.max_prefix() as f64) as i32;
+    let k = if e >= 0 {
+        e.div_euclid(3)
+    } else {
+        ((e as f64) / 3.0).round() as i32
+    }
+    .clamp(PREFIXES[0].0, unit.max_prefix());
     let prefix = PREFIXES.iter().find(|p| p.0 == k).map_or("", |p| p.1);
     format!("{} {prefix}{}", short(v / 10f64.powi(3 * k)), unit.symbol())
 }
@@ -239,6 +243,7 @@ mod tests {
         );
         assert_eq!(engineering(2.5e-4, Unit::Second), "0.25 ms");
         assert_eq!(engineering(1500.0, Unit::Joule), "1.5 kJ");
+        assert_eq!(engineering(100.0, Unit::Joule), "100 J");
         assert_eq!(engineering(-0.02, Unit::Joule), "-20 mJ");
         assert_eq!(engineering(0.0, Unit::Joule), "0 J");
         assert_eq!(engineering(100.0, Unit::Count), "100");
