@@ -3,13 +3,13 @@
 //! rows and columns, finite positive errors, the default solver's error falling with
 //! dt, the dense solver sharing its iterates, the FEM baseline's row, CPU run times of
 //! one-thread runs, the summary; and every plot's SVG read back by its text
-//! (`report::svg_check`): one label per decade on both axes, no two text boxes
+//! (`plot::svg_check`): one label per decade on both axes, no two text boxes
 //! overlapping, every legend entry present, a caption; PNGs of the same size beside
 //! them; index.html with every plot inline.
 
 use std::path::{Path, PathBuf};
 
-use developable_sim::report::svg_check::{
+use developable_sim::plot::svg_check::{
     axis_labels, decade_problems, label_value, missing_entries, overlapping, text_boxes,
 };
 use developable_sim::report::{output::CSV_HEADER, run_report, ReportOptions};

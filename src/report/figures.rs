@@ -1,19 +1,19 @@
-//! The report's figures ([`super::plot::Figure`]): per compared scene, error against run
+//! The report's figures ([`crate::plot::Figure`]): per compared scene, error against run
 //! time; per exact-solution scene, error against run time and against n or dt. Each
 //! names every mark in its legend (the default solver as such, the Pareto front, the
 //! reference's own error) and says in its caption what was swept and what the error is
-//! measured against. Pure: reports in, figures out ([`super::plot`] draws them).
+//! measured against. Pure: reports in, figures out ([`crate::plot`] draws them).
 
 use plotters::style::RGBColor;
 
-use super::axis::{engineering, Scale, Unit};
 use super::errors::pareto_front;
 use super::exact_output::{lines, series, xy};
 use super::exact_run::ExactSceneReport;
 use super::findings::RunFacts;
 use super::output::{color, Row, SceneReport};
 use super::plan::{Method, SceneKind, Sweep};
-use super::plot::{Axis, Figure, Level, Series, Style};
+use crate::plot::axis::{engineering, Scale, Unit};
+use crate::plot::{Axis, Figure, Level, Series, Style};
 
 /// The Pareto front's colour (drawn translucent under the markers).
 const FRONT: RGBColor = RGBColor(0, 0, 0);

@@ -3,8 +3,8 @@
 //! rises while its dt falls, the measured reason. Pure: the runs' numbers in,
 //! sentences out (index.html prints them).
 
-use super::axis::{engineering, Unit};
 use super::errors::pareto_front;
+use crate::plot::axis::{engineering, Unit};
 
 /// What the sentences need of one run.
 #[derive(Clone, Debug, PartialEq)]

@@ -9,7 +9,6 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::axis::{engineering, Unit};
 use super::exact::CLAMPS;
 use super::exact_output::orders;
 use super::exact_run::{ExactRow, ExactSceneReport};
@@ -18,6 +17,8 @@ use super::findings::{front_in_words, rises_in_words, Refines, RiseContext, RunF
 use super::output::SceneReport;
 use super::plan::{Method, Sweep};
 use super::report_error::{io, ReportError};
+use crate::plot::axis::{engineering, Unit};
+use crate::plot::page::{escape, inline_svg, STYLE};
 
 /// Everything the page shows.
 pub struct Page<'a> {
@@ -35,24 +36,6 @@ pub struct Page<'a> {
     pub exact_svgs: &'a [(String, String)],
 }
 
-const STYLE: &str = include_str!("report.css");
-
-/// `text` escaped for HTML text and attribute values.
-pub fn escape(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
-
 /// `text` escaped, with `code` spans (backticks, as in summary.md) as `<code>`.
 fn prose(text: &str) -> String {
     escape(text)
@@ -66,11 +49,6 @@ fn prose(text: &str) -> String {
             }
         })
         .collect()
-}
-
-/// An SVG document as an inline element (from `<svg` on: no XML prolog).
-fn inline_svg(svg: &str) -> &str {
-    svg.find("<svg").map_or(svg, |i| &svg[i..])
 }
 
 fn s(v: f64) -> String {
@@ -585,9 +563,7 @@ mod tests {
 
     #[test]
     fn text_is_escaped_and_code_spans_kept() {
-        assert_eq!(escape("a<b & \"c\""), "a&lt;b &amp; &quot;c&quot;");
         assert_eq!(prose("use `x<y` here"), "use <code>x&lt;y</code> here");
-        assert_eq!(inline_svg("<?xml?>\n<svg a>"), "<svg a>");
     }
 
     #[test]

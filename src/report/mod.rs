@@ -15,7 +15,6 @@
 //! it equals the wall time on an idle machine and is not inflated by other processes
 //! on a shared one.
 
-pub mod axis;
 pub mod errors;
 pub mod exact;
 pub mod exact_output;
@@ -26,11 +25,9 @@ pub mod findings;
 pub mod html;
 pub mod output;
 pub mod plan;
-pub(crate) mod plot;
 pub mod report_error;
-pub mod svg_check;
 
-pub use plot::write_lines;
+pub use crate::plot::write_lines;
 pub use report_error::ReportError;
 
 use std::path::{Path, PathBuf};
@@ -658,15 +655,15 @@ fn write_outputs(
     let mut scene_svgs = Vec::new();
     for s in reports {
         let fig = figures::scene_figure(s);
-        scene_svgs.push(plot::write_figure(&opts.out, &s.name, &fig)?);
+        scene_svgs.push(crate::plot::write_figure(&opts.out, &s.name, &fig)?);
     }
     exact_output::write_exact_csv(&opts.out.join("exact.csv"), exact_reports)?;
     let mut exact_svgs = Vec::new();
     for s in exact_reports {
         let (cost, conv) = figures::exact_figures(s);
         exact_svgs.push((
-            plot::write_figure(&opts.out, &s.name, &cost)?,
-            plot::write_figure(&opts.out, &format!("{}_order", s.name), &conv)?,
+            crate::plot::write_figure(&opts.out, &s.name, &cost)?,
+            crate::plot::write_figure(&opts.out, &format!("{}_order", s.name), &conv)?,
         ));
     }
     let (wall_s, cpu_s) = (

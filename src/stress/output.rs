@@ -8,10 +8,9 @@ use std::fmt::Write as _;
 use plotters::style::RGBColor;
 
 use super::{cases, CaseResult, StressReport, DEFAULT_ALLOWANCE};
-use crate::report::axis::{engineering, Scale, Unit};
-use crate::report::html::escape;
-use crate::report::plot::{svg, Axis, Figure, Series, Style};
-use crate::report::ReportError;
+use crate::plot::axis::{engineering, Scale, Unit};
+use crate::plot::page::{escape, inline_svg, STYLE};
+use crate::plot::{svg, Axis, Figure, PlotError, Series, Style};
 
 /// The pass/fail table and how to read it.
 pub fn markdown(report: &StressReport) -> String {
@@ -176,13 +175,13 @@ const TABLE_HEAD: &str = "<table>\n<tr><th>case</th><th>dt</th><th>steps</th><th
     <th>result</th></tr>\n";
 
 /// `index.html`: the verdicts, how a run is judged, and per case its plot and rows.
-pub(super) fn index(report: &StressReport) -> Result<String, ReportError> {
+pub(super) fn index(report: &StressReport) -> Result<String, PlotError> {
     let mut h = String::from(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
          <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
          <title>Stress suite</title>\n<style>\n",
     );
-    h.push_str(include_str!("../report/report.css"));
+    h.push_str(STYLE);
     h.push_str("</style>\n</head>\n<body>\n");
     let _ = writeln!(
         h,
@@ -231,8 +230,7 @@ pub(super) fn index(report: &StressReport) -> Result<String, ReportError> {
             }
         );
         let plot = svg(&case_figure(c.name, &runs))?;
-        let inline = plot.find("<svg").map_or(plot.as_str(), |i| &plot[i..]);
-        let _ = writeln!(h, "<figure>{inline}</figure>");
+        let _ = writeln!(h, "<figure>{}</figure>", inline_svg(&plot));
         h.push_str(TABLE_HEAD);
         for r in runs {
             h.push_str(&row(r));

@@ -1,14 +1,17 @@
-//! The report's one kind of figure, drawn by plotters into a PNG (bitmap backend) and
-//! an SVG (svg backend) from the same code: a chart with log or linear axes labelled in
-//! engineering units at every decade ([`super::axis`]), every series and level in a
-//! legend to the right of the chart (never over the data), and a caption under it
-//! saying what was swept and what the error is measured against.
+//! Plots and pages for the tools built on runs (`report`, `stress`): one kind of figure,
+//! drawn by plotters into a PNG (bitmap backend) and an SVG (svg backend) from the same
+//! code: a chart with log or linear axes labelled in engineering units at every decade
+//! ([`axis`]), every series and level in a legend to the right of the chart (never over
+//! the data), and a caption under it saying what was swept and what the error is
+//! measured against; [`svg_check`] reads a figure's SVG back by its text, [`page`]
+//! holds what the tools' self-contained HTML pages share. Knows no scene and no run
+//! (layer 1: tests/layers.rs), so both tools can use it.
 //!
 //! Text is DejaVu Sans Mono embedded in the binary (assets/fonts), registered as the
 //! `monospace` family: every machine lays out the PNG's text the same way, and the SVG
 //! asks the browser for a monospace font, whose advance (0.60 em) is within the
 //! layout's (0.64 of the SVG's em), so text that does not overlap in the PNG does not
-//! overlap in a browser either ([`super::svg_check`] checks the SVG against 0.65 em).
+//! overlap in a browser either ([`svg_check`] checks the SVG against 0.65 em).
 
 use std::path::Path;
 
@@ -18,8 +21,38 @@ use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, Ranged};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::axis::{engineering, linear_ticks, log_ticks, Scale, Ticks, Unit};
-use super::report_error::{io, ReportError};
+pub mod axis;
+pub mod page;
+pub mod svg_check;
+
+use axis::{engineering, linear_ticks, log_ticks, Scale, Ticks, Unit};
+
+/// Why a figure could not be drawn or written.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// No point of the figure can be drawn (none finite, or none positive on a log
+    /// axis): the figure's title and that.
+    #[error("{0}: no run to plot")]
+    NoData(String),
+    /// plotters failed to draw (its errors are not `Send`, so only their text is kept).
+    #[error("{0}")]
+    Draw(String),
+    #[error(transparent)]
+    Png(#[from] png::EncodingError),
+    /// The file could not be written.
+    #[error("cannot write {path}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+/// An I/O error naming the file.
+fn io(path: &Path) -> impl FnOnce(std::io::Error) -> PlotError {
+    let path = path.display().to_string();
+    move |source| PlotError::Io { path, source }
+}
 
 /// How a series is drawn (and shown in the legend).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -166,10 +199,10 @@ impl Figure {
 
     /// The ticks of both axes over every point that can be drawn (finite, positive on
     /// a log axis) and, on y, the levels.
-    fn ticks(&self) -> Result<(Ticks, Ticks), ReportError> {
+    fn ticks(&self) -> Result<(Ticks, Ticks), PlotError> {
         let usable =
             |axis: &Axis, v: f64| v.is_finite() && (axis.scale == Scale::Linear || v > 0.0);
-        let none = || ReportError::Invalid(format!("{}: no run to plot", self.title));
+        let none = || PlotError::NoData(self.title.clone());
         let pts: Vec<(f64, f64)> = self
             .series
             .iter()
@@ -240,8 +273,8 @@ impl Ranged for TickAxis {
 }
 
 /// The drawing error of plotters as the report's.
-fn plot_err<E: std::fmt::Debug>(e: E) -> ReportError {
-    ReportError::Plot(format!("{e:?}"))
+fn plot_err<E: std::fmt::Debug>(e: E) -> PlotError {
+    PlotError::Draw(format!("{e:?}"))
 }
 
 fn text_style(size: u32) -> TextStyle<'static> {
@@ -249,10 +282,7 @@ fn text_style(size: u32) -> TextStyle<'static> {
 }
 
 /// Draw `fig` on `root`.
-fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    fig: &Figure,
-) -> Result<(), ReportError> {
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &Figure) -> Result<(), PlotError> {
     root.fill(&WHITE).map_err(plot_err)?;
     let (w, _) = fig.size();
     let (xt, yt) = fig.ticks()?;
@@ -278,7 +308,7 @@ fn draw_chart<DB: DrawingBackend>(
     fig: &Figure,
     xt: &Ticks,
     yt: &Ticks,
-) -> Result<(), ReportError> {
+) -> Result<(), PlotError> {
     const MARGIN: u32 = 14;
     let (x_label_area, y_label_area) = (56u32, 86u32);
     let area = area
@@ -382,7 +412,7 @@ fn draw_series<DB: DrawingBackend>(
     chart: &mut Chart<'_, DB>,
     s: &Series,
     mut pts: Vec<(f64, f64)>,
-) -> Result<(), ReportError> {
+) -> Result<(), PlotError> {
     let c = s.color;
     pts.sort_by(|a, b| a.0.total_cmp(&b.0));
     match s.style {
@@ -445,7 +475,7 @@ fn draw_series<DB: DrawingBackend>(
 fn draw_legend<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     fig: &Figure,
-) -> Result<(), ReportError> {
+) -> Result<(), PlotError> {
     let text = text_style(FONT);
     let (sample_w, gap) = SAMPLE;
     let mut y = 6i32;
@@ -488,7 +518,7 @@ fn legend_sample<DB: DrawingBackend>(
     s: &Series,
     (x, y): (i32, i32),
     width: i32,
-) -> Result<(), ReportError> {
+) -> Result<(), PlotError> {
     let c = s.color;
     let mid = (x + width / 2, y);
     let line = |style: ShapeStyle| PathElement::new(vec![(x, y), (x + width, y)], style);
@@ -526,7 +556,7 @@ fn legend_sample<DB: DrawingBackend>(
 }
 
 /// `fig` as an SVG document.
-pub(crate) fn svg(fig: &Figure) -> Result<String, ReportError> {
+pub(crate) fn svg(fig: &Figure) -> Result<String, PlotError> {
     register_font();
     let mut out = String::new();
     {
@@ -538,7 +568,7 @@ pub(crate) fn svg(fig: &Figure) -> Result<String, ReportError> {
 }
 
 /// `fig` as a PNG file at `path`.
-pub(crate) fn write_png(path: &Path, fig: &Figure) -> Result<(), ReportError> {
+pub(crate) fn write_png(path: &Path, fig: &Figure) -> Result<(), PlotError> {
     register_font();
     let (w, h) = fig.size();
     let mut buf = vec![255u8; (w * h * 3) as usize];
@@ -547,7 +577,7 @@ pub(crate) fn write_png(path: &Path, fig: &Figure) -> Result<(), ReportError> {
         draw(&root, fig)?;
         root.present().map_err(plot_err)?;
     }
-    let file = std::fs::File::create(path).map_err(io("cannot write", path))?;
+    let file = std::fs::File::create(path).map_err(io(path))?;
     let mut encoder = png::Encoder::new(std::io::BufWriter::new(file), w, h);
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
@@ -559,11 +589,11 @@ pub(crate) fn write_png(path: &Path, fig: &Figure) -> Result<(), ReportError> {
 
 /// Write `fig` as `<dir>/<stem>.png` and `<dir>/<stem>.svg`; returns the SVG (for
 /// index.html, which inlines it).
-pub(crate) fn write_figure(dir: &Path, stem: &str, fig: &Figure) -> Result<String, ReportError> {
+pub(crate) fn write_figure(dir: &Path, stem: &str, fig: &Figure) -> Result<String, PlotError> {
     let svg = svg(fig)?;
     write_png(&dir.join(format!("{stem}.png")), fig)?;
     let path = dir.join(format!("{stem}.svg"));
-    std::fs::write(&path, &svg).map_err(io("cannot write", &path))?;
+    std::fs::write(&path, &svg).map_err(io(&path))?;
     Ok(svg)
 }
 
@@ -576,7 +606,7 @@ pub fn write_lines(
     title: &str,
     (x_desc, y_desc): (&str, &str),
     series: &[(String, Vec<(f64, f64)>)],
-) -> Result<(), ReportError> {
+) -> Result<(), PlotError> {
     const PALETTE: [RGBColor; 5] = [
         RGBColor(31, 119, 180),
         RGBColor(214, 39, 40),
@@ -608,12 +638,12 @@ pub fn write_lines(
     };
     write_png(path, &fig)?;
     let svg_path = path.with_extension("svg");
-    std::fs::write(&svg_path, svg(&fig)?).map_err(io("cannot write", &svg_path))
+    std::fs::write(&svg_path, svg(&fig)?).map_err(io(&svg_path))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::svg_check::{axis_labels, label_value, overlapping, text_boxes};
+    use super::svg_check::{axis_labels, label_value, overlapping, text_boxes};
     use super::*;
 
     fn figure(series: Vec<Series>) -> Figure {
