@@ -168,6 +168,15 @@ pub struct OutputsFile {
     /// `<object>/start`, `<object>/end`, parent `frame_id`. Default false.
     #[serde(default)]
     pub tf: bool,
+    /// `/handles/<handle>/state` (developable_sim/msg/GraspState, latched): whether each
+    /// handle holds an object, which and where. Default true.
+    #[serde(default = "d_true")]
+    pub grasp_state: bool,
+    /// `/<object>/<handle>/wrench` (geometry_msgs/msg/WrenchStamped, every step while
+    /// the handle holds the object): the force and torque the object exerts on the
+    /// gripper. Default true.
+    #[serde(default = "d_true")]
+    pub wrench: bool,
     /// Hz, at most this many markers messages per second per object (the mesh is the
     /// largest output). Default: every tick.
     #[serde(default)]
@@ -181,6 +190,8 @@ impl Default for OutputsFile {
             status: true,
             clock: true,
             tf: false,
+            grasp_state: true,
+            wrench: true,
             markers_rate: None,
         }
     }
@@ -341,12 +352,6 @@ impl SceneFile {
                     ),
                 ));
             }
-            if self.handles[i].release_at.is_some() {
-                return Err(ck.fail(
-                    &format!("{key}.release_at"),
-                    "only paper objects support releasing a handle",
-                ));
-            }
         }
         let (params, initial) = ribbon_params(ck, rk, ribbon, gravity, solver, specs)?;
         let imperfection = Imperfection {
@@ -466,7 +471,6 @@ impl SceneFile {
     fn paper_scene<'a>(&'a self, paper: &'a PaperFile) -> PaperScene<'a> {
         PaperScene {
             paper,
-            handles: &self.handles,
             has_colliders: !self.colliders.is_empty(),
             has_contact: self.contact.is_some(),
             has_forces: !self.forces.is_empty(),
@@ -500,6 +504,8 @@ impl SceneFile {
                 status: self.outputs.status,
                 clock: self.outputs.clock,
                 tf: self.outputs.tf,
+                grasp_state: self.outputs.grasp_state,
+                wrench: self.outputs.wrench,
                 markers_rate: self.outputs.markers_rate,
             },
             handle_tf_frames: self.handles.iter().map(|h| h.tf_frame.clone()).collect(),
