@@ -290,3 +290,35 @@ fn every_plot_labels_its_decades_and_names_every_mark() {
     );
     assert!(html.contains("order in n of chain (moment_matched) &gt;= 1.8"));
 }
+
+/// The committed full report (docs/img/report, what docs/accuracy.md and the README
+/// show) passes the same checks as the tiny one: every plot's SVG has one label per
+/// decade on both axes, no two text boxes overlapping, a caption and a PNG of its size
+/// beside it, and is inline in the committed index.html, which names the command that
+/// made it. (Regenerating the report by hand cannot leave an illegible plot behind.)
+#[test]
+fn the_committed_full_report_passes_the_same_checks() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/img/report");
+    let html = std::fs::read_to_string(dir.join("index.html")).unwrap();
+    assert!(html.contains("<code>developable_sim report --out docs/img/report</code>"));
+    let mut stems: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| {
+            let name = e.unwrap().file_name().into_string().unwrap();
+            name.strip_suffix(".svg").map(str::to_string)
+        })
+        .collect();
+    stems.sort();
+    // three scenes against a reference, three exact ones with an order plot each
+    assert_eq!(stems.len(), 9, "{stems:?}");
+    for stem in &stems {
+        let against = if stem.starts_with("exact_") {
+            "to the exact solution"
+        } else {
+            "to a reference run of ours"
+        };
+        let svg = check_plot(&dir, stem, &[], against);
+        let inline = &svg[svg.find("<svg").unwrap()..];
+        assert!(html.contains(inline), "{stem} is not inline in index.html");
+    }
+}
