@@ -25,6 +25,8 @@ pub use developable_core::{
 pub mod cli;
 #[cfg(feature = "node")]
 pub mod foxglove; //      4: transports
+#[cfg(feature = "tools")]
+pub mod plot; //          1: plots and self-contained pages (no scene, no run)
 #[cfg(feature = "node")]
 pub mod record; //        4
 pub mod render; //        1: offline pictures

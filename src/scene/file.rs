@@ -88,8 +88,10 @@ pub struct SceneFile {
 #[serde(deny_unknown_fields)]
 pub struct SolverFile {
     /// `chain` (ours, default: projected Newton with the Newton system solved along the
-    /// chain in O(n)), `gauss_newton` (the same method on a dense matrix, O(n^3) per
-    /// iteration: a baseline) or `lbfgsb` (the paper's).
+    /// chain in O(n)), `trust_region` (ours: a trust-region projected Newton method on
+    /// the same O(n) chain model, the end crease held exactly), `gauss_newton` (the
+    /// damped method on a dense matrix, O(n^3) per iteration: a baseline) or `lbfgsb`
+    /// (the paper's).
     #[serde(default = "d_solver_kind")]
     pub kind: String,
     /// Inner stop: projected gradient reduced by this factor (dimensionless). 1e-6.
@@ -430,9 +432,14 @@ impl SceneFile {
 
     fn solver_settings(&self, ck: &Check) -> Result<SolverSettings, SceneError> {
         let s = &self.solver;
-        let kind = match ck.choice("solver.kind", &s.kind, &["gauss_newton", "lbfgsb", "chain"])? {
+        let kind = match ck.choice(
+            "solver.kind",
+            &s.kind,
+            &["gauss_newton", "lbfgsb", "chain", "trust_region"],
+        )? {
             "lbfgsb" => SolverKind::Lbfgsb,
             "chain" => SolverKind::Chain,
+            "trust_region" => SolverKind::TrustRegion,
             _ => SolverKind::GaussNewton,
         };
         let tolerance = ck.positive("solver.tolerance", s.tolerance)?;
@@ -443,7 +450,7 @@ impl SceneFile {
             ));
         }
         let max_iterations = s.max_iterations.unwrap_or(match kind {
-            SolverKind::GaussNewton | SolverKind::Chain => 200,
+            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => 200,
             SolverKind::Lbfgsb => 5000,
         });
         if max_iterations == 0 {
