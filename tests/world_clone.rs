@@ -1,7 +1,7 @@
 //! A `World` cloned in the middle of a run steps on exactly as the original: every
 //! piece of state a step carries to the next (the ribbon's history, its adaptive
-//! penalty, the Newton solvers' damping, the paper's meshes) is copied, buffers are
-//! not. The Python binding's `Simulation.copy()` relies on it (docs/python.md).
+//! penalty, the Newton solvers' damping, the trust region's radius, the paper's meshes)
+//! is copied, buffers are not. The Python binding's `Simulation.copy()` relies on it (docs/python.md).
 
 mod common;
 
@@ -37,8 +37,9 @@ fn clone_continues(name: &str, sets: &[&str], k: usize, m: usize) {
 
 #[test]
 fn a_cloned_world_continues_bit_for_bit() {
-    // each ribbon solver (chain and dense Newton carry their damping between steps)
-    for solver in ["chain", "gauss_newton", "lbfgsb"] {
+    // each ribbon solver (chain and dense Newton carry their damping between steps, the
+    // trust region its radius and shift)
+    for solver in ["chain", "gauss_newton", "lbfgsb", "trust_region"] {
         let kind = format!("solver.kind={solver}");
         clone_continues("ribbon_gripper", &["ribbon.segments=20", &kind], 8, 8);
     }
