@@ -39,7 +39,9 @@ use crate::testutil::{
 use crate::testutil::{WebSocketClient, WebSocketClientError};
 #[cfg(feature = "websocket-tls")]
 use crate::websocket::TlsIdentity;
-use crate::websocket::handshake::{SUBPROTOCOL_V1, SUBPROTOCOL_V1_1, Subprotocol};
+use crate::websocket::handshake::{
+    SUBPROTOCOL_V1, SUBPROTOCOL_V1_1, SUBPROTOCOL_WEBSOCKET_V1, Subprotocol,
+};
 use crate::websocket::server::{ServerOptions, create_server as do_create_server};
 use crate::websocket::service::{CallId, Service, ServiceSchema};
 use crate::websocket::{
@@ -312,6 +314,55 @@ async fn test_handshake_with_multiple_subprotocols() {
     assert_eq!(
         response.headers().get("sec-websocket-protocol"),
         Some(&HeaderValue::from_static(SUBPROTOCOL_V1_1))
+    );
+
+    let _ = server.stop();
+}
+
+#[traced_test]
+#[tokio::test]
+async fn test_handshake_with_the_ws_protocol_name_of_v1() {
+    let ctx = Context::new();
+    let server = create_server(&ctx, ServerOptions::default());
+    let addr = server
+        .start("127.0.0.1", 0)
+        .await
+        .expect("Failed to start server");
+    let request = format!("ws://{addr}/")
+        .into_client_request()
+        .expect("Failed to build request");
+
+    // Lichtblick and the ws-protocol client libraries ask for `foxglove.websocket.v1` only:
+    // accepted, and answered with the name asked for (a client rejects any other).
+    let mut req = request.clone();
+    req.headers_mut().insert(
+        "sec-websocket-protocol",
+        HeaderValue::from_static(SUBPROTOCOL_WEBSOCKET_V1),
+    );
+    let (mut ws, response) = tokio_tungstenite::connect_async(req)
+        .await
+        .expect("Failed to connect");
+    assert_eq!(
+        response.headers().get("sec-websocket-protocol"),
+        Some(&HeaderValue::from_static(SUBPROTOCOL_WEBSOCKET_V1))
+    );
+    // the server speaks v1 on it: its first message is serverInfo
+    use futures_util::StreamExt;
+    let msg = ws.next().await.expect("No serverInfo").expect("Bad frame");
+    let info: serde_json::Value =
+        serde_json::from_str(msg.to_text().expect("serverInfo is text")).expect("JSON");
+    assert_eq!(info["op"], "serverInfo");
+
+    // an unknown name is still refused
+    let mut req = request.clone();
+    req.headers_mut().insert(
+        "sec-websocket-protocol",
+        HeaderValue::from_static("foxglove.websocket.v2"),
+    );
+    let result = tokio_tungstenite::connect_async(req).await;
+    assert_eq!(
+        result.unwrap_err().to_string(),
+        "HTTP error: 400 Bad Request"
     );
 
     let _ = server.stop();
