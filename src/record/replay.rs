@@ -24,7 +24,7 @@ use crate::session::outputs::OutputRow;
 use crate::session::{Command, Content, Frame, OutputTable, Scope, Session};
 use crate::wire::cdr;
 use crate::wire::introspect::{compare, Value};
-use crate::wire::msgs::{PoseStamped, SimCommand, SimStatus};
+use crate::wire::msgs::{PoseStamped, SimCommand, SimStatus, StringMsg, TFMessage};
 
 /// Replay settings.
 #[derive(Clone, Debug, Default)]
@@ -170,6 +170,9 @@ enum Route {
     TfFailure(usize),
     /// The other commands (`~/commands`).
     Commands,
+    /// Robot descriptions as received, and the robot links' TF lookups (commands).
+    RobotDescription,
+    LinkPoses,
     /// A row of the outputs table.
     Output(usize),
 }
@@ -249,6 +252,20 @@ impl Replayed {
                 let msg: SimCommand = decode(dir, m)?;
                 Command::from_msg(&msg).map_err(|e| bag_error(dir, format!("{}: {e}", m.topic)))?
             }
+            Route::RobotDescription => {
+                let urdf = decode::<StringMsg>(dir, m)?.data;
+                // loaded again as the node loaded it (its mesh files read again)
+                let loaded = crate::scene::urdf::load_for(&self.session.scene, &urdf);
+                Command::RobotDescription {
+                    urdf,
+                    loaded,
+                    arrival_ns: m.log_time,
+                }
+            }
+            Route::LinkPoses => Command::LinkPoses {
+                transforms: decode::<TFMessage>(dir, m)?.transforms,
+                arrival_ns: m.log_time,
+            },
             Route::Output(row) => return self.output(dir, m, row, report),
         };
         if matches!(route, Route::Input(_) | Route::TfFailure(_)) {
@@ -492,6 +509,12 @@ fn start_session(
     }
     if let Some(t) = &info.commands_topic {
         routes.insert(t.clone(), Route::Commands);
+    }
+    if let Some(t) = &info.robot_description_topic {
+        routes.insert(t.clone(), Route::RobotDescription);
+    }
+    if let Some(t) = &info.robot_link_poses_topic {
+        routes.insert(t.clone(), Route::LinkPoses);
     }
     for (k, r) in rows.iter().enumerate() {
         routes.insert(r.topic.clone(), Route::Output(k));

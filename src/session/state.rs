@@ -15,6 +15,7 @@ use super::input::{HandleInput, InputPolicy, Rejection};
 use super::outputs::{Frame, OutputTable};
 use super::params::ParamValue;
 use super::produce::{Counters, Produce};
+use super::robot::RobotLinks;
 use super::style::MarkerStyle;
 
 /// What applying a command did.
@@ -26,6 +27,9 @@ pub enum Applied {
     TfLookupFailed,
     /// A new state: after a step, or the initial state after a reset.
     NewState,
+    /// A robot description or the links' poses were taken (Err: why the description or
+    /// the links could not be used; the robot stays as it was).
+    Robot(Result<(), String>),
     /// Paused or resumed; `changed`: the flag differs from before.
     Paused { changed: bool },
     /// A parameter took effect in the session, or concerns only the node (its pacing,
@@ -54,6 +58,8 @@ pub struct Session {
     pub counters: Counters,
     pub paused: bool,
     inputs: Vec<HandleInput>,
+    /// The robot's links in the world (`robot_colliders:`).
+    robot: RobotLinks,
     /// The step that made the current state and its wall time, s (None: step 0).
     last_step: Option<(StepReport, f64)>,
     targets: Vec<Option<Pose>>,
@@ -81,6 +87,7 @@ impl Session {
             },
             paused: false,
             inputs: vec![HandleInput::default(); handles],
+            robot: RobotLinks::default(),
             last_step: None,
             targets: vec![None; handles],
         }
@@ -100,6 +107,16 @@ impl Session {
                     input.rejected_tf_lookup += 1;
                 }
                 Applied::TfLookupFailed
+            }
+            Command::RobotDescription { loaded, .. } => {
+                let friction = self.robot_friction();
+                let world = &mut self.scene.world;
+                Applied::Robot(self.robot.set_description(loaded, world, friction))
+            }
+            Command::LinkPoses { transforms, .. } => {
+                let friction = self.robot_friction();
+                let world = &mut self.scene.world;
+                Applied::Robot(self.robot.set_poses(transforms, world, friction))
             }
             Command::Step => {
                 self.step();
@@ -126,6 +143,16 @@ impl Session {
             Applied::Paused { changed: true } => Some(self.frame(Content::Statuses)),
             _ => None,
         }
+    }
+
+    /// The robot's links in the world (`robot_colliders:`).
+    pub fn robot(&self) -> &RobotLinks {
+        &self.robot
+    }
+
+    /// Coulomb μ of the robot's links (`robot_colliders.friction`).
+    fn robot_friction(&self) -> f64 {
+        self.scene.robot.as_ref().map_or(0.0, |r| r.friction)
     }
 
     /// The parameters that change the session; the others concern the node only.

@@ -44,6 +44,13 @@ impl Qos {
         reliable: true,
         transient_local: false,
     };
+    /// A robot description (`/robot_description`) as `robot_state_publisher` latches
+    /// it: reliable, transient local, keep last 1.
+    pub const LATCHED: Qos = Qos {
+        depth: 1,
+        reliable: true,
+        transient_local: true,
+    };
     /// `/tf_static`: reliable, transient local (a late joiner gets the whole static tree).
     pub const TF_STATIC: Qos = Qos {
         depth: 100,
