@@ -275,3 +275,52 @@ fn robot_commands_move_links_through_the_ribbon_and_replay_bit_for_bit() {
     let colliders_topic = r.topics.iter().find(|t| t.topic == "/colliders").unwrap();
     assert_eq!(colliders_topic.compared, 1 + 125);
 }
+
+#[test]
+fn a_bad_robot_colliders_section_names_its_key() {
+    let load = |name: &str, set: &str| {
+        developable_sim::scene::load(&common::scene_path(name), &[set.to_string()])
+            .unwrap_err()
+            .to_string()
+    };
+    for (set, says) in [
+        (
+            "robot_colliders.thickness=-0.001",
+            "`robot_colliders.thickness`: must be >= 0",
+        ),
+        (
+            "robot_colliders.friction=.nan",
+            "`robot_colliders.friction`: must be a finite number",
+        ),
+        (
+            "robot_colliders.links=[]",
+            "`robot_colliders.links`: an empty list takes no link",
+        ),
+        (
+            "robot_colliders.topic=' '",
+            "`robot_colliders.topic`: must not be empty",
+        ),
+        ("robot_colliders.frames=x", "unknown field `frames`"),
+    ] {
+        let e = load("ribbon_robot_arm", set);
+        assert!(e.contains(says), "{set}: {e}");
+    }
+    let e = load("paper_crumple", "robot_colliders={}");
+    assert!(
+        e.contains("`robot_colliders`: a robot's links collide with ribbons"),
+        "{e}"
+    );
+    // the defaults
+    let s = common::load("ribbon_robot_arm", &["robot_colliders={}"]);
+    let r = s.robot.unwrap();
+    assert_eq!(
+        (
+            r.topic.as_str(),
+            r.links,
+            r.thickness,
+            r.friction,
+            r.frame_prefix.as_str()
+        ),
+        ("/robot_description", None, 0.0, 0.5, "")
+    );
+}

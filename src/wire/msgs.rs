@@ -174,8 +174,10 @@ pub struct TransformStamped {
 // ---------------------------------------------------------------- std_msgs
 
 /// `std_msgs/msg/String`: a robot description (URDF) as `robot_state_publisher`
-/// publishes it on `/robot_description`.
+/// publishes it on `/robot_description`. (Named `String` to serde, as the definition
+/// checks expect: the Rust name would shadow `std::string::String` here.)
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename = "String")]
 pub struct StringMsg {
     pub data: String,
 }

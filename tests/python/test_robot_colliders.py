@@ -143,20 +143,28 @@ def send_tf(writer, k: int) -> None:
     )
 
 
-def sweep(start_node, ros, domain_id, tmp_path: Path, forearm_geometry: str):
-    """Run the sweep with this forearm geometry; returns (bag, node)."""
+def sweep(
+    start_node, ros, domain_id, tmp_path: Path, forearm_geometry: str, latched_first: bool
+):
+    """Run the sweep with this forearm geometry; returns (bag, node). latched_first:
+    the description is published before the node starts (as robot_state_publisher,
+    started first, latches it: the node must get it as a late joiner), else after the
+    node is up."""
     bag = tmp_path / "bag"
+    description = ros.writer("/robot_description", rt.String, reliable_qos(1, True))
+    if latched_first:
+        description.write(rt.String(data=urdf(forearm_geometry)))
     node = start_node(
         domain_id, SCENE, "--record", str(bag), "--ros-args", "-p", "use_sim_time:=true"
     )
-    description = ros.writer("/robot_description", rt.String, reliable_qos(1, True))
     static = ros.writer("/tf_static", rt.TFMessage, qos=TF_STATIC_QOS)
     dynamic = ros.writer("/tf", rt.TFMessage, qos=TF_QOS)
     clock = ros.writer("/clock", rt.Clock, qos=CLOCK_QOS)
     status = ros.reader("/ribbon/status", rt.SimStatus)
     for e in (description, static, dynamic, clock, status):
         ros.wait_matched(e)
-    description.write(rt.String(data=urdf(forearm_geometry)))
+    if not latched_first:
+        description.write(rt.String(data=urdf(forearm_geometry)))
     static.write(
         rt.TFMessage(
             transforms=[
@@ -250,8 +258,9 @@ def drawn_boxes(bag: Path) -> list[tuple[float, list]]:
 def test_a_two_link_arm_sweeping_through_the_ribbon_pushes_it_aside_never_across(
     start_node, ros, domain_id, tmp_path
 ):
+    # the URDF latched before the node starts, as robot_state_publisher does
     bag, node = sweep(
-        start_node, ros, domain_id, tmp_path, '<box size="0.3 0.04 0.04"/>'
+        start_node, ros, domain_id, tmp_path, '<box size="0.3 0.04 0.04"/>', True
     )
     assert "2 colliding links (upper_arm, forearm)" in node.log()
     assert "skipped" not in node.log()
@@ -283,7 +292,7 @@ def test_a_missing_mesh_is_named_and_skipped_and_the_node_runs_on(
 ):
     missing = tmp_path / "meshes" / "forearm.stl"
     bag, node = sweep(
-        start_node, ros, domain_id, tmp_path, f'<mesh filename="file://{missing}"/>'
+        start_node, ros, domain_id, tmp_path, f'<mesh filename="file://{missing}"/>', False
     )
     log = node.log()
     assert f"link `forearm`: collision 0 (mesh `file://{missing}`): cannot read {missing}" in log
