@@ -153,7 +153,7 @@ fn recorded_session(bag: &std::path::Path) -> (Session, SessionRecorder) {
         accept_empty_frame_id: false,
         max_stamp_lead: 10.0,
     };
-    let session = Session::new(scene, policy, names.handles.clone(), table);
+    let mut session = Session::new(scene, policy, names.handles.clone(), table);
     let mut recorder =
         SessionRecorder::create(bag, BagOptions::default(), &session, &names).unwrap();
     recorder

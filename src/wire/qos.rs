@@ -38,18 +38,19 @@ impl Qos {
         reliable: true,
         transient_local: false,
     };
+    /// A latched state (a handle's grasp; a robot description on `/robot_description`
+    /// as `robot_state_publisher` latches it): reliable, keep last 1, transient local (a
+    /// late joiner gets the current state).
+    pub const LATCHED: Qos = Qos {
+        depth: 1,
+        reliable: true,
+        transient_local: true,
+    };
     /// `/tf` as tf2's listener reads it: reliable, volatile, keep last 100.
     pub const TF: Qos = Qos {
         depth: 100,
         reliable: true,
         transient_local: false,
-    };
-    /// A robot description (`/robot_description`) as `robot_state_publisher` latches
-    /// it: reliable, transient local, keep last 1.
-    pub const LATCHED: Qos = Qos {
-        depth: 1,
-        reliable: true,
-        transient_local: true,
     };
     /// `/tf_static`: reliable, transient local (a late joiner gets the whole static tree).
     pub const TF_STATIC: Qos = Qos {

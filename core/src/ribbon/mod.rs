@@ -10,6 +10,8 @@
 //!   substitution, augmented Lagrangian, and the two inner solvers.
 
 pub mod bending;
+mod handle_terms;
+mod handles;
 pub mod mass;
 pub mod objective;
 pub mod params;
@@ -17,6 +19,7 @@ pub mod reconstruct;
 mod sim;
 pub mod step;
 
+pub use handle_terms::HandleRef;
 pub use params::{
     BaseMode, ClampRule, KineticModel, LoopKind, RibbonParams, SolverKind, SolverSettings,
 };

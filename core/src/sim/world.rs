@@ -3,10 +3,10 @@ use rayon::prelude::*;
 use crate::contact::{BodyInput, Collider, ContactError, ContactReport, ContactStage};
 use crate::geometry::{Point3, Pose, SurfaceMesh};
 
-use super::handle::HandleSpec;
+use super::handle::{HandleSpec, ScriptedChange};
 use super::object::{
     pose_is_finite, NoClock, ObjectSim, ObjectStepReport, Phase, PhaseClock, SingularPoint,
-    StepContext,
+    StepContext, Wrench,
 };
 
 /// What a whole-world step did.
@@ -17,6 +17,8 @@ pub struct StepReport {
     pub objects: Vec<ObjectStepReport>,
     /// The contact stage, when the scene has one.
     pub contact: Option<ContactStepReport>,
+    /// The scripted grasps and releases applied at the start of the step.
+    pub scripted: Vec<ScriptedChange>,
 }
 
 /// What the contact stage did in a step (its wall time is measured by the caller's
@@ -43,16 +45,21 @@ struct ContactState {
 #[derive(Clone, Debug)]
 pub struct World {
     names: Vec<String>,
-    objects: Vec<Box<dyn ObjectSim>>,
+    pub(super) objects: Vec<Box<dyn ObjectSim>>,
     initial_objects: Vec<Box<dyn ObjectSim>>,
-    handles: Vec<HandleSpec>,
+    /// The handles now (grasps and releases edit them, `grasp`).
+    pub(super) handles: Vec<HandleSpec>,
+    /// The handles as the scene declared them (a reset restores them).
+    pub(super) initial_handles: Vec<HandleSpec>,
+    /// Per handle: its next scripted grasp or release.
+    pub(super) script_next: Vec<usize>,
     dt: f64,
     time: f64,
     steps: u64,
     contact: Option<ContactState>,
     /// Carrier poses at the end of the last step (the start of the next one): the
     /// handles' targets, then the kinematic bodies' poses.
-    last_targets: Vec<Pose>,
+    pub(super) last_targets: Vec<Pose>,
     /// The kinematic bodies' poses at the end of the next step
     /// ([`World::set_kinematic_pose`]).
     kinematic_next: Vec<Pose>,
@@ -71,6 +78,8 @@ impl World {
             names,
             initial_objects: objects.clone(),
             objects,
+            initial_handles: handles.clone(),
+            script_next: vec![0; handles.len()],
             handles,
             dt,
             time: 0.0,
@@ -190,8 +199,13 @@ impl World {
     pub fn steps_taken(&self) -> u64 {
         self.steps
     }
+    /// The handles now (what each holds changes with grasps and releases).
     pub fn handles(&self) -> &[HandleSpec] {
         &self.handles
+    }
+    /// The handles as the scene declared them.
+    pub fn scene_handles(&self) -> &[HandleSpec] {
+        &self.initial_handles
     }
     pub fn object_names(&self) -> &[String] {
         &self.names
@@ -237,6 +251,7 @@ impl World {
         clock: &dyn PhaseClock,
     ) -> StepReport {
         let t_next = self.time + self.dt;
+        let scripted = self.apply_script(t_next, targets);
         let resolved: Vec<Pose> = (0..self.handles.len())
             .map(|i| {
                 let target = targets
@@ -290,7 +305,18 @@ impl World {
             time: self.time,
             objects: reports,
             contact,
+            scripted,
         }
+    }
+
+    /// What handle `handle` feels from the object it holds, from the last step (None:
+    /// it holds nothing, or no step was taken since it grasped).
+    pub fn handle_wrench(&self, handle: usize) -> Option<Wrench> {
+        let spec = self.handles.get(handle)?;
+        if !spec.attached {
+            return None;
+        }
+        self.objects.get(spec.object)?.handle_wrench(handle)
     }
 
     /// The current surface mesh of object `object`.
@@ -306,6 +332,8 @@ impl World {
     /// Back to the state at t = 0.
     pub fn reset(&mut self) {
         self.objects = self.initial_objects.clone();
+        self.handles = self.initial_handles.clone();
+        self.script_next.iter_mut().for_each(|k| *k = 0);
         self.time = 0.0;
         self.steps = 0;
         // the kinematic bodies stay where they are (a robot is not reset with the world)
