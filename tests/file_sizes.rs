@@ -186,10 +186,11 @@ fn too_long_functions(root: &Path) -> Vec<(String, String, usize)> {
     long
 }
 
-/// The two crates of the workspace: the edges (this one) and the core (core/).
-fn crate_roots() -> [PathBuf; 2] {
+/// The crates of the workspace: the edges (this one), the core (core/) and the Python
+/// bindings (python/).
+fn crate_roots() -> [PathBuf; 3] {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    [root.to_path_buf(), root.join("core")]
+    [root.to_path_buf(), root.join("core"), root.join("python")]
 }
 
 #[test]

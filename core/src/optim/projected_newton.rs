@@ -217,6 +217,18 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         }
     }
 
+    /// A solver whose next `minimize` runs as this one's would: the one value carried
+    /// from solve to solve, the damping the last solve's first iteration needed, is
+    /// copied; the rest (the gradient, the matrix and its factorization) is rebuilt by
+    /// every solve (a factorization is reused only within a solve's rounds, when the
+    /// caller asks, never across a fresh start).
+    pub fn fresh_with_history(&self) -> Self {
+        ProjectedNewton {
+            first_damping: self.first_damping,
+            ..Self::new()
+        }
+    }
+
     /// Minimize `problem` over the box [lower, upper] from `x` (clamped into the box),
     /// writing the minimizer to `x`.
     pub fn minimize(

@@ -246,6 +246,14 @@ impl RibbonSim {
     pub fn strip(&self) -> &Strip {
         &self.strip
     }
+    /// Forget what the step solver carries from step to step (the Newton solvers'
+    /// damping, the trust region's radius): the next step solves as a newly built
+    /// ribbon's solver would from this state. For comparing solver kinds from one state
+    /// (tests/ribbon_chain_solver.rs); a clone keeps that history instead, so that it
+    /// continues bit for bit.
+    pub fn forget_solver_history(&mut self) {
+        self.solver = StepSolver::default();
+    }
     pub fn mesh(&self) -> &SurfaceMesh {
         &self.mesh
     }

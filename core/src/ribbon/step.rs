@@ -80,8 +80,16 @@ pub struct StepSolver {
 
 impl Clone for StepSolver {
     fn clone(&self) -> Self {
-        // Buffers only: a fresh solver behaves identically.
-        StepSolver::default()
+        // Buffers, except what the solvers carry from step to step (the Newton
+        // solvers' damping, the trust region's radius and shift): a clone steps on
+        // exactly as the original (a World copied mid-run continues bit for bit,
+        // tests/world_clone.rs).
+        StepSolver {
+            newton: self.newton.fresh_with_history(),
+            chain: self.chain.fresh_with_history(),
+            trust: self.trust.fresh_with_history(),
+            ..StepSolver::default()
+        }
     }
 }
 

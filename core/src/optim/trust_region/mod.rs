@@ -126,9 +126,11 @@ pub struct TrustRegion<M: ModelMatrix> {
 }
 
 impl<M: ModelMatrix> Clone for TrustRegion<M> {
-    /// Buffers only: a fresh workspace behaves identically.
+    /// What one solve carries to the next is copied (a clone solves on exactly as the
+    /// original: a World cloned mid-run continues bit for bit, tests/world_clone.rs);
+    /// the buffers are not.
     fn clone(&self) -> Self {
-        TrustRegion::default()
+        self.fresh_with_history()
     }
 }
 
@@ -167,6 +169,19 @@ struct ModelStep {
 impl<M: ModelMatrix> TrustRegion<M> {
     pub fn new() -> Self {
         TrustRegion::default()
+    }
+
+    /// A workspace whose next `minimize` runs as this one's would: the values carried
+    /// from solve to solve are copied (Δ, the last positive-definite shift, the slab
+    /// projection's multiplier it starts from); the buffers and the per-solve values
+    /// (the Cauchy t, the round's shift, the slab, the counts) are set by every solve.
+    pub fn fresh_with_history(&self) -> Self {
+        TrustRegion {
+            radius: self.radius,
+            shift: self.shift,
+            path_tau: self.path_tau,
+            ..Self::default()
+        }
     }
 
     /// The current trust-region radius Δ (in the unknowns' units).
