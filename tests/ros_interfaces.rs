@@ -201,10 +201,11 @@ fn service_parts(name: &str) -> (Vec<FieldDef>, Vec<FieldDef>) {
     let text = SERVICES.iter().find(|(n, _)| *n == name).unwrap().1;
     let (req, resp) = text.split_once("---").unwrap();
     let package = name.split('/').next().unwrap();
-    (
-        parse_msg(package, req).unwrap(),
-        parse_msg(package, resp).unwrap(),
-    )
+    let fields = |text: &str| -> Vec<FieldDef> {
+        let all = parse_msg(package, text).unwrap();
+        all.into_iter().filter(|f| !f.constant).collect()
+    };
+    (fields(req), fields(resp))
 }
 
 fn fields_of(v: Value) -> Vec<(&'static str, Value)> {
@@ -356,7 +357,12 @@ fn simulation_interfaces_constants_are_the_definitions() {
         let line = file_text
             .lines()
             .map(|l| l.split('#').next().unwrap_or("").trim())
-            .find(|l| l.split_whitespace().nth(1).map(|n| n.split('=').next().unwrap().trim()) == Some(name))
+            .find(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .map(|n| n.split('=').next().unwrap().trim())
+                    == Some(name)
+            })
             .unwrap_or_else(|| panic!("{ty}: no constant {name}"));
         line.split('=').nth(1).unwrap().trim().parse().unwrap()
     };
@@ -365,15 +371,42 @@ fn simulation_interfaces_constants_are_the_definitions() {
     let f = def("simulation_interfaces/msg/SimulatorFeatures");
     for (name, v) in [
         ("SIMULATION_RESET", SimulatorFeatures::SIMULATION_RESET),
-        ("SIMULATION_RESET_TIME", SimulatorFeatures::SIMULATION_RESET_TIME),
-        ("SIMULATION_RESET_STATE", SimulatorFeatures::SIMULATION_RESET_STATE),
-        ("SIMULATION_RESET_SPAWNED", SimulatorFeatures::SIMULATION_RESET_SPAWNED),
-        ("SIMULATION_STATE_GETTING", SimulatorFeatures::SIMULATION_STATE_GETTING),
-        ("SIMULATION_STATE_SETTING", SimulatorFeatures::SIMULATION_STATE_SETTING),
-        ("SIMULATION_STATE_PAUSE", SimulatorFeatures::SIMULATION_STATE_PAUSE),
-        ("STEP_SIMULATION_SINGLE", SimulatorFeatures::STEP_SIMULATION_SINGLE),
-        ("STEP_SIMULATION_MULTIPLE", SimulatorFeatures::STEP_SIMULATION_MULTIPLE),
-        ("STEP_SIMULATION_ACTION", SimulatorFeatures::STEP_SIMULATION_ACTION),
+        (
+            "SIMULATION_RESET_TIME",
+            SimulatorFeatures::SIMULATION_RESET_TIME,
+        ),
+        (
+            "SIMULATION_RESET_STATE",
+            SimulatorFeatures::SIMULATION_RESET_STATE,
+        ),
+        (
+            "SIMULATION_RESET_SPAWNED",
+            SimulatorFeatures::SIMULATION_RESET_SPAWNED,
+        ),
+        (
+            "SIMULATION_STATE_GETTING",
+            SimulatorFeatures::SIMULATION_STATE_GETTING,
+        ),
+        (
+            "SIMULATION_STATE_SETTING",
+            SimulatorFeatures::SIMULATION_STATE_SETTING,
+        ),
+        (
+            "SIMULATION_STATE_PAUSE",
+            SimulatorFeatures::SIMULATION_STATE_PAUSE,
+        ),
+        (
+            "STEP_SIMULATION_SINGLE",
+            SimulatorFeatures::STEP_SIMULATION_SINGLE,
+        ),
+        (
+            "STEP_SIMULATION_MULTIPLE",
+            SimulatorFeatures::STEP_SIMULATION_MULTIPLE,
+        ),
+        (
+            "STEP_SIMULATION_ACTION",
+            SimulatorFeatures::STEP_SIMULATION_ACTION,
+        ),
     ] {
         assert_eq!(value("SimulatorFeatures", f, name), u64::from(v), "{name}");
     }
@@ -406,7 +439,11 @@ fn simulation_interfaces_constants_are_the_definitions() {
         ("SCOPE_SPAWNED", ResetSimulationRequest::SCOPE_SPAWNED),
         ("SCOPE_ALL", ResetSimulationRequest::SCOPE_ALL),
     ] {
-        assert_eq!(value("ResetSimulation", reset, name), u64::from(v), "{name}");
+        assert_eq!(
+            value("ResetSimulation", reset, name),
+            u64::from(v),
+            "{name}"
+        );
     }
     let set = srv("simulation_interfaces/srv/SetSimulationState");
     for (name, v) in [
@@ -414,7 +451,11 @@ fn simulation_interfaces_constants_are_the_definitions() {
         ("STATE_TRANSITION_ERROR", STATE_TRANSITION_ERROR),
         ("INCORRECT_TRANSITION", INCORRECT_TRANSITION),
     ] {
-        assert_eq!(value("SetSimulationState", set, name), u64::from(v), "{name}");
+        assert_eq!(
+            value("SetSimulationState", set, name),
+            u64::from(v),
+            "{name}"
+        );
     }
     // the checker itself: a wrong value would be caught
     assert_ne!(value("SimulationState", s, "STATE_PAUSED"), 1);

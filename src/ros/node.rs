@@ -397,7 +397,8 @@ impl SimNode {
             let dt = self.session.scene.world.dt();
             self.realtime.step(Instant::now(), dt, *step_s);
             self.session.counters.real_time_factor = self.realtime.factor();
-            if let Some(line) = self.realtime.judge(self.realtime_target()) {
+            let target = self.realtime_target();
+            if let Some(line) = self.realtime.judge(Instant::now(), target) {
                 eprintln!("[developable_sim] {line}");
             }
         }
@@ -435,7 +436,10 @@ impl SimNode {
     /// Under use_sim_time, before the first /clock sample: no time yet, so nothing is
     /// published or recorded (a status stamped 0 would be in no one's time base).
     fn waiting_for_clock(&self) -> bool {
-        self.io.clock_in.as_ref().is_some_and(|c| c.now_ns().is_none())
+        self.io
+            .clock_in
+            .as_ref()
+            .is_some_and(|c| c.now_ns().is_none())
     }
 
     /// One step now; `trigger` is when the tick started or the lock-step input came.

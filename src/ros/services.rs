@@ -150,7 +150,10 @@ pub struct SimulationServices {
 }
 
 impl SimulationServices {
-    fn new(c: &mut Ctx, names: &crate::session::names::SimulationServices) -> Result<Self, NodeError> {
+    fn new(
+        c: &mut Ctx,
+        names: &crate::session::names::SimulationServices,
+    ) -> Result<Self, NodeError> {
         let t = |n| ("simulation_interfaces", n);
         Ok(SimulationServices {
             get_features: Service::new(

@@ -222,13 +222,15 @@ def test_a_bag_recorded_under_a_jumping_clock_replays_identical(ros, domain_id, 
 
 
 def test_a_node_that_cannot_keep_up_says_so(ros, domain_id, start_node):
-    """A long ribbon (800 segments) at the gripper scene's 100 Hz: the node's steps take
-    longer than the 10 ms tick, so its real-time factor falls below 1; SimStatus says
-    how far and stderr says it once, naming the step time and the tick period."""
-    node = start_node(domain_id, GRIPPER, "--set", "ribbon.segments=800")
+    """A long ribbon (800 segments) ticking at 1 kHz (dt 1 ms): a step and its markers
+    take several ms (measured 6.1 ms a step, 0.11x, at load 11 on 2 cores; a step alone
+    is about 4 ms on this machine), so the real-time factor falls well below 1;
+    SimStatus says how far and stderr says it once, naming the step time and the tick
+    period."""
+    node = start_node(domain_id, GRIPPER, "--set", "ribbon.segments=800", "--set", "dt=0.001")
     status = ros.reader("/ribbon/status", rt.SimStatus, STATUS_QOS)
     ros.wait_matched(status)
-    got = ros.take(status, 30.0, until=lambda s: s.sim_time > 1.0 and 0 < s.real_time_factor < 0.95)
+    got = ros.take(status, 30.0, until=lambda s: s.sim_time > 0.2 and 0 < s.real_time_factor < 0.95)
     slow = got[-1]
     # the factor is simulated over wall time: the node measured it from its steps
     assert 0.0 < slow.real_time_factor < 0.95, slow.real_time_factor
@@ -237,9 +239,8 @@ def test_a_node_that_cannot_keep_up_says_so(ros, domain_id, start_node):
         time.sleep(0.1)
     log = node.log()
     line = next(ln for ln in log.splitlines() if "slower than real time" in ln)
-    assert "tick period is 10.0 ms" in line and "a step takes" in line, line
-    # said when it happens (and again only after a recovery), not once per step
-    slow_lines = log.count("slower than real time")
-    assert 1 <= slow_lines <= log.count("keeping up again") + 1, log
-    assert slow_lines < 5, log
+    assert "tick period is 1.0 ms" in line and "a step takes" in line, line
+    # said once, not once per step (it never keeps up here)
+    assert log.count("slower than real time") == 1, log
+    assert "keeping up again" not in log, log
     assert node.stop() == 0

@@ -5,8 +5,8 @@
 use std::time::Instant;
 
 use super::{Lockstep, SimNode, CATCH_UP_BATCH, CATCH_UP_WALL};
-use crate::session::sim_clock::ClockEvent;
 use crate::ros::graph::tf_pose;
+use crate::session::sim_clock::ClockEvent;
 use crate::session::{Applied, Command};
 use crate::wire::msgs::{Header, Pose, PoseStamped, Time};
 
@@ -58,7 +58,11 @@ impl SimNode {
                 }
             }
             ClockEvent::Forward { from_ns, to_ns } => {
-                let max = self.io.clock_in.as_ref().map_or(0, |c| c.follower.max_jump_ns);
+                let max = self
+                    .io
+                    .clock_in
+                    .as_ref()
+                    .map_or(0, |c| c.follower.max_jump_ns);
                 eprintln!(
                     "[developable_sim] /clock jumped ahead from {:.9} s to {:.9} s (more \
                      than max_clock_jump = {} s beyond the wall time between the samples): \

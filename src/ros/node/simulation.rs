@@ -69,7 +69,11 @@ impl SimNode {
     /// Answer the simulation_interfaces services.
     pub(super) fn drain_simulation_services(&mut self, next_tick: &mut Instant) {
         while let Some((id, _)) = self.io.services.simulation.get_features.receive() {
-            self.io.services.simulation.get_features.reply(id, features());
+            self.io
+                .services
+                .simulation
+                .get_features
+                .reply(id, features());
         }
         while let Some((id, _)) = self.io.services.simulation.get_state.receive() {
             let state = State {
