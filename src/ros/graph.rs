@@ -166,7 +166,7 @@ impl ClockIn {
         while let Ok(Some((msg, info))) = self.sub.take() {
             let wall = info
                 .source_timestamp()
-                .map(|t| t.to_nanos() as i64)
+                .map(|t| t.to_nanos())
                 .filter(|t| *t > 0)
                 .unwrap_or_else(|| crate::wire::clock::now_ns() as i64);
             events.extend(self.follower.sample(msg.clock.nanos(), wall));
