@@ -41,12 +41,13 @@ mod grasp;
 mod inputs;
 mod latency;
 mod realtime;
+mod sim_state;
 mod simulation;
 
 use endpoints::Endpoints;
 use latency::Latency;
 use realtime::{RealTimeWatch, Target};
-use simulation::SimInterfaces;
+use sim_state::SimInterfaces;
 
 /// How ticks are paced.
 #[derive(Clone, Copy, Debug, PartialEq)]

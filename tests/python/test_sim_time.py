@@ -8,18 +8,18 @@ stderr."""
 
 from __future__ import annotations
 
-import json
-import subprocess
 import time
 
 import pytest
-from conftest import BIN, ROOT, SCENES, _cdr1, reliable_qos
+from conftest import SCENES, _cdr1, reliable_qos
 from cyclonedds.core import Policy
+from test_commands_replay import commands, replay, without_one_command
 
 import ros_types as rt
 
 GRIPPER = str(SCENES / "ribbon_gripper.yaml")
 DT_NS = 10_000_000  # the gripper scene's dt, 0.01 s
+TIME_ORIGIN = 8  # SimCommand kinds (msg/SimCommand.msg)
 S = 1_000_000_000
 CLOCK_QOS = _cdr1(
     Policy.Reliability.BestEffort, Policy.History.KeepLast(1), Policy.Durability.Volatile
@@ -208,17 +208,28 @@ def test_a_bag_recorded_under_a_jumping_clock_replays_identical(ros, domain_id, 
     clock.run(0.3)
     settle(ros, status, clock.now)
     assert node.stop() == 0
-    out = tmp_path / "replay.json"
-    r = subprocess.run(
-        [str(BIN), "replay", str(bag), "--stats", str(out)],
-        cwd=ROOT, capture_output=True, text=True, timeout=300,
-    )
-    report = json.loads(out.read_text())
-    assert r.returncode == 0 and report["identical"], r.stdout + r.stderr
+    code, report = replay(bag, tmp_path / "replay.json")
+    assert code == 0 and report["identical"], report
     assert report["resets"] == 1 and report["steps"] > 80, report
-    # the commands that moved time are in the bag
     log = node.log()
     assert "/clock jumped ahead" in log and "/clock jumped back" in log
+    # the jumps are recorded commands: without the forward jump's TIME_ORIGIN (the
+    # second one; the first is the first sample) every later stamp differs
+    origins = [k for k, _ in commands(bag) if k == TIME_ORIGIN]
+    assert len(origins) == 2, commands(bag)
+    seen = []
+
+    def second_origin(m):
+        if m.kind == TIME_ORIGIN:
+            seen.append(m)
+        return len(seen) == 2
+
+    cut = tmp_path / "cut"
+    without_one_command(bag, cut, second_origin)
+    code, report = replay(cut, tmp_path / "cut.json")
+    assert code == 1 and not report["identical"], report
+    status = next(t for t in report["topics"] if t["topic"] == "/ribbon/status")
+    assert status["differing"] > 0 and "header.stamp" in status["first_difference"], status
 
 
 def test_a_node_that_cannot_keep_up_says_so(ros, domain_id, start_node):

@@ -7,10 +7,7 @@
 //! or stepped), QUITTING (the node exits after replying). StepSimulation runs its steps
 //! a batch per loop iteration (inputs and services stay served) and replies when done.
 
-use std::collections::VecDeque;
 use std::time::Instant;
-
-use ros2_client::RmwRequestId;
 
 use super::{Lockstep, SimNode, CATCH_UP_BATCH, CATCH_UP_WALL};
 use crate::wire::sim_interfaces::{
@@ -18,25 +15,6 @@ use crate::wire::sim_interfaces::{
     ResultResponse, SimResult, SimulationState as State, SimulatorFeatures as F,
     ALREADY_IN_TARGET_STATE,
 };
-
-/// The services' own state (the rest is the session's: paused, the world).
-#[derive(Default)]
-pub(super) struct SimInterfaces {
-    /// STOPPED: reset and paused by SetSimulationState, not played, paused or stepped
-    /// since.
-    stopped: bool,
-    /// QUITTING was asked: the node stops after the reply.
-    pub(super) quitting: bool,
-    /// StepSimulation requests: (request, steps asked, steps done), oldest first.
-    stepping: VecDeque<(RmwRequestId, u64, u64)>,
-}
-
-impl SimInterfaces {
-    /// Whether steps are waiting to run (the loop must not sleep).
-    pub(super) fn busy(&self) -> bool {
-        !self.stepping.is_empty()
-    }
-}
 
 /// What this node supports, for GetSimulatorFeatures.
 fn features() -> GetSimulatorFeaturesResponse {
