@@ -17,6 +17,7 @@ pub mod names;
 pub mod outputs;
 pub mod params;
 pub mod produce;
+pub mod robot;
 pub mod sim_clock;
 mod state;
 mod status;

@@ -166,6 +166,7 @@ fn initial_terms(
         equalities,
         multipliers,
         end_crease_multipliers: [0.0, 0.0],
+        end_crease_exact: false,
         penalty: params.solver.penalty,
         crease_bound: params.crease_bound(),
     }
@@ -752,6 +753,7 @@ impl ObjectSim for RibbonSim {
             super::SolverKind::GaussNewton => "gauss_newton",
             super::SolverKind::Lbfgsb => "lbfgsb",
             super::SolverKind::Chain => "chain",
+            super::SolverKind::TrustRegion => "trust_region",
         }
     }
     /// One implicit-Euler step, timed as one [`Phase::Simulation`].
