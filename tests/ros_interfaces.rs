@@ -7,6 +7,7 @@ use std::collections::BTreeSet;
 use developable_sim::wire::introspect::{to_value, Value};
 use developable_sim::wire::msgs::*;
 use developable_sim::wire::schema::{is_primitive, parse_msg, FieldDef, DEFINITIONS, SERVICES};
+use developable_sim::wire::sim_interfaces::*;
 
 /// `package/msg/Type` of a Rust struct name (each name is unique among the definitions).
 fn ros_type_of(rust_name: &str) -> String {
@@ -173,6 +174,26 @@ fn every_message_struct_matches_its_msg_definition() {
         &mut seen,
     );
     root(
+        to_value(&SimulatorFeatures {
+            features: vec![1],
+            spawn_formats: vec!["urdf".into()],
+            ..Default::default()
+        })
+        .unwrap(),
+        SimulatorFeatures::TYPE,
+        &mut seen,
+    );
+    root(
+        to_value(&SimResult::default()).unwrap(),
+        SimResult::TYPE,
+        &mut seen,
+    );
+    root(
+        to_value(&SimulationState::default()).unwrap(),
+        SimulationState::TYPE,
+        &mut seen,
+    );
+    root(
         to_value(&StringMsg {
             data: "<robot/>".into(),
         })
@@ -188,10 +209,11 @@ fn service_parts(name: &str) -> (Vec<FieldDef>, Vec<FieldDef>) {
     let text = SERVICES.iter().find(|(n, _)| *n == name).unwrap().1;
     let (req, resp) = text.split_once("---").unwrap();
     let package = name.split('/').next().unwrap();
-    (
-        parse_msg(package, req).unwrap(),
-        parse_msg(package, resp).unwrap(),
-    )
+    let fields = |text: &str| -> Vec<FieldDef> {
+        let all = parse_msg(package, text).unwrap();
+        all.into_iter().filter(|f| !f.constant).collect()
+    };
+    (fields(req), fields(resp))
 }
 
 fn fields_of(v: Value) -> Vec<(&'static str, Value)> {
@@ -289,6 +311,162 @@ fn service_structs_match_our_srv_files() {
         &resp,
         &mut seen,
     );
+}
+
+/// The simulation_interfaces services (vendored release 1.5.1) against their
+/// definitions, field for field.
+#[test]
+fn service_structs_match_simulation_interfaces() {
+    let mut seen = BTreeSet::new();
+    let mut check = |name: &str, req: Value, resp: Value| {
+        let (rq, rs) = service_parts(&format!("simulation_interfaces/srv/{name}"));
+        check_fields(name, &fields_of(req), &or_placeholder(rq), &mut seen);
+        check_fields(name, &fields_of(resp), &rs, &mut seen);
+    };
+    let features = GetSimulatorFeaturesResponse {
+        features: SimulatorFeatures {
+            features: vec![20],
+            spawn_formats: vec!["sdf".into()],
+            ..Default::default()
+        },
+    };
+    check(
+        "GetSimulatorFeatures",
+        to_value(&TriggerRequest::default()).unwrap(),
+        to_value(&features).unwrap(),
+    );
+    check(
+        "ResetSimulation",
+        to_value(&ResetSimulationRequest::default()).unwrap(),
+        to_value(&ResultResponse::default()).unwrap(),
+    );
+    check(
+        "StepSimulation",
+        to_value(&StepSimulationRequest::default()).unwrap(),
+        to_value(&ResultResponse::default()).unwrap(),
+    );
+    check(
+        "GetSimulationState",
+        to_value(&TriggerRequest::default()).unwrap(),
+        to_value(&GetSimulationStateResponse::default()).unwrap(),
+    );
+    check(
+        "SetSimulationState",
+        to_value(&SetSimulationStateRequest::default()).unwrap(),
+        to_value(&ResultResponse::default()).unwrap(),
+    );
+    assert!(seen.contains("simulation_interfaces/msg/SimulatorFeatures"));
+}
+
+/// The constants the node answers with are the vendored definitions' values.
+#[test]
+fn simulation_interfaces_constants_are_the_definitions() {
+    let value = |ty: &str, file_text: &str, name: &str| -> u64 {
+        let line = file_text
+            .lines()
+            .map(|l| l.split('#').next().unwrap_or("").trim())
+            .find(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .map(|n| n.split('=').next().unwrap().trim())
+                    == Some(name)
+            })
+            .unwrap_or_else(|| panic!("{ty}: no constant {name}"));
+        line.split('=').nth(1).unwrap().trim().parse().unwrap()
+    };
+    let def = |n: &str| DEFINITIONS.iter().find(|(d, _)| *d == n).unwrap().1;
+    let srv = |n: &str| SERVICES.iter().find(|(d, _)| *d == n).unwrap().1;
+    let f = def("simulation_interfaces/msg/SimulatorFeatures");
+    for (name, v) in [
+        ("SIMULATION_RESET", SimulatorFeatures::SIMULATION_RESET),
+        (
+            "SIMULATION_RESET_TIME",
+            SimulatorFeatures::SIMULATION_RESET_TIME,
+        ),
+        (
+            "SIMULATION_RESET_STATE",
+            SimulatorFeatures::SIMULATION_RESET_STATE,
+        ),
+        (
+            "SIMULATION_RESET_SPAWNED",
+            SimulatorFeatures::SIMULATION_RESET_SPAWNED,
+        ),
+        (
+            "SIMULATION_STATE_GETTING",
+            SimulatorFeatures::SIMULATION_STATE_GETTING,
+        ),
+        (
+            "SIMULATION_STATE_SETTING",
+            SimulatorFeatures::SIMULATION_STATE_SETTING,
+        ),
+        (
+            "SIMULATION_STATE_PAUSE",
+            SimulatorFeatures::SIMULATION_STATE_PAUSE,
+        ),
+        (
+            "STEP_SIMULATION_SINGLE",
+            SimulatorFeatures::STEP_SIMULATION_SINGLE,
+        ),
+        (
+            "STEP_SIMULATION_MULTIPLE",
+            SimulatorFeatures::STEP_SIMULATION_MULTIPLE,
+        ),
+        (
+            "STEP_SIMULATION_ACTION",
+            SimulatorFeatures::STEP_SIMULATION_ACTION,
+        ),
+    ] {
+        assert_eq!(value("SimulatorFeatures", f, name), u64::from(v), "{name}");
+    }
+    let s = def("simulation_interfaces/msg/SimulationState");
+    for (name, v) in [
+        ("STATE_STOPPED", SimulationState::STOPPED),
+        ("STATE_PLAYING", SimulationState::PLAYING),
+        ("STATE_PAUSED", SimulationState::PAUSED),
+        ("STATE_QUITTING", SimulationState::QUITTING),
+        ("STATE_NO_WORLD", SimulationState::NO_WORLD),
+        ("STATE_LOADING_WORLD", SimulationState::LOADING_WORLD),
+    ] {
+        assert_eq!(value("SimulationState", s, name), u64::from(v), "{name}");
+    }
+    let r = def("simulation_interfaces/msg/Result");
+    for (name, v) in [
+        ("RESULT_FEATURE_UNSUPPORTED", SimResult::FEATURE_UNSUPPORTED),
+        ("RESULT_OK", SimResult::OK),
+        ("RESULT_NOT_FOUND", SimResult::NOT_FOUND),
+        ("RESULT_INCORRECT_STATE", SimResult::INCORRECT_STATE),
+        ("RESULT_OPERATION_FAILED", SimResult::OPERATION_FAILED),
+    ] {
+        assert_eq!(value("Result", r, name), u64::from(v), "{name}");
+    }
+    let reset = srv("simulation_interfaces/srv/ResetSimulation");
+    for (name, v) in [
+        ("SCOPE_DEFAULT", ResetSimulationRequest::SCOPE_DEFAULT),
+        ("SCOPE_TIME", ResetSimulationRequest::SCOPE_TIME),
+        ("SCOPE_STATE", ResetSimulationRequest::SCOPE_STATE),
+        ("SCOPE_SPAWNED", ResetSimulationRequest::SCOPE_SPAWNED),
+        ("SCOPE_ALL", ResetSimulationRequest::SCOPE_ALL),
+    ] {
+        assert_eq!(
+            value("ResetSimulation", reset, name),
+            u64::from(v),
+            "{name}"
+        );
+    }
+    let set = srv("simulation_interfaces/srv/SetSimulationState");
+    for (name, v) in [
+        ("ALREADY_IN_TARGET_STATE", ALREADY_IN_TARGET_STATE),
+        ("STATE_TRANSITION_ERROR", STATE_TRANSITION_ERROR),
+        ("INCORRECT_TRANSITION", INCORRECT_TRANSITION),
+    ] {
+        assert_eq!(
+            value("SetSimulationState", set, name),
+            u64::from(v),
+            "{name}"
+        );
+    }
+    // the checker itself: a wrong value would be caught
+    assert_ne!(value("SimulationState", s, "STATE_PAUSED"), 1);
 }
 
 #[test]

@@ -322,6 +322,7 @@ pub fn resolve(
     let start_paused = args.paused || p.bool("start_paused").unwrap_or(false);
     let use_sim_time = p.bool("use_sim_time").unwrap_or(false);
     let tf_max_lag = non_negative(&p, "tf_max_lag", DEFAULT_MAX_LAG)?;
+    let max_clock_jump = positive(&p, "max_clock_jump", 1.0)?;
     if p.double("markers_rate").is_some() {
         non_negative(&p, "markers_rate", 0.0)?;
     }
@@ -348,6 +349,7 @@ pub fn resolve(
         style,
         use_sim_time,
         tf_max_lag,
+        max_clock_jump,
         params: p,
         foxglove,
     })

@@ -133,6 +133,10 @@ pub struct SessionInfo {
     pub start_paused: bool,
     /// The recorded rows of the outputs table, in the session's order.
     pub outputs: Vec<RecordedOutput>,
+    /// The node followed an external `/clock` (use_sim_time, no `/clock` row): it
+    /// published nothing before the first clock sample set the time origin.
+    #[serde(default)]
+    pub waits_for_clock: bool,
 }
 
 /// The bag topic of a handle's failed TF lookups: beside its input topic, so it reads as
@@ -211,6 +215,7 @@ impl SessionInfo {
                 .filter(|r| r.want.recorded)
                 .map(RecordedOutput::of)
                 .collect(),
+            waits_for_clock: !session.table.rows.iter().any(|r| r.kind.name == "clock"),
         })
     }
 }

@@ -194,6 +194,9 @@ struct Replayed {
     per_topic: BTreeMap<String, TopicReport>,
     /// The rows the bag recorded for the current state.
     seen: std::collections::BTreeSet<usize>,
+    /// Recorded under an external clock and no time origin set yet (see
+    /// `SessionInfo::waits_for_clock`).
+    waiting_for_clock: bool,
 }
 
 impl Replayed {
@@ -219,6 +222,7 @@ impl Replayed {
             frame_step: 0,
             per_topic: BTreeMap::new(),
             seen: std::collections::BTreeSet::new(),
+            waiting_for_clock: info.waits_for_clock,
         })
     }
 
@@ -293,11 +297,19 @@ impl Replayed {
         let applied = self.session.apply(command);
         match command {
             Command::Step => report.steps += 1,
-            Command::Reset => report.resets += 1,
+            Command::Reset | Command::ResetAt { .. } => report.resets += 1,
             _ => {}
         }
         if let Some(frame) = self.session.frame_after(&applied) {
             let frame = frame.map_err(|e| bag_error(dir, e.to_string()))?;
+            // under use_sim_time the node publishes nothing before the first /clock
+            // sample sets the time origin: what the replay makes before it is not missing
+            if self.waiting_for_clock {
+                self.seen.extend(0..self.session.table.rows.len());
+            }
+            if matches!(command, Command::SetTimeOrigin { .. }) {
+                self.waiting_for_clock = false;
+            }
             self.next_frame(frame);
         }
         Ok(())
@@ -411,7 +423,7 @@ impl Replayed {
     /// The comparison per topic, the last state's missing outputs counted unless the bag
     /// was `truncated` in it.
     fn finish(mut self, truncated: bool) -> Vec<TopicReport> {
-        if !truncated {
+        if !truncated && !self.waiting_for_clock {
             self.count_missing();
         }
         self.per_topic.into_values().collect()
@@ -535,5 +547,9 @@ fn tally(entry: &mut TopicReport, step: u64, r: &Value, c: &Value) {
 
 /// Status fields that depend on the wall clock or on the node's transport, not on the
 /// simulation: not compared.
-const WALL_CLOCK_STATUS_FIELDS: &[&str] =
-    &["step_duration", "overrun_ticks", "dropped_publications"];
+const WALL_CLOCK_STATUS_FIELDS: &[&str] = &[
+    "step_duration",
+    "overrun_ticks",
+    "dropped_publications",
+    "real_time_factor",
+];

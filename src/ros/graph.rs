@@ -14,6 +14,7 @@ use ros2_client::{Name, Node, Subscription};
 
 use crate::ros::dds::{dds, qos, topic_type, NodeError};
 use crate::ros::tf::{frame_name, LookupError, TfBuffer};
+use crate::session::sim_clock::{ClockEvent, ClockFollower};
 use crate::wire::msgs::{Clock, PoseStamped, TFMessage, Time};
 use crate::wire::qos::Qos;
 
@@ -132,13 +133,11 @@ pub fn tf_pose(
     })
 }
 
-/// An external `/clock` (use_sim_time): the newest time received, never backwards.
+/// An external `/clock` (use_sim_time): its samples, judged by a [`ClockFollower`]
+/// (first sample, jumps backwards and forwards).
 pub struct ClockIn {
     sub: Subscription<Clock>,
-    /// Newest clock time, ns (None: nothing received yet).
-    pub now_ns: Option<i64>,
-    /// Clock messages older than the newest (ignored: time never runs backwards).
-    pub backwards: u64,
+    pub follower: ClockFollower,
 }
 
 impl ClockIn {
@@ -147,22 +146,31 @@ impl ClockIn {
         clock: &str,
         poll: &Poll,
         token: usize,
+        max_jump: f64,
     ) -> Result<ClockIn, NodeError> {
         Ok(ClockIn {
             sub: subscription(node, clock, Qos::CLOCK, poll, Token(token))?,
-            now_ns: None,
-            backwards: 0,
+            follower: ClockFollower::new(max_jump),
         })
     }
 
-    /// Take pending clock messages.
-    pub fn drain(&mut self) {
-        while let Ok(Some((msg, _))) = self.sub.take() {
-            let t = msg.clock.nanos();
-            match self.now_ns {
-                Some(now) if t < now => self.backwards += 1,
-                _ => self.now_ns = Some(t),
-            }
+    /// Newest clock time, ns (None: nothing received yet).
+    pub fn now_ns(&self) -> Option<i64> {
+        self.follower.now_ns()
+    }
+
+    /// Take pending clock messages; what they ask of the simulation, in order. A
+    /// sample's wall time is its source timestamp (when it was published), else now.
+    pub fn drain(&mut self) -> Vec<ClockEvent> {
+        let mut events = Vec::new();
+        while let Ok(Some((msg, info))) = self.sub.take() {
+            let wall = info
+                .source_timestamp()
+                .map(|t| t.to_nanos())
+                .filter(|t| *t > 0)
+                .unwrap_or_else(|| crate::wire::clock::now_ns() as i64);
+            events.extend(self.follower.sample(msg.clock.nanos(), wall));
         }
+        events
     }
 }

@@ -40,10 +40,15 @@ mod endpoints;
 mod grasp;
 mod inputs;
 mod latency;
+mod realtime;
 mod robot;
+mod sim_state;
+mod simulation;
 
 use endpoints::Endpoints;
 use latency::Latency;
+use realtime::{RealTimeWatch, Target};
+use sim_state::SimInterfaces;
 
 /// How ticks are paced.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,6 +87,8 @@ pub struct NodeConfig {
     pub use_sim_time: bool,
     /// s, a TF lookup at most this long after a chain's newest transform takes the newest.
     pub tf_max_lag: f64,
+    /// s, under use_sim_time: a larger jump of the clock moves the time origin.
+    pub max_clock_jump: f64,
     /// The parameters as read (the parameter services report them; the node's own
     /// settings above win where they differ).
     pub params: Params,
@@ -92,6 +99,8 @@ pub struct NodeConfig {
 /// Under use_sim_time, at most this many catch-up steps run between two polls (inputs
 /// and services stay served while the node catches up with a clock far ahead).
 const CATCH_UP_BATCH: usize = 100;
+/// ... and for at most this much wall time.
+const CATCH_UP_WALL: Duration = Duration::from_millis(100);
 
 /// The running node.
 pub struct SimNode {
@@ -126,6 +135,10 @@ pub struct SimNode {
     /// Which topics' dropped publications were already said in this episode.
     drop_log: DropLog,
     latency: Latency,
+    /// The real-time factor and the slow / back-to-real-time lines.
+    realtime: RealTimeWatch,
+    /// The simulation_interfaces services' state (stopped, quitting, pending steps).
+    sim_if: SimInterfaces,
 }
 
 /// Lock-step on a handle steps once per pose accepted on its topic. A handle that
@@ -192,6 +205,7 @@ fn param_table(cfg: &NodeConfig) -> (ParamTable, f64) {
     params.store("start_paused", ParamValue::Bool(cfg.start_paused));
     params.store("use_sim_time", ParamValue::Bool(cfg.use_sim_time));
     params.store("tf_max_lag", ParamValue::Double(cfg.tf_max_lag));
+    params.store("max_clock_jump", ParamValue::Double(cfg.max_clock_jump));
     if let Pacing::RealTime { factor } = cfg.pacing {
         params.store("real_time_factor", ParamValue::Double(factor));
     }
@@ -221,7 +235,7 @@ impl SimNode {
             cfg.domain_id,
             &cfg.names,
             &table,
-            (cfg.use_sim_time, cfg.tf_max_lag),
+            (cfg.use_sim_time, cfg.tf_max_lag, cfg.max_clock_jump),
             &tf_handles,
         )?;
         let (params, markers_rate) = param_table(&cfg);
@@ -269,6 +283,8 @@ impl SimNode {
             stats,
             drop_log: DropLog::default(),
             latency: Latency::new(),
+            realtime: RealTimeWatch::default(),
+            sim_if: SimInterfaces::default(),
         })
     }
 
@@ -295,15 +311,18 @@ impl SimNode {
     /// Run until `stop` is set (then woken) or the duration is reached.
     pub fn run(mut self, stop: &AtomicBool) -> Result<NodeStats, NodeError> {
         self.latency.start();
+        self.realtime.restart(Instant::now());
+        // under use_sim_time the first /clock sample sets the time: nothing goes out
+        // before it (see `emit`)
         self.emit_current(Content::All, None);
         let mut next_tick = Instant::now() + self.period();
         let mut events = Events::with_capacity(64);
         // under use_sim_time the external clock drives the steps
         let free_running = self.lockstep == Lockstep::Off && self.io.clock_in.is_none();
         let mut behind_clock = false;
-        while !stop.load(Ordering::SeqCst) && !self.done() {
+        while !stop.load(Ordering::SeqCst) && !self.done() && !self.sim_if.quitting {
             let now = Instant::now();
-            let timeout = if behind_clock {
+            let timeout = if behind_clock || self.sim_if.busy() {
                 Duration::ZERO
             } else if free_running && !self.session.paused {
                 next_tick.saturating_duration_since(now)
@@ -332,6 +351,7 @@ impl SimNode {
             if self.lockstep == Lockstep::Off {
                 behind_clock = self.follow_clock();
             }
+            self.advance_step_requests();
             let now = Instant::now();
             if free_running && !self.session.paused && now >= next_tick {
                 // real_time_factor may change at run time
@@ -352,6 +372,9 @@ impl SimNode {
             self.latency.roll_window(&mut self.stats, false);
         }
         self.latency.roll_window(&mut self.stats, true);
+        if self.sim_if.quitting {
+            eprintln!("[developable_sim] SetSimulationState STATE_QUITTING: stopping");
+        }
         Ok(self.finish())
     }
 
@@ -373,9 +396,18 @@ impl SimNode {
         applied
     }
 
-    /// Statistics and the reach messages of the step just taken.
+    /// Statistics, the real-time factor and the reach messages of the step just taken.
     fn after_step(&mut self) {
         self.stats.steps += 1;
+        if let Some((_, step_s)) = self.session.last_step() {
+            let dt = self.session.scene.world.dt();
+            self.realtime.step(Instant::now(), dt, *step_s);
+            self.session.counters.real_time_factor = self.realtime.factor();
+            let target = self.realtime_target();
+            if let Some(line) = self.realtime.judge(Instant::now(), target) {
+                eprintln!("[developable_sim] {line}");
+            }
+        }
         if let Some((report, step_s)) = self.session.last_step() {
             self.latency.step(*step_s);
             let world = &self.session.scene.world;
@@ -386,6 +418,34 @@ impl SimNode {
                 eprintln!("[developable_sim] {m}");
             }
         }
+    }
+
+    /// What the real-time factor is judged against (see `realtime`).
+    fn realtime_target(&self) -> Target {
+        if self.session.paused || self.lockstep != Lockstep::Off {
+            return Target::None;
+        }
+        if self.io.clock_in.is_some() {
+            return Target::Clock {
+                dt: self.session.scene.world.dt(),
+            };
+        }
+        match self.pacing {
+            Pacing::RealTime { factor } => Target::Factor {
+                factor,
+                period: self.period(),
+            },
+            Pacing::AsFastAsPossible => Target::None,
+        }
+    }
+
+    /// Under use_sim_time, before the first /clock sample: no time yet, so nothing is
+    /// published or recorded (a status stamped 0 would be in no one's time base).
+    fn waiting_for_clock(&self) -> bool {
+        self.io
+            .clock_in
+            .as_ref()
+            .is_some_and(|c| c.now_ns().is_none())
     }
 
     /// One step now; `trigger` is when the tick started or the lock-step input came.
@@ -412,6 +472,9 @@ impl SimNode {
     /// Publish a frame (every published row; the markers only when due), send it to
     /// Foxglove, then record it.
     fn emit(&mut self, frame: &Frame, trigger: Option<Instant>) {
+        if self.waiting_for_clock() {
+            return;
+        }
         let t = self.session.scene.world.time();
         let markers_due = match (self.markers_period, self.last_markers) {
             (Some(period), Some(last)) => t - last >= period - 0.5 * self.session.scene.world.dt(),

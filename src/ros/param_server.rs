@@ -16,6 +16,7 @@ const RUNTIME: &[(&str, Option<(f64, bool)>)] = &[
     ("accept_empty_frame_id", None),
     ("max_stamp_lead", Some((0.0, false))),
     ("tf_max_lag", Some((0.0, true))),
+    ("max_clock_jump", Some((0.0, false))),
     ("real_time_factor", Some((0.0, false))),
     ("marker.line_width", Some((0.0, false))),
     ("marker.sphere_diameter", Some((0.0, false))),

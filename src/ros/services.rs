@@ -25,6 +25,10 @@ use crate::wire::msgs::{
     TriggerRequest, TriggerResponse,
 };
 use crate::wire::param_msgs::*;
+use crate::wire::sim_interfaces::{
+    GetSimulationStateResponse, GetSimulatorFeaturesResponse, ResetSimulationRequest,
+    ResultResponse, SetSimulationStateRequest, StepSimulationRequest,
+};
 
 /// One server and the replies it holds.
 pub struct Service<Req: Message + 'static, Resp: Message + 'static> {
@@ -132,7 +136,66 @@ pub struct Services {
     pub release: Service<ReleaseRequest, ReleaseResponse>,
     /// Per handle: its open / close shortcut.
     pub handle_grasp: Vec<Service<SetBoolRequest, SetBoolResponse>>,
+    pub simulation: SimulationServices,
     client_writers: ClientWriters,
+}
+
+/// The simulation_interfaces services.
+pub struct SimulationServices {
+    pub get_features: Service<TriggerRequest, GetSimulatorFeaturesResponse>,
+    pub reset: Service<ResetSimulationRequest, ResultResponse>,
+    pub step: Service<StepSimulationRequest, ResultResponse>,
+    pub get_state: Service<TriggerRequest, GetSimulationStateResponse>,
+    pub set_state: Service<SetSimulationStateRequest, ResultResponse>,
+}
+
+impl SimulationServices {
+    fn new(
+        c: &mut Ctx,
+        names: &crate::session::names::SimulationServices,
+    ) -> Result<Self, NodeError> {
+        let t = |n| ("simulation_interfaces", n);
+        Ok(SimulationServices {
+            get_features: Service::new(
+                c,
+                &names.get_features,
+                t("GetSimulatorFeatures"),
+                "get_simulator_features",
+            )?,
+            reset: Service::new(c, &names.reset, t("ResetSimulation"), "reset_simulation")?,
+            step: Service::new(c, &names.step, t("StepSimulation"), "step_simulation")?,
+            get_state: Service::new(
+                c,
+                &names.get_state,
+                t("GetSimulationState"),
+                "get_simulation_state",
+            )?,
+            set_state: Service::new(
+                c,
+                &names.set_state,
+                t("SetSimulationState"),
+                "set_simulation_state",
+            )?,
+        })
+    }
+
+    fn waiting(&self) -> bool {
+        !(self.get_features.replies.is_empty()
+            && self.reset.replies.is_empty()
+            && self.step.replies.is_empty()
+            && self.get_state.replies.is_empty()
+            && self.set_state.replies.is_empty())
+    }
+
+    fn flush(&mut self, node: &Node, w: &ClientWriters, now: Instant) -> [Flushed; 5] {
+        [
+            self.get_features.flush(node, w, now),
+            self.reset.flush(node, w, now),
+            self.step.flush(node, w, now),
+            self.get_state.flush(node, w, now),
+            self.set_state.flush(node, w, now),
+        ]
+    }
 }
 
 impl Services {
@@ -194,6 +257,7 @@ impl Services {
                 .iter()
                 .map(|n| Service::new(&mut c, n, ("std_srvs", "SetBool"), "handle grasp"))
                 .collect::<Result<Vec<_>, _>>()?,
+            simulation: SimulationServices::new(&mut c, &names.simulation)?,
             client_writers: ClientWriters::default(),
         })
     }
@@ -210,7 +274,8 @@ impl Services {
             && self.get_parameter_types.replies.is_empty()
             && self.grasp.replies.is_empty()
             && self.release.replies.is_empty()
-            && self.handle_grasp.iter().all(|s| s.replies.is_empty()))
+            && self.handle_grasp.iter().all(|s| s.replies.is_empty())
+            && !self.simulation.waiting())
     }
 
     /// Send the held replies whose clients can receive them; what was sent, summed.
@@ -225,11 +290,12 @@ impl Services {
         }
         self.client_writers.refresh(participant);
         let w = &self.client_writers;
-        let shortcuts: Vec<Flushed> = self
+        let mut shortcuts: Vec<Flushed> = self
             .handle_grasp
             .iter_mut()
             .map(|s| s.flush(node, w, now))
             .collect();
+        shortcuts.extend(self.simulation.flush(node, w, now));
         let all = [
             self.grasp.flush(node, w, now),
             self.release.flush(node, w, now),

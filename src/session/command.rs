@@ -57,6 +57,15 @@ pub enum Command {
     Step,
     /// Back to t = 0 (`~/reset`).
     Reset,
+    /// Under an external clock (use_sim_time): back to t = 0 with the initial state
+    /// stamped `origin_ns` (ns on the clock): a reset service called while the clock runs,
+    /// or the clock jumped backwards (`clock_jump`, counted in `SimStatus.clock_resets`).
+    ResetAt { origin_ns: i64, clock_jump: bool },
+    /// Under an external clock: simulated time 0 is at `origin_ns` on the clock from now
+    /// on (the first `/clock` sample; a forward jump beyond `max_clock_jump` moves it by
+    /// the jump instead of simulating the gap). The current state is published again
+    /// with its new stamp.
+    SetTimeOrigin { origin_ns: i64 },
     /// Pause or resume (`~/set_paused`, the `paused` parameter).
     SetPaused(bool),
     /// A run-time parameter took a new value (`~/set_parameters`, already checked).
@@ -102,6 +111,17 @@ impl Command {
             | Command::LinkPoses { .. } => return None,
             Command::Step => m.kind = SimCommand::STEP,
             Command::Reset => m.kind = SimCommand::RESET,
+            Command::ResetAt {
+                origin_ns,
+                clock_jump,
+            } => {
+                m.kind = SimCommand::RESET_AT;
+                (m.integer_value, m.bool_value) = (*origin_ns, *clock_jump);
+            }
+            Command::SetTimeOrigin { origin_ns } => {
+                m.kind = SimCommand::TIME_ORIGIN;
+                m.integer_value = *origin_ns;
+            }
             Command::SetPaused(p) => {
                 m.kind = SimCommand::SET_PAUSED;
                 m.paused = *p;
@@ -164,6 +184,13 @@ impl Command {
         Ok(match m.kind {
             SimCommand::STEP => Command::Step,
             SimCommand::RESET => Command::Reset,
+            SimCommand::RESET_AT => Command::ResetAt {
+                origin_ns: m.integer_value,
+                clock_jump: m.bool_value,
+            },
+            SimCommand::TIME_ORIGIN => Command::SetTimeOrigin {
+                origin_ns: m.integer_value,
+            },
             SimCommand::SET_PAUSED => Command::SetPaused(m.paused),
             SimCommand::SET_PARAMETER => Command::SetParameter {
                 name: m.parameter_name.clone(),
@@ -215,6 +242,17 @@ mod tests {
         let commands = [
             Command::Step,
             Command::Reset,
+            Command::ResetAt {
+                origin_ns: 1_700_000_123_456_789_012,
+                clock_jump: true,
+            },
+            Command::ResetAt {
+                origin_ns: 5,
+                clock_jump: false,
+            },
+            Command::SetTimeOrigin {
+                origin_ns: 100_000_000_000,
+            },
             Command::SetPaused(true),
             Command::SetPaused(false),
             Command::SetParameter {

@@ -18,6 +18,7 @@ pub mod outputs;
 pub mod params;
 pub mod produce;
 pub mod robot;
+pub mod sim_clock;
 mod state;
 mod status;
 pub mod style;

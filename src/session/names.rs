@@ -6,7 +6,8 @@
 //! them to `/robot1/handles/<handle>`; a `topic:` given in the scene is absolute and
 //! stays), outputs `<object>/markers`, `<object>/singular_points`, `<object>/status`
 //! (relative), `colliders` (relative; only for a scene with colliders), `/clock`
-//! (absolute), services `~/reset`, `~/set_paused`, `~/step`.
+//! (absolute), services `~/reset`, `~/set_paused`, `~/step` and the
+//! simulation_interfaces ones (`~/get_simulator_features`, ...).
 
 use crate::scene::Scene;
 
@@ -53,6 +54,19 @@ pub struct NodeNames {
     pub robot_link_poses: String,
     /// The rcl_interfaces parameter services.
     pub parameters: ParameterServices,
+    /// The simulation_interfaces services.
+    pub simulation: SimulationServices,
+}
+
+/// `~/get_simulator_features`, `~/reset_simulation`, `~/step_simulation`,
+/// `~/get_simulation_state`, `~/set_simulation_state` (simulation_interfaces).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SimulationServices {
+    pub get_features: String,
+    pub reset: String,
+    pub step: String,
+    pub get_state: String,
+    pub set_state: String,
 }
 
 /// `~/list_parameters`, `~/get_parameters`, `~/set_parameters`, `~/describe_parameters`,
@@ -134,6 +148,13 @@ impl NodeNames {
                 set: resolve("~/set_parameters")?,
                 describe: resolve("~/describe_parameters")?,
                 get_types: resolve("~/get_parameter_types")?,
+            },
+            simulation: SimulationServices {
+                get_features: resolve("~/get_simulator_features")?,
+                reset: resolve("~/reset_simulation")?,
+                step: resolve("~/step_simulation")?,
+                get_state: resolve("~/get_simulation_state")?,
+                set_state: resolve("~/set_simulation_state")?,
             },
             handles,
             ..names.clone()

@@ -147,8 +147,20 @@ pub const DECLARED: &[Declared] = &[
         ty: ParamType::Bool,
         default: "false",
         doc: "Standard ROS parameter. false: the node owns time and publishes /clock (sim \
-              time from 0). true: it follows an external /clock (ClockQoS), stepping as \
-              many dt as needed to catch up, never backwards, and publishes no /clock.",
+              time from 0). true: it follows an external /clock (ClockQoS) and publishes \
+              none: simulated time starts at the first sample, the node steps as the \
+              clock advances, a jump backwards resets the simulation (counted in \
+              SimStatus.clock_resets), a jump forward beyond max_clock_jump moves the \
+              time origin instead of simulating the gap.",
+    },
+    Declared {
+        name: "max_clock_jump",
+        ty: ParamType::Double,
+        default: "1.0",
+        doc: "s, > 0, run-time, under use_sim_time: a /clock sample that advances more \
+              than this beyond the wall time since the previous sample is a jump: the \
+              time origin moves by it (said on stderr) instead of the gap being \
+              simulated.",
     },
     Declared {
         name: "paused",

@@ -32,6 +32,11 @@ pub struct Counters {
     pub unconverged_steps: Vec<u64>,
     /// Per object: steps whose result was not finite (rejected, previous state kept).
     pub rejected_steps: Vec<u64>,
+    /// Resets because the external clock (use_sim_time) jumped backwards.
+    pub clock_resets: u32,
+    /// Simulated over wall time over the last second (the node measures it; not a
+    /// counter, and not reproduced by a replay).
+    pub real_time_factor: f64,
 }
 
 /// One state of the session, as the producers see it.
@@ -52,12 +57,27 @@ pub struct Produce<'a> {
     pub grasp_dirty: &'a [bool],
     /// Wall time of that step, s (0 for step 0).
     pub step_duration: f64,
+    /// ns on the stamping clock where simulated time 0 is (see [`stamp_at`]).
+    pub origin_ns: i64,
+}
+
+/// The stamp of simulated time `t` (s) when simulated time 0 is at `origin_ns` on the
+/// stamping clock: 0 when the node owns time, the first `/clock` sample under
+/// use_sim_time (moved by the clock's jumps). Integer ns, so an epoch origin (~1.7e9 s)
+/// loses nothing to f64 (whose spacing there is 0.24 us).
+pub fn stamp_at(origin_ns: i64, t: f64) -> Time {
+    let t_ns = if t.is_finite() && t > 0.0 {
+        (t * 1e9).round().min(i64::MAX as f64) as i64
+    } else {
+        0
+    };
+    Time::from_nanos(origin_ns.saturating_add(t_ns))
 }
 
 impl Produce<'_> {
-    /// Simulation time of the state.
+    /// The stamp of the state: its simulated time after the origin.
     pub fn stamp(&self) -> Time {
-        Time::from_secs(self.scene.world.time())
+        stamp_at(self.origin_ns, self.scene.world.time())
     }
 
     /// The header of every message of this state: its time, the scene frame.

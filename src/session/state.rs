@@ -14,7 +14,7 @@ use super::command::Command;
 use super::input::{HandleInput, InputPolicy, Rejection};
 use super::outputs::{Frame, OutputTable};
 use super::params::ParamValue;
-use super::produce::{Counters, Produce};
+use super::produce::{stamp_at, Counters, Produce};
 use super::robot::RobotLinks;
 use super::style::MarkerStyle;
 
@@ -27,6 +27,8 @@ pub enum Applied {
     TfLookupFailed,
     /// A new state: after a step, or the initial state after a reset.
     NewState,
+    /// The same state with a new stamp (the time origin moved).
+    TimeOrigin,
     /// A robot description or the links' poses were taken (Err: why the description or
     /// the links could not be used; the robot stays as it was).
     Robot(Result<(), String>),
@@ -63,6 +65,9 @@ pub struct Session {
     pub table: OutputTable,
     pub counters: Counters,
     pub paused: bool,
+    /// ns on the stamping clock where simulated time 0 is: 0 when the node owns time;
+    /// under use_sim_time set by [`Command::SetTimeOrigin`] and [`Command::ResetAt`].
+    pub origin_ns: i64,
     inputs: Vec<HandleInput>,
     /// The robot's links in the world (`robot_colliders:`).
     robot: RobotLinks,
@@ -96,6 +101,7 @@ impl Session {
                 ..Counters::default()
             },
             paused: false,
+            origin_ns: 0,
             inputs: vec![HandleInput::default(); handles],
             robot: RobotLinks::default(),
             grasp_changed: vec![Time::default(); handles],
@@ -138,6 +144,19 @@ impl Session {
                 self.reset();
                 Applied::NewState
             }
+            Command::ResetAt {
+                origin_ns,
+                clock_jump,
+            } => {
+                self.reset();
+                self.origin_ns = *origin_ns;
+                self.counters.clock_resets += u32::from(*clock_jump);
+                Applied::NewState
+            }
+            Command::SetTimeOrigin { origin_ns } => {
+                self.origin_ns = *origin_ns;
+                Applied::TimeOrigin
+            }
             Command::SetPaused(p) => {
                 let changed = self.paused != *p;
                 self.paused = *p;
@@ -178,7 +197,7 @@ impl Session {
     /// the handles' hold) and what changed; otherwise none.
     pub fn frame_after(&mut self, applied: &Applied) -> Option<Result<Frame, CdrError>> {
         match applied {
-            Applied::NewState => Some(self.frame(Content::All)),
+            Applied::NewState | Applied::TimeOrigin => Some(self.frame(Content::All)),
             Applied::Paused { changed: true }
             | Applied::Grasp(Ok(Grasped { changed: true, .. }))
             | Applied::Release(Ok(true)) => Some(self.frame(Content::Statuses)),
@@ -266,9 +285,9 @@ impl Session {
         self.last_step.as_ref()
     }
 
-    /// Simulation time of the current state.
+    /// The stamp of the current state: its simulated time after the origin.
     pub fn stamp(&self) -> Time {
-        Time::from_secs(self.scene.world.time())
+        stamp_at(self.origin_ns, self.scene.world.time())
     }
 
     /// The messages of the current state.
@@ -317,6 +336,7 @@ impl Session {
             step_duration,
             grasp_changed: &self.grasp_changed,
             grasp_dirty: &self.grasp_dirty,
+            origin_ns: self.origin_ns,
         };
         let mut messages = Vec::with_capacity(self.table.rows.len());
         for row in &self.table.rows {

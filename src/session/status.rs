@@ -67,6 +67,8 @@ pub fn status(p: &Produce, scope: Scope) -> Option<SimStatus> {
         dropped_publications: c.dropped_publications,
         unconverged_steps: c.unconverged_steps[object],
         rejected_steps: c.rejected_steps[object],
+        real_time_factor: c.real_time_factor,
+        clock_resets: c.clock_resets,
         ..SimStatus::default()
     };
     match p.report.and_then(|r| r.objects.get(object)) {

@@ -1,6 +1,6 @@
 //! The wire layer: what a message is, independent of how it travels. Rust mirrors of
-//! every ROS 2 message and service the node speaks ([`msgs`], [`param_msgs`]; the
-//! standard definitions in `interfaces/`, ours in `msg/`), their CDR encoding
+//! every ROS 2 message and service the node speaks ([`msgs`], [`param_msgs`],
+//! [`sim_interfaces`]; the standard definitions in `interfaces/`, ours in `msg/`), their CDR encoding
 //! ([`cdr`]), `ros2msg` schemas ([`schema`]), a field-by-field view for comparisons
 //! ([`introspect`]), the QoS of each kind of topic ([`qos`]), the clock inputs are
 //! stamped with ([`clock`]) and the conversions from the core's geometry ([`convert`]).
@@ -17,3 +17,4 @@ pub mod msgs;
 pub mod param_msgs;
 pub mod qos;
 pub mod schema;
+pub mod sim_interfaces;

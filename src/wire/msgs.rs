@@ -31,6 +31,7 @@ macro_rules! ros_message {
         impl ros2_client::Message for $t {}
     };
 }
+pub(crate) use ros_message;
 
 // ---------------------------------------------------------------- builtin_interfaces
 
@@ -435,12 +436,14 @@ pub struct SimStatus {
     pub rejected_inputs: u64,
     pub unconverged_steps: u64,
     pub rejected_steps: u64,
+    pub real_time_factor: f64,
+    pub clock_resets: u32,
     pub handles: Vec<HandleStatus>,
 }
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_2f6e8cd48d94d2cd1db9744bc6580096a2315cc845a5e8fa31cefb4f1c9e53d3"
+    "RIHS01_09a455efef7e2c9eb451f54ae8f13d4a47dcb51263ec111a98451d29aa2a11a4"
 );
 
 /// `developable_sim/msg/SimCommand`: one external action on the simulation as the node
@@ -475,6 +478,8 @@ impl SimCommand {
     pub const SET_PARAMETER: u8 = 4;
     pub const GRASP: u8 = 5;
     pub const RELEASE: u8 = 6;
+    pub const RESET_AT: u8 = 7;
+    pub const TIME_ORIGIN: u8 = 8;
     pub const PARAMETER_BOOL: u8 = 1;
     pub const PARAMETER_INTEGER: u8 = 2;
     pub const PARAMETER_DOUBLE: u8 = 3;

@@ -114,6 +114,18 @@ pub const DEFINITIONS: &[(&str, &str)] = &[
         "rosgraph_msgs/msg/Clock",
         include_str!("interfaces/rosgraph_msgs/Clock.msg"),
     ),
+    (
+        "simulation_interfaces/msg/Result",
+        include_str!("interfaces/simulation_interfaces/Result.msg"),
+    ),
+    (
+        "simulation_interfaces/msg/SimulationState",
+        include_str!("interfaces/simulation_interfaces/SimulationState.msg"),
+    ),
+    (
+        "simulation_interfaces/msg/SimulatorFeatures",
+        include_str!("interfaces/simulation_interfaces/SimulatorFeatures.msg"),
+    ),
 ];
 
 /// `(package/srv/Type, definition)` of the services the node serves.
@@ -137,6 +149,26 @@ pub const SERVICES: &[(&str, &str)] = &[
     (
         "std_srvs/srv/Empty",
         include_str!("interfaces/std_srvs/Empty.srv"),
+    ),
+    (
+        "simulation_interfaces/srv/GetSimulatorFeatures",
+        include_str!("interfaces/simulation_interfaces/GetSimulatorFeatures.srv"),
+    ),
+    (
+        "simulation_interfaces/srv/ResetSimulation",
+        include_str!("interfaces/simulation_interfaces/ResetSimulation.srv"),
+    ),
+    (
+        "simulation_interfaces/srv/StepSimulation",
+        include_str!("interfaces/simulation_interfaces/StepSimulation.srv"),
+    ),
+    (
+        "simulation_interfaces/srv/GetSimulationState",
+        include_str!("interfaces/simulation_interfaces/GetSimulationState.srv"),
+    ),
+    (
+        "simulation_interfaces/srv/SetSimulationState",
+        include_str!("interfaces/simulation_interfaces/SetSimulationState.srv"),
     ),
 ];
 

@@ -200,6 +200,8 @@ class SimStatus(IdlStruct, typename="developable_sim::msg::dds_::SimStatus_"):
     rejected_inputs: t.uint64 = 0
     unconverged_steps: t.uint64 = 0
     rejected_steps: t.uint64 = 0
+    real_time_factor: t.float64 = 0.0
+    clock_resets: t.uint32 = 0
     handles: t.sequence[HandleStatus] = field(default_factory=list)
 
 
@@ -453,3 +455,116 @@ class GetParameterTypesResponse(IdlStruct, typename="rcl_interfaces::srv::dds_::
     client_guid: t.uint64 = 0
     sequence_number: t.int64 = 0
     types: t.sequence[t.uint8] = field(default_factory=list)
+
+
+# simulation_interfaces 1.5.1 (src/wire/interfaces/simulation_interfaces/), on the
+# rmw_cyclonedds service wire format
+
+
+@dataclass
+class SimResult(IdlStruct, typename="simulation_interfaces::msg::dds_::Result_"):
+    result: t.uint8 = 0
+    error_message: str = ""
+
+
+@dataclass
+class SimulationState(IdlStruct, typename="simulation_interfaces::msg::dds_::SimulationState_"):
+    state: t.uint8 = 0
+
+
+@dataclass
+class SimulatorFeatures(IdlStruct, typename="simulation_interfaces::msg::dds_::SimulatorFeatures_"):
+    features: t.sequence[t.uint16] = field(default_factory=list)
+    spawn_formats: t.sequence[str] = field(default_factory=list)
+    custom_info: str = ""
+
+
+@dataclass
+class GetSimulatorFeaturesRequest(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulatorFeatures_Request_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    structure_needs_at_least_one_member: t.uint8 = 0
+
+
+@dataclass
+class GetSimulatorFeaturesResponse(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulatorFeatures_Response_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    features: SimulatorFeatures = field(default_factory=SimulatorFeatures)
+
+
+@dataclass
+class ResetSimulationRequest(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::ResetSimulation_Request_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    scope: t.uint8 = 0
+
+
+@dataclass
+class ResetSimulationResponse(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::ResetSimulation_Response_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    result: SimResult = field(default_factory=SimResult)
+
+
+@dataclass
+class StepSimulationRequest(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::StepSimulation_Request_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    steps: t.uint64 = 1
+
+
+@dataclass
+class StepSimulationResponse(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::StepSimulation_Response_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    result: SimResult = field(default_factory=SimResult)
+
+
+@dataclass
+class GetSimulationStateRequest(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulationState_Request_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    structure_needs_at_least_one_member: t.uint8 = 0
+
+
+@dataclass
+class GetSimulationStateResponse(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::GetSimulationState_Response_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    state: SimulationState = field(default_factory=SimulationState)
+    result: SimResult = field(default_factory=SimResult)
+
+
+@dataclass
+class SetSimulationStateRequest(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::SetSimulationState_Request_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    state: SimulationState = field(default_factory=SimulationState)
+
+
+@dataclass
+class SetSimulationStateResponse(
+    IdlStruct, typename="simulation_interfaces::srv::dds_::SetSimulationState_Response_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    result: SimResult = field(default_factory=SimResult)

@@ -16,13 +16,7 @@ use crate::wire::param_msgs::{
 impl SimNode {
     pub(super) fn drain_services(&mut self, next_tick: &mut Instant) {
         while let Some((id, _req)) = self.io.services.reset.receive() {
-            self.reach.clear();
-            self.last_markers = None;
-            for p in &mut self.pending_input {
-                *p = None;
-            }
-            self.command(Command::Reset, None);
-            *next_tick = Instant::now() + self.period();
+            self.reset(next_tick);
             let resp = TriggerResponse {
                 success: true,
                 message: format!(
@@ -68,7 +62,25 @@ impl SimNode {
         }
         self.drain_parameter_services(next_tick);
         self.drain_grasp_services();
+        self.drain_simulation_services(next_tick);
         self.flush_replies();
+    }
+
+    /// Back to t = 0; under use_sim_time the initial state is stamped with the clock's
+    /// newest time (the origin moves there), so the node does not re-simulate the time
+    /// since the first clock sample.
+    pub(super) fn reset(&mut self, next_tick: &mut Instant) {
+        self.forget_episode();
+        let clock_now = self.io.clock_in.as_ref().and_then(|c| c.now_ns());
+        let command = match clock_now {
+            Some(origin_ns) => Command::ResetAt {
+                origin_ns,
+                clock_jump: false,
+            },
+            None => Command::Reset,
+        };
+        self.command(command, None);
+        *next_tick = Instant::now() + self.period();
     }
 
     pub(super) fn replies_waiting(&self) -> bool {
@@ -81,6 +93,8 @@ impl SimNode {
         self.params.store("paused", ParamValue::Bool(paused));
         if was && !paused {
             *next_tick = Instant::now() + self.period();
+            // the time spent paused is not counted against the real-time factor
+            self.realtime.restart(Instant::now());
         }
         self.command(Command::SetPaused(paused), None);
     }
@@ -162,6 +176,12 @@ impl SimNode {
                 if let Pacing::RealTime { factor } = &mut self.pacing {
                     *factor = x;
                     *next_tick = Instant::now() + self.period();
+                    self.realtime.restart(Instant::now());
+                }
+            }
+            "max_clock_jump" => {
+                if let Some(c) = &mut self.io.clock_in {
+                    c.follower.max_jump_ns = crate::session::sim_clock::secs_to_ns(x);
                 }
             }
             _ => {}

@@ -131,14 +131,14 @@ impl Endpoints {
     }
 
     /// Create every entity the node's settings and outputs ask for (`use_sim_time`:
-    /// follow an external clock; `tf_max_lag`, s); `tf_handles`: (handle, TF frame) of
+    /// follow an external clock; `tf_max_lag`, s; `max_clock_jump`, s); `tf_handles`: (handle, TF frame) of
     /// the handles that follow TF frames (they get no pose subscription); a writer for
     /// each published row of `outputs`.
     pub(super) fn open(
         domain_id: u16,
         names: &NodeNames,
         outputs: &OutputTable,
-        (use_sim_time, tf_max_lag): (bool, f64),
+        (use_sim_time, tf_max_lag, max_clock_jump): (bool, f64, f64),
         tf_handles: &[(usize, String)],
     ) -> Result<Self, NodeError> {
         let (context, node_name, mut node, spinner) = start_node(domain_id, names)?;
@@ -162,7 +162,10 @@ impl Endpoints {
             })
             .transpose()?;
         let clock_in = use_sim_time
-            .then(|| ClockIn::new(&mut node, &names.clock, &poll, GRAPH_TOKEN_BASE + 2))
+            .then(|| {
+                let token = GRAPH_TOKEN_BASE + 2;
+                ClockIn::new(&mut node, &names.clock, &poll, token, max_clock_jump)
+            })
             .transpose()?;
         let robot_description = robot
             .then(|| {

@@ -4,36 +4,114 @@
 
 use std::time::Instant;
 
-use super::{Lockstep, SimNode, CATCH_UP_BATCH};
+use super::{Lockstep, SimNode, CATCH_UP_BATCH, CATCH_UP_WALL};
 use crate::ros::graph::tf_pose;
+use crate::session::sim_clock::ClockEvent;
 use crate::session::{Applied, Command};
 use crate::wire::msgs::{Header, Pose, PoseStamped, Time};
 
 impl SimNode {
-    /// TF and the external clock: take what arrived.
+    /// TF and the external clock: take what arrived; the clock's first sample and its
+    /// jumps become commands.
     pub(super) fn drain_graph(&mut self) {
         if let Some(tf) = &mut self.io.tf_in {
             tf.drain();
         }
-        if let Some(c) = &mut self.io.clock_in {
-            c.drain();
+        let Some(c) = &mut self.io.clock_in else {
+            return;
+        };
+        let events = c.drain();
+        if let Some(now) = c.now_ns() {
+            self.realtime.clock(Instant::now(), now as f64 * 1e-9);
+        }
+        for e in events {
+            self.clock_event(e);
         }
     }
 
-    /// Under use_sim_time: step (at most [`CATCH_UP_BATCH`] times) while the next state's
-    /// time is not after the external clock. Returns whether the node is still behind.
+    /// The first `/clock` sample starts simulated time; a jump backwards resets there;
+    /// a jump forward beyond `max_clock_jump` moves the time origin (see
+    /// `session::sim_clock`). Each is said once on stderr.
+    fn clock_event(&mut self, event: ClockEvent) {
+        let s = |ns: i64| ns as f64 * 1e-9;
+        let command = match event {
+            ClockEvent::Start { at_ns } => {
+                eprintln!(
+                    "[developable_sim] /clock: simulated time starts at {:.9} s (the first \
+                     clock sample)",
+                    s(at_ns)
+                );
+                Command::SetTimeOrigin { origin_ns: at_ns }
+            }
+            ClockEvent::Backwards { from_ns, to_ns } => {
+                eprintln!(
+                    "[developable_sim] /clock jumped back from {:.9} s to {:.9} s: the \
+                     simulation is reset there (clock reset {})",
+                    s(from_ns),
+                    s(to_ns),
+                    self.session.counters.clock_resets + 1
+                );
+                self.forget_episode();
+                Command::ResetAt {
+                    origin_ns: to_ns,
+                    clock_jump: true,
+                }
+            }
+            ClockEvent::Forward { from_ns, to_ns } => {
+                let max = self
+                    .io
+                    .clock_in
+                    .as_ref()
+                    .map_or(0, |c| c.follower.max_jump_ns);
+                eprintln!(
+                    "[developable_sim] /clock jumped ahead from {:.9} s to {:.9} s (more \
+                     than max_clock_jump = {} s beyond the wall time between the samples): \
+                     the {:.3} s gap is not simulated, the time origin moves by it",
+                    s(from_ns),
+                    s(to_ns),
+                    s(max),
+                    s(to_ns - from_ns)
+                );
+                Command::SetTimeOrigin {
+                    origin_ns: self.session.origin_ns + (to_ns - from_ns),
+                }
+            }
+        };
+        self.command(command, None);
+        self.realtime.restart(Instant::now());
+    }
+
+    /// What belongs to an episode of the node (reach messages, the markers' throttle,
+    /// inputs waiting for their markers): forgotten at a reset.
+    pub(super) fn forget_episode(&mut self) {
+        self.reach.clear();
+        self.last_markers = None;
+        for p in &mut self.pending_input {
+            *p = None;
+        }
+    }
+
+    /// Under use_sim_time: step (at most [`CATCH_UP_BATCH`] times, and for at most
+    /// [`CATCH_UP_WALL`] of wall time, so inputs, services and the clock stay served)
+    /// while the next state's stamp is not after the external clock. Returns whether
+    /// the node is still behind.
     pub(super) fn follow_clock(&mut self) -> bool {
-        let Some(clock_ns) = self.io.clock_in.as_ref().and_then(|c| c.now_ns) else {
+        let Some(clock_ns) = self.io.clock_in.as_ref().and_then(|c| c.now_ns()) else {
             return false;
         };
-        let world = &self.session.scene.world;
-        let (dt, clock) = (world.dt(), clock_ns as f64 * 1e-9);
+        // the clock relative to the origin: small numbers, exact in f64 at any epoch
+        let clock = (clock_ns - self.session.origin_ns) as f64 * 1e-9;
+        let dt = self.session.scene.world.dt();
         let due = |w: &crate::sim::World| w.time() + 0.5 * dt <= clock;
+        let start = Instant::now();
         for _ in 0..CATCH_UP_BATCH {
             if self.session.paused || self.done() || !due(&self.session.scene.world) {
                 return false;
             }
             self.tick(Instant::now());
+            if start.elapsed() >= CATCH_UP_WALL {
+                break;
+            }
         }
         due(&self.session.scene.world)
     }
@@ -44,7 +122,8 @@ impl SimNode {
     pub(super) fn lookup_time_ns(&self) -> u64 {
         if self.io.clock_in.is_some() {
             let w = &self.session.scene.world;
-            ((w.time() + w.dt()) * 1e9).round().max(0.0) as u64
+            let next = crate::session::produce::stamp_at(self.session.origin_ns, w.time() + w.dt());
+            next.nanos().max(0) as u64
         } else {
             crate::wire::clock::now_ns()
         }
