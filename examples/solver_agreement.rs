@@ -106,7 +106,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             both += 1;
             let d = distance(&a, &b);
             distances.push(d);
-            if !(d <= worst) {
+            // (a NaN distance, a sample outside a mesh, counts as the largest)
+            if d.is_nan() || d > worst {
                 worst = d;
                 worst_step = step;
             }
