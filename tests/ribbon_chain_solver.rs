@@ -113,7 +113,8 @@ const OPEN_RIBBON_SCENES: [&str; 9] = [
 /// fire at the same iteration. Measured (2026-12-07): RMS at most 1.9e-15 m on the open
 /// scenes, 6.4e-13 m on the Moebius chain (its Woodbury step's capacitance matrix
 /// amplifies round-off), equal iteration counts on both. The bounds are 50x and 15x
-/// above those and 1e4 below what the negative control below produces.
+/// above those, 1e4 below what a solve stopped one iteration early gives, and below
+/// what a Newton matrix 1e-5 off gives (the negative controls below).
 const OPEN_RMS: f64 = 1e-13;
 const LOOP_RMS: f64 = 1e-11;
 
@@ -199,9 +200,8 @@ fn known_gap_the_double_chain_differs_beyond_round_off() {
 fn the_agreement_check_sees_a_solve_stopped_elsewhere() {
     // negative control: the chain solver with its relative gradient tolerance at 1e-5
     // instead of 1e-6 -- the same Newton matrix, iterates that stop one or more
-    // iterations earlier, at a point within the solve's tolerance (what a subtly wrong
-    // Newton matrix gives: different iterates to the same minimizer). Both checks of
-    // the tests above must fail on it.
+    // iterations earlier, at a point within the solve's tolerance. Both checks of the
+    // tests above must fail on it.
     let (rms, converged, dense_it, chain_it) =
         step_distance_with("ribbon_extreme_torsion", 50, 3, |r| {
             r.params.solver.tolerance = 1e-5
@@ -210,6 +210,29 @@ fn the_agreement_check_sees_a_solve_stopped_elsewhere() {
     assert!(converged);
     assert!(rms > 1e4 * OPEN_RMS, "{rms}");
     assert_ne!(dense_it, chain_it);
+}
+
+#[test]
+fn the_agreement_checks_see_a_subtly_wrong_newton_matrix() {
+    // negative control: the chain solver's Newton matrix with every crease's 2x2 block
+    // 1e-5 too large (the core's test-only hook `RibbonSim::set_newton_matrix_error`,
+    // feature `test-hooks`, on in this crate's dev-dependency only; the objective and
+    // its gradient stay exact, so the solve reaches the same minimizer by other
+    // iterates). Measured (2026-12-08, the third warm step): RMS 6.4e-13 m on the
+    // extreme torsion and 3.7e-11 m on the Moebius band, 6x and 3.7x above the bounds
+    // of the tests above, so both fail; the distance scales with the error (1e-4:
+    // 6.5e-12 and 3.7e-10 m), so 1e-6 (6.4e-14 and 3.7e-12 m) passes unseen. The
+    // iteration counts stay equal (22 and 1): only the distance sees it.
+    for (name, bound) in [
+        ("ribbon_extreme_torsion", OPEN_RMS),
+        ("mobius_band", LOOP_RMS),
+    ] {
+        let (rms, converged, dense_it, chain_it) =
+            step_distance_with(name, 50, 3, |r| r.set_newton_matrix_error(1e-5));
+        eprintln!("{name}, matrix 1e-5 off: RMS {rms:.3e} m, iterations {dense_it} {chain_it}");
+        assert!(converged, "{name}");
+        assert!(rms > bound, "{name}: RMS {rms} m, not seen");
+    }
 }
 
 #[test]

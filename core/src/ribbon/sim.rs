@@ -277,6 +277,14 @@ impl RibbonSim {
         }
     }
 
+    /// Test-only (`test-hooks` feature): the chain solvers' Newton matrix made subtly
+    /// wrong, every crease's 2x2 block scaled by 1 + `relative` (the objective and its
+    /// gradient stay exact), for the negative controls of the solver comparisons.
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub fn set_newton_matrix_error(&mut self, relative: f64) {
+        self.solver.newton_matrix_error = relative;
+    }
+
     /// One implicit-Euler step of `dt` s to time `time`; `targets[h]` is the target of
     /// world handle h (`world_from_gripper`).
     pub fn step(

@@ -76,6 +76,10 @@ pub struct StepSolver {
     /// Buffers of the z-problem (q and its gradient), kept across rounds and steps.
     q_scratch: Vec<f64>,
     gq_scratch: Vec<f64>,
+    /// Test-only: the chain matrix's crease blocks off by this relative amount
+    /// (`ChainModel::perturb_local_blocks`); 0: exact.
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub newton_matrix_error: f64,
 }
 
 impl Clone for StepSolver {
@@ -88,6 +92,8 @@ impl Clone for StepSolver {
             newton: self.newton.fresh_with_history(),
             chain: self.chain.fresh_with_history(),
             trust: self.trust.fresh_with_history(),
+            #[cfg(any(test, feature = "test-hooks"))]
+            newton_matrix_error: self.newton_matrix_error,
             ..StepSolver::default()
         }
     }
@@ -127,6 +133,8 @@ struct ZProblem<'o, 'w> {
     mode: GradientMode,
     /// Record second-order data with every gradient (for `BoxProblem::hessian`).
     second_order: bool,
+    #[cfg(any(test, feature = "test-hooks"))]
+    newton_matrix_error: f64,
 }
 
 impl ZProblem<'_, '_> {
@@ -259,6 +267,10 @@ impl BoxProblem for ZChain<'_, '_, '_> {
         problem
             .objective
             .chain_model(problem.workspace, &mut h.model);
+        #[cfg(any(test, feature = "test-hooks"))]
+        if problem.newton_matrix_error != 0.0 {
+            h.model.perturb_local_blocks(problem.newton_matrix_error);
+        }
     }
     /// The trust region's units: 1 for crease differences (crease-direction units),
     /// bending angles and the base rotation (rad); the strip's length l for the base
@@ -516,6 +528,8 @@ impl StepSolver {
             gq: std::mem::take(&mut self.gq_scratch),
             mode: GradientMode::Adjoint,
             second_order: false,
+            #[cfg(any(test, feature = "test-hooks"))]
+            newton_matrix_error: self.newton_matrix_error,
         };
         let result = match settings.kind {
             SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => {

@@ -49,8 +49,11 @@ pub trait ModelMatrix: NewtonMatrix {
         face: Option<(std::ops::Range<usize>, f64)>,
     ) -> bool;
     /// After a [`Self::factor_free`] that failed: the least eigenvalue of the pivot it
-    /// failed at (the shift included; <= 0), if it failed at one: the shift must grow by
-    /// at least its magnitude to pass that pivot.
+    /// failed at (the shift included; <= 0), if it failed at one. Growing the shift by
+    /// its magnitude is enough to pass that pivot (a Schur complement grows at least as
+    /// fast as the shift: S(sigma + s) >= S(sigma) + s I), but not needed: it can exceed
+    /// the least shift that makes the whole matrix positive definite ([[0, 1], [1, 1]]
+    /// eliminated from the end: pivot -1, least shift 0.618).
     fn failed_pivot(&self) -> Option<f64>;
     /// Solve with the last factorization: `rhs` full length (held entries ignored),
     /// `out` full length (held entries 0). False if not finite.

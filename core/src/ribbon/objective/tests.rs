@@ -112,7 +112,6 @@ fn check_gradient(n: usize, floating: bool, kinetic: KineticModel, mode: Gradien
     let f0 = obj.evaluate(&q, &mut ws, Some((&mut g, mode)), None);
     assert!(f0.is_finite());
     let h = 1e-6;
-    let mut worst: f64 = 0.0;
     let scale = g.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     for a in 0..q.len() {
         let mut qp = q.clone();
@@ -122,7 +121,6 @@ fn check_gradient(n: usize, floating: bool, kinetic: KineticModel, mode: Gradien
         let fm = obj.evaluate(&qp, &mut ws, None, None);
         let fd = (fp - fm) / (2.0 * h);
         let err = (fd - g[a]).abs() / scale;
-        worst = worst.max(err);
         // central differences: O(h^2) truncation ~ 1e-12 relative, round-off
         // ~ eps |f| / h ~ 1e-10 relative to the gradient scale.
         assert!(
@@ -131,7 +129,6 @@ fn check_gradient(n: usize, floating: bool, kinetic: KineticModel, mode: Gradien
             g[a]
         );
     }
-    assert!(worst < 1e-6);
 }
 
 #[test]
@@ -228,28 +225,31 @@ fn check_hessian_against(
         }
     }
     let fd = (&fd + fd.transpose()) * 0.5;
+    // The error's spectral norm bounds how far any eigenvalue can move (Weyl), so the
+    // check certifies the soft modes: on the extreme torsion (the design check,
+    // docs/ribbon_chain_solver.md) they sit at 1e-4 J (positive) and -1e-3 J (negative)
+    // against |H|max ~ 1e3, i.e. 1e-7 of the largest entry; the bound is a tenth of
+    // that, so an error that moves the softest mode by 10 % of itself fails. The
+    // differences' own error: round-off eps |g| / h = 2.2e-10 |g|max per entry,
+    // truncation h^2 |g'''| / 6 ~ 1e-13; measured at most 1.2e-9 |H|max in spectral
+    // norm over these tests (the quasi-static one), 8x below the bound.
+    let m = coords.len();
+    let error = DMatrix::from_fn(m, m, |r, c| {
+        fd[(coords[r], coords[c])] - hm[(coords[r], coords[c])]
+    });
+    let spectral = error.clone().singular_values().max();
+    let bound = 1e-8 * hm.amax();
     if std::env::var("HESSIAN_DEBUG").is_ok() {
-        for &b in coords {
-            for &a in coords {
-                if (fd[(a, b)] - hm[(a, b)]).abs() >= 1e-6 * hm.amax() {
-                    eprintln!("H[{a},{b}] = {} vs fd {}", hm[(a, b)], fd[(a, b)]);
-                }
-            }
-        }
+        eprintln!("||fd - H||_2 = {spectral:.3e}, bound {bound:.3e}");
     }
-    for &b in coords {
-        for &a in coords {
-            // truncation ~ h^2 times the third derivative, round-off ~ eps |g| / h
-            // ~ 1e-10 |g|; 1e-6 of the largest entry is far above both and far below
-            // any missing term.
-            assert!(
-                (fd[(a, b)] - hm[(a, b)]).abs() < 1e-6 * hm.amax(),
-                "H[{a},{b}] = {} vs fd {}",
-                hm[(a, b)],
-                fd[(a, b)]
-            );
-        }
-    }
+    let worst = error.iamax_full();
+    let (a, b) = (coords[worst.0], coords[worst.1]);
+    assert!(
+        spectral <= bound,
+        "||fd - H||_2 = {spectral:.3e} > {bound:.3e}; worst H[{a},{b}] = {} vs fd {}",
+        hm[(a, b)],
+        fd[(a, b)]
+    );
 }
 
 #[test]
@@ -402,6 +402,26 @@ fn hessian_check_sees_a_wrong_kinetic_term() {
     let mut hm = DMatrix::zeros(q.len(), q.len());
     obj.evaluate(&q, &mut ws, None, Some(&mut hm));
     terms.density *= 1.01;
+    check_hessian_against(&terms, &history, strip, base, &q, true, &all, &hm);
+}
+
+/// ... and an error at the soft modes' scale: a rank-one error of 1e-7 |H|max (what
+/// would move a soft mode of the extreme torsion by its own size) along a random
+/// direction.
+#[test]
+#[should_panic(expected = "vs fd")]
+fn hessian_check_sees_an_error_at_the_soft_modes_scale() {
+    let (strip, mut terms, history, mut q, base) = problem(7, true, KineticModel::Full, 4);
+    unclamped(&mut terms, &mut q, true);
+    q[0..3].copy_from_slice(&[0.0; 3]);
+    let all: Vec<usize> = (0..q.len()).collect();
+    let obj = Objective::new(strip, true, &terms, &history, base);
+    let mut ws = Workspace::default();
+    let mut hm = DMatrix::zeros(q.len(), q.len());
+    obj.evaluate(&q, &mut ws, None, Some(&mut hm));
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
+    let v = nalgebra::DVector::from_fn(q.len(), |_, _| rng.random_range(-1.0..1.0)).normalize();
+    let hm = &hm + &v * v.transpose() * (1e-7 * hm.amax());
     check_hessian_against(&terms, &history, strip, base, &q, true, &all, &hm);
 }
 
@@ -630,4 +650,240 @@ fn chain_product_and_negative_curvature_are_the_dense_ones() {
         }
     }
     assert!(directions >= 6, "only {directions} directions compared");
+}
+
+/// The dense counterpart of `ChainMatrix::factor_free`: H_z on the free unknowns,
+/// plus shift I, plus rho (Σ d_i)^2 over the free crease differences (the slab's face).
+fn shifted_reduced(
+    hz: &DMatrix<f64>,
+    idx: &[usize],
+    lay: &Layout,
+    shift: f64,
+    face: Option<f64>,
+) -> DMatrix<f64> {
+    let on_face = |j: usize| (lay.c(1)..lay.c(lay.segments - 1) + 1).contains(&j);
+    let m = idx.len();
+    DMatrix::from_fn(m, m, |r, c| {
+        let (a, b) = (idx[r], idx[c]);
+        let rho = match face {
+            Some(rho) if on_face(a) && on_face(b) => rho,
+            _ => 0.0,
+        };
+        hz[(a, b)] + rho + if r == c { shift } else { 0.0 }
+    })
+}
+
+/// What the near-singular checks compare: the chain's factorization at `shift` (+ the
+/// slab's face) on the unknowns `free` against the dense Cholesky of the same matrix.
+struct NearSingular<'a> {
+    hz: &'a DMatrix<f64>,
+    lay: Layout,
+    free: Vec<bool>,
+    idx: Vec<usize>,
+    face: Option<f64>,
+}
+
+impl NearSingular<'_> {
+    fn dense(&self, shift: f64) -> DMatrix<f64> {
+        shifted_reduced(self.hz, &self.idx, &self.lay, shift, self.face)
+    }
+
+    fn range(&self) -> Option<(std::ops::Range<usize>, f64)> {
+        let n = self.lay.segments;
+        self.face
+            .map(|rho| (self.lay.c(1)..self.lay.c(n - 1) + 1, rho))
+    }
+
+    /// Just above the least shift: the chain factorizes and solves `rhs` as the dense
+    /// Cholesky does: relative residual (backward error) at most `backward`, and the
+    /// solution within the condition number times that. False where the chain fails
+    /// (the dense matrix is asserted positive definite).
+    fn solves(
+        &self,
+        matrix: &mut chain::ChainMatrix,
+        shift: f64,
+        rhs: &[f64],
+        backward: f64,
+        what: &str,
+    ) -> bool {
+        use crate::optim::ModelMatrix;
+        let dense = self.dense(shift);
+        let eig = dense.clone().symmetric_eigen().eigenvalues;
+        let kappa = eig.max() / eig.min();
+        let cholesky = dense.clone().cholesky().expect("dense: positive definite");
+        if !matrix.factor_free(&self.free, shift, self.range()) {
+            return false;
+        }
+        let r = nalgebra::DVector::from_fn(self.idx.len(), |k, _| rhs[self.idx[k]]);
+        let expected = cholesky.solve(&r);
+        let mut out = vec![f64::NAN; rhs.len()];
+        assert!(matrix.solve_free(rhs, &mut out), "{what}");
+        let x = nalgebra::DVector::from_fn(self.idx.len(), |k, _| out[self.idx[k]]);
+        let residual = (&dense * &x - &r).amax() / (dense.amax() * x.amax());
+        let forward = (&x - &expected).amax() / expected.amax();
+        assert!(residual <= backward, "{what}: residual {residual:.2e}");
+        assert!(
+            forward <= kappa * 2.0 * backward,
+            "{what}: forward error {forward:.2e}, condition {kappa:.1e}"
+        );
+        for (j, &f) in self.free.iter().enumerate() {
+            assert!(f || out[j] == 0.0, "{what}: a held unknown moves");
+        }
+        true
+    }
+
+    /// Just below it (one eigenvalue at -delta |H|): the chain fails, and on an open
+    /// chain, the direction it returns has the curvature it reports (with a loop closure
+    /// it is the chain's without the closure's coupling, see
+    /// `ChainModel::negative_curvature`).
+    fn fails(&self, matrix: &mut chain::ChainMatrix, shift: f64, open: bool, what: &str) {
+        use crate::optim::ModelMatrix;
+        assert!(
+            !matrix.factor_free(&self.free, shift, self.range()),
+            "chain passes: {what}"
+        );
+        let mut d = vec![f64::NAN; self.lay.len()];
+        let direction = matrix.model.negative_curvature(&mut d);
+        assert!(
+            direction.is_some() || !open,
+            "{what}: an open chain's sweep gives a direction"
+        );
+        if let Some(curvature) = direction.filter(|_| open) {
+            let dv = nalgebra::DVector::from_fn(self.idx.len(), |k, _| d[self.idx[k]]);
+            let dense = self.dense(shift);
+            let exact = dv.dot(&(&dense * &dv));
+            assert!(curvature <= 0.0, "{what}: {curvature}");
+            assert!(
+                (exact - curvature).abs() <= 1e-9 * dense.amax() * dv.norm_squared(),
+                "{what}: d^T (H + S) d dense {exact:.6e} vs sweep {curvature:.6e}"
+            );
+        }
+    }
+}
+
+/// The regime the solvers live in (docs/ribbon_chain_solver.md, the design check):
+/// indefinite Newton matrices whose positive definite shifts are nearly singular. The
+/// trust region's step takes the least shift sigma I that makes H_FF (+ the slab's
+/// face) positive definite, i.e. sigma = -lambda_min + delta |H|; its soft modes on the
+/// extreme torsion are 1e-4 J against |H| ~ 1e3 (delta ~ 1e-7), and the least-shift
+/// search can land nearer (delta = 1e-11 here: 1e3 above the sweep's backward error
+/// m eps). Just above, the chain must factorize and solve as the dense Cholesky does;
+/// just below (one eigenvalue at -delta |H|) it must fail. Backward error: the sweep
+/// is a block LDL^T, so m eps (m unknowns; measured at most 7e-16 on open chains);
+/// the loop closures' Woodbury step is not backward stable: measured at most 2.0e-12
+/// at delta = 1e-7, asserted at 1e-11, and at delta <= 1e-10 its capacitance misjudges
+/// the inertia or loses the solve (residual 3e-5; docs/ribbon_chain_solver.md), so
+/// the loops are checked at delta = 1e-7 only.
+#[test]
+fn chain_solve_is_the_dense_solve_where_nearly_singular_and_indefinite() {
+    near_singular_cases(0.0);
+}
+
+/// The check has teeth: a chain matrix whose crease blocks are 1e-9 off (relative)
+/// leaves a residual of ~1e-9 of their size, far above the sweep's m eps.
+#[test]
+#[should_panic(expected = "residual")]
+fn near_singular_check_sees_a_matrix_1e_9_off() {
+    near_singular_cases(1e-9);
+}
+
+/// [`chain_solve_is_the_dense_solve_where_nearly_singular_and_indefinite`] with the
+/// chain's crease blocks scaled by 1 + `error` (0: exact).
+fn near_singular_cases(error: f64) {
+    use crate::optim::{ModelMatrix, NewtonMatrix};
+    let closures = [
+        None,
+        Some(LoopKind::Orientable),
+        Some(LoopKind::NonOrientable),
+    ];
+    let (mut cases, mut known_gap) = (0, 0);
+    for (i, (floating, closure)) in [false, true]
+        .into_iter()
+        .flat_map(|f| closures.map(|c| (f, c)))
+        .enumerate()
+    {
+        let n = 9 + i % 2;
+        let (strip, mut terms, history, mut q, base) =
+            problem(n, floating, KineticModel::Full, 60 + i as u64);
+        with_closure(&mut terms, closure, 61);
+        if floating {
+            q[0..3].copy_from_slice(&[0.3, -0.1, 0.2]);
+        }
+        let obj = Objective::new(strip, floating, &terms, &history, base);
+        let lay = obj.layout;
+        let mut ws = Workspace::default();
+        let mut hq = DMatrix::zeros(q.len(), q.len());
+        obj.evaluate(&q, &mut ws, None, Some(&mut hq));
+        let a = substitution(&lay);
+        let hz = a.transpose() * &hq * &a;
+        let mut matrix = chain::ChainMatrix::default();
+        obj.chain_model(&mut ws, &mut matrix.model);
+        if error != 0.0 {
+            matrix.model.perturb_local_blocks(error);
+        }
+        let nq = q.len();
+        let mut diagonal = vec![0.0; nq];
+        matrix.diagonal(&mut diagonal); // cached, as the solver does
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(70 + i as u64);
+        let rhs: Vec<f64> = (0..nq).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let amax = hz.amax();
+        for (held, face) in [
+            (vec![], None),
+            (vec![lay.c(3), lay.psi(5)], None),
+            (vec![], Some(1e2 * amax)),
+            (vec![lay.c(2)], Some(amax)),
+        ] {
+            let free: Vec<bool> = (0..nq).map(|j| !held.contains(&j)).collect();
+            let idx: Vec<usize> = (0..nq).filter(|&j| free[j]).collect();
+            let check = NearSingular {
+                hz: &hz,
+                lay,
+                free,
+                idx,
+                face,
+            };
+            let unshifted = check.dense(0.0);
+            // |H| without the face's rho (which only stiffens the directions that cross it)
+            let (lambda_min, scale) = (unshifted.symmetric_eigen().eigenvalues.min(), amax);
+            assert!(lambda_min < -1e-2 * scale, "not indefinite: {lambda_min}");
+            assert!(
+                !matrix.factor_free(&check.free, 0.0, check.range()),
+                "indefinite"
+            );
+            let (deltas, backward): (&[f64], f64) = match closure {
+                None => (&[1e-7, 1e-11], check.idx.len() as f64 * f64::EPSILON),
+                Some(_) => (&[1e-7], 1e-11),
+            };
+            for &delta in deltas {
+                let what = format!("floating {floating}, {closure:?}, held {held:?}, face {face:?}, delta {delta:e}");
+                cases += 1;
+                let solved = check.solves(
+                    &mut matrix,
+                    -lambda_min + delta * scale,
+                    &rhs,
+                    backward,
+                    &what,
+                );
+                if floating && closure == Some(LoopKind::Orientable) {
+                    // Known gap: the sweep factorizes the chain without the closure's
+                    // coupling (H0), which is indefinite here where H is not: the least
+                    // shift the chain accepts is 1.35x the true one (45.3 vs 33.6)
+                    assert!(!solved, "fixed? {what}: then drop this branch");
+                    known_gap += 1;
+                } else {
+                    assert!(
+                        solved,
+                        "chain fails where the dense Cholesky passes: {what}"
+                    );
+                }
+                check.fails(
+                    &mut matrix,
+                    -lambda_min - delta * scale,
+                    closure.is_none(),
+                    &what,
+                );
+            }
+        }
+    }
+    assert_eq!((cases, known_gap), (32, 4));
 }

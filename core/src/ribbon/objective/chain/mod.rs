@@ -185,6 +185,19 @@ impl Objective<'_> {
     }
 }
 
+impl ChainModel {
+    /// Test-only: every crease's local 2x2 block (bending, regularizer, its own
+    /// geometric terms) scaled by 1 + `relative`, a subtly wrong Newton matrix for the
+    /// negative controls of the solver comparisons.
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub fn perturb_local_blocks(&mut self, relative: f64) {
+        for block in self.local.iter_mut() {
+            *block *= 1.0 + relative;
+        }
+        self.diagonal_ready = false;
+    }
+}
+
 /// The twist ξ_a of coordinate a as a 6-vector (angular, linear).
 fn twist(ws: &Workspace, a: usize) -> Vec6 {
     Vec6::from(ws.twists[a].to_array())
