@@ -332,10 +332,7 @@ impl Session {
 
     /// Whether the scene has colliders to draw.
     pub fn has_colliders(&self) -> bool {
-        self.scene
-            .world
-            .contact_stage()
-            .is_some_and(|s| !s.colliders().is_empty())
+        !self.scene.world.colliders().is_empty()
     }
 
     /// One marker per collider, at its current pose (attached colliders follow their
@@ -344,7 +341,7 @@ impl Session {
     fn collider_markers(&self, scene: &Scene, header: &Header) -> Option<MarkerArray> {
         use crate::contact::ColliderShape;
         let world = &scene.world;
-        let colliders = world.contact_stage()?.colliders();
+        let colliders = world.colliders();
         if colliders.is_empty() {
             return None;
         }

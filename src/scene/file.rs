@@ -6,7 +6,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use super::check::Check;
-use super::contact::{build_stage, ColliderFile, ContactFile};
+use super::contact::{build_contact, ColliderFile, ContactFile};
 use super::handle_file::{parse_handle, ForceFile, HandleFile};
 use super::paper_file::{build_paper, PaperFile, PaperScene};
 use super::ribbon_file::{ribbon_entries, ribbon_params, RibbonFile};
@@ -237,11 +237,8 @@ impl SceneFile {
                 Box::new(sim) as Box<dyn ObjectSim>,
             ));
         }
-        let mut world = World::new(objects, handles, dt);
-        if let Some(stage) = build_stage(&self.colliders, self.contact.as_ref(), &ck, file, &world)?
-        {
-            world = world.with_contact(stage);
-        }
+        let world = World::new(objects, handles, dt);
+        let world = build_contact(&self.colliders, self.contact.as_ref(), &ck, file, world)?;
         Ok(self.into_scene(file, duration, world, topics))
     }
 

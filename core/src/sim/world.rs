@@ -1,6 +1,11 @@
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
-use crate::contact::{BodyInput, ContactReport, ContactStage};
+use crate::contact::{
+    BarrierSettings, BodyInput, CellMesh, Collider, ContactEnv, ContactReport, ContactStage,
+    OtherMesh,
+};
 use crate::geometry::{Point3, Pose, SurfaceMesh};
 
 use super::handle::HandleSpec;
@@ -48,8 +53,20 @@ pub struct World {
     time: f64,
     steps: u64,
     contact: Option<ContactState>,
+    /// Contact inside the steps (`contact.method: barrier`) instead of the stage.
+    barrier: Option<BarrierState>,
     /// Handle targets at the end of the last step (the start of the next one).
     last_targets: Vec<Pose>,
+}
+
+/// Contact inside the objects' steps (docs/contact_barrier.md): the settings, the
+/// colliders, and the contact bodies' mesh cells (for the other bodies' steps).
+#[derive(Clone, Debug)]
+struct BarrierState {
+    settings: BarrierSettings,
+    colliders: Vec<Collider>,
+    /// Per object: its mesh cells when it is a contact body.
+    cells: Vec<Option<Arc<CellMesh>>>,
 }
 
 impl World {
@@ -70,8 +87,96 @@ impl World {
             time: 0.0,
             steps: 0,
             contact: None,
+            barrier: None,
             last_targets,
         }
+    }
+
+    /// Contact inside every contact body's step (`contact.method: barrier`) against
+    /// `colliders`, the other bodies and itself, instead of a contact stage after the
+    /// steps. Bodies are then stepped one after the other (block Gauss-Seidel; the order
+    /// alternates between steps).
+    pub fn with_barrier(mut self, settings: BarrierSettings, colliders: Vec<Collider>) -> World {
+        let cells = self
+            .objects
+            .iter()
+            .map(|o| {
+                o.contact_body().map(|_| {
+                    let mesh = o.mesh();
+                    Arc::new(CellMesh::new(&mesh.triangles, mesh.vertices.len()))
+                })
+            })
+            .collect();
+        self.barrier = Some(BarrierState {
+            settings,
+            colliders,
+            cells,
+        });
+        self
+    }
+
+    /// With barrier contact: the smallest gap (m, beyond the thickness) of any contact
+    /// body against the colliders (at the current targets) and the other bodies, and
+    /// that body's index; None without barrier contact or without bodies.
+    pub fn barrier_start_gap(&mut self) -> Option<(f64, usize)> {
+        let barrier = self.barrier.as_ref()?;
+        let poses: Vec<Pose> = barrier
+            .colliders
+            .iter()
+            .map(|c| c.world_pose(&self.last_targets))
+            .collect();
+        let mut worst: Option<(f64, usize)> = None;
+        for index in 0..self.objects.len() {
+            let (before, rest) = self.objects.split_at_mut(index);
+            let (object, after) = rest.split_first_mut().expect("index < len");
+            let others: Vec<OtherMesh> = before
+                .iter()
+                .enumerate()
+                .chain(after.iter().enumerate().map(|(j, o)| (index + 1 + j, o)))
+                .filter_map(|(j, o)| {
+                    barrier.cells[j].as_ref().map(|cells| OtherMesh {
+                        vertices: &o.mesh().vertices,
+                        cells,
+                    })
+                })
+                .collect();
+            let env = ContactEnv {
+                settings: barrier.settings,
+                colliders: &barrier.colliders,
+                poses0: &poses,
+                poses1: &poses,
+                others: &others,
+            };
+            if let Some(body) = object.contact_body_mut() {
+                let g = body.barrier_gap(&env);
+                if worst.is_none_or(|(w, _)| g < w) {
+                    worst = Some((g, index));
+                }
+            }
+        }
+        worst
+    }
+
+    /// The colliders of the scene, whichever contact method runs them (empty without
+    /// contact).
+    pub fn colliders(&self) -> &[Collider] {
+        match (&self.contact, &self.barrier) {
+            (Some(c), _) => c.stage.colliders(),
+            (None, Some(b)) => &b.colliders,
+            (None, None) => &[],
+        }
+    }
+
+    /// Whether the scene has contact (a stage after the steps or a barrier in them).
+    pub fn has_contact(&self) -> bool {
+        self.contact.is_some() || self.barrier.is_some()
+    }
+
+    /// The barrier contact's settings and colliders, if the world has it.
+    pub fn barrier_contact(&self) -> Option<(&BarrierSettings, &[Collider])> {
+        self.barrier
+            .as_ref()
+            .map(|b| (&b.settings, b.colliders.as_slice()))
     }
 
     /// Add a contact stage whose bodies are the objects of this world that offer one
@@ -182,6 +287,23 @@ impl World {
             .collect();
         let dt = self.dt;
         let handles = &self.handles;
+        if let Some(barrier) = &self.barrier {
+            let (reports, contact) = barrier.step(
+                &mut self.objects,
+                self.steps,
+                (&self.last_targets, &resolved),
+                (dt, t_next, handles),
+                clock,
+            );
+            self.last_targets = resolved;
+            self.time = t_next;
+            self.steps += 1;
+            return StepReport {
+                time: self.time,
+                objects: reports,
+                contact: Some(contact),
+            };
+        }
         // Every object's optimization in parallel: each is independent and sequential
         // inside, so the results do not depend on the thread count.
         let mut reports: Vec<ObjectStepReport> = self
@@ -196,6 +318,7 @@ impl World {
                     handles,
                     targets: &resolved,
                     clock,
+                    contact: None,
                 })
             })
             .collect();
@@ -238,6 +361,83 @@ impl World {
             .iter()
             .map(|h| h.trajectory.pose_at(0.0))
             .collect();
+    }
+}
+
+impl BarrierState {
+    /// Every object's step in turn (forward on even steps, backward on odd), each
+    /// contact body with the colliders and the other bodies' current meshes; the
+    /// bodies' contact outcomes summed into a [`ContactStepReport`].
+    fn step(
+        &self,
+        objects: &mut [Box<dyn ObjectSim>],
+        step_index: u64,
+        (targets0, targets1): (&[Pose], &[Pose]),
+        (dt, time, handles): (f64, f64, &[HandleSpec]),
+        clock: &dyn PhaseClock,
+    ) -> (Vec<ObjectStepReport>, ContactStepReport) {
+        let poses0: Vec<Pose> = self
+            .colliders
+            .iter()
+            .map(|c| c.world_pose(targets0))
+            .collect();
+        let poses1: Vec<Pose> = self
+            .colliders
+            .iter()
+            .map(|c| c.world_pose(targets1))
+            .collect();
+        let count = objects.len();
+        let mut reports = vec![ObjectStepReport::default(); count];
+        let order: Vec<usize> = if step_index % 2 == 0 {
+            (0..count).collect()
+        } else {
+            (0..count).rev().collect()
+        };
+        for index in order {
+            let (before, rest) = objects.split_at_mut(index);
+            let (object, after) = rest.split_first_mut().expect("index < count");
+            let others: Vec<OtherMesh> = before
+                .iter()
+                .enumerate()
+                .chain(after.iter().enumerate().map(|(j, o)| (index + 1 + j, o)))
+                .filter_map(|(j, o)| {
+                    self.cells[j].as_ref().map(|cells| OtherMesh {
+                        vertices: &o.mesh().vertices,
+                        cells,
+                    })
+                })
+                .collect();
+            let env = ContactEnv {
+                settings: self.settings,
+                colliders: &self.colliders,
+                poses0: &poses0,
+                poses1: &poses1,
+                others: &others,
+            };
+            reports[index] = object.step(&StepContext {
+                dt,
+                time,
+                index,
+                handles,
+                targets: targets1,
+                clock,
+                contact: self.cells[index].as_ref().map(|_| &env),
+            });
+        }
+        let mut report = ContactReport {
+            resolved: true,
+            ..Default::default()
+        };
+        for outcome in reports.iter().filter_map(|r| r.contact) {
+            report.contacts += outcome.active;
+            report.constraints += outcome.active;
+            report.iterations = report.iterations.max(outcome.rounds);
+            report.resolved &= outcome.resolved;
+            // the smallest gap left, as an overlap when it is negative (never, by
+            // construction: every iterate is feasible)
+            report.penetration_max = report.penetration_max.max(-outcome.min_gap);
+        }
+        (reports, ContactStepReport { report })
     }
 }
 

@@ -199,10 +199,7 @@ impl Endpoints {
         // under use_sim_time another node owns /clock
         let own_clock = outputs.clock && !use_sim_time;
         let clock = make.publisher(own_clock, &names.clock, Qos::CLOCK, "clock")?;
-        let has_colliders = scene
-            .world
-            .contact_stage()
-            .is_some_and(|s| !s.colliders().is_empty());
+        let has_colliders = !scene.world.colliders().is_empty();
         let colliders = make.publisher(
             outputs.markers && has_colliders,
             &names.colliders,
