@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::check::{pose_from, Check};
 use super::mesh_file::load_mesh;
 use super::SceneError;
+use crate::contact::barrier::PairSource;
 use crate::contact::{
     BarrierSettings, Closeness, Collider, ColliderShape, ContactSettings, ContactStage,
 };
@@ -173,6 +174,8 @@ pub(super) fn build_contact(
     }
     let defaults = ContactFile::default();
     let c = contact.unwrap_or(&defaults);
+    // the projection's keys are checked whichever method runs (a typo is an error)
+    contact_settings(ck, c)?;
     if ck.choice("contact.method", &c.method, &["barrier", "projection"])? == "barrier" {
         return build_barrier(collider_files, c, ck, file, world);
     }
@@ -226,26 +229,62 @@ fn build_barrier(
         }
     }
     let colliders = colliders(ck, collider_files, file, &world)?;
+    check_outside_solids(ck, &colliders, &world, thickness)?;
     let mut world = world.with_barrier(settings, colliders);
     check_barrier_start(ck, &mut world, thickness)?;
     Ok(world)
 }
 
-/// A barrier scene must start with every pair apart (a gap beyond the thickness).
-fn check_barrier_start(ck: &Check, world: &mut World, thickness: f64) -> Result<(), SceneError> {
-    if let Some((gap, o)) = world.barrier_start_gap() {
-        if gap <= 0.0 {
-            let name = &world.object_names()[o];
-            return Err(ck.fail(
-                "contact",
-                format!(
-                    "ribbon `{name}` starts touching or overlapping a collider, another ribbon or itself ({:.4} m inside the thickness {thickness} m); move it apart or reduce contact.thickness",
-                    -gap
-                ),
-            ));
+/// Every ribbon vertex at least thickness/2 outside every collider's solid.
+fn check_outside_solids(
+    ck: &Check,
+    colliders: &[Collider],
+    world: &World,
+    thickness: f64,
+) -> Result<(), SceneError> {
+    let half = 0.5 * thickness;
+    for (k, collider) in colliders.iter().enumerate() {
+        for (o, name) in world.object_names().iter().enumerate() {
+            for v in &world.mesh(o).vertices {
+                if let Some((sd, _)) = collider.signed_distance(world.current_targets(), &v.coords)
+                {
+                    if sd <= half {
+                        return Err(ck.fail(
+                            &format!("colliders.{k}"),
+                            format!(
+                                "ribbon `{name}` starts inside or closer than thickness/2 = {half} m (a vertex at [{:.4}, {:.4}, {:.4}] is at {sd:.4} m)",
+                                v.x, v.y, v.z
+                            ),
+                        ));
+                    }
+                }
+            }
         }
     }
     Ok(())
+}
+
+/// A barrier scene must start with every pair apart (a gap beyond the thickness).
+fn check_barrier_start(ck: &Check, world: &mut World, thickness: f64) -> Result<(), SceneError> {
+    let Some((gap, o, source)) = world.barrier_start_gap() else {
+        return Ok(());
+    };
+    if gap > 0.0 {
+        return Ok(());
+    }
+    let names = world.object_names();
+    let other = match source {
+        PairSource::Collider(k) => format!("collider {k}"),
+        PairSource::Body(b) => format!("ribbon `{}`", names[b]),
+        PairSource::Itself => "itself".to_string(),
+    };
+    Err(ck.fail(
+        "contact",
+        format!(
+            "the scene starts with overlapping surfaces: ribbon `{}` and {other} are {:.4} m closer than the thickness {thickness} m; move them apart or reduce contact.thickness",
+            names[o], -gap
+        ),
+    ))
 }
 
 /// The contact stage of a scene (`contact.method: projection`).

@@ -75,6 +75,18 @@ impl BarrierSettings {
     }
 }
 
+/// What a pair is against.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PairSource {
+    /// Collider k.
+    Collider(usize),
+    /// Other body b (in the order of `ContactEnv::others`).
+    Body(usize),
+    /// The ribbon itself.
+    #[default]
+    Itself,
+}
+
 /// What contact inside an object's last step did (`contact.method: barrier`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BarrierOutcome {
@@ -256,6 +268,40 @@ fn finish(diff: Vector3, weights: [f64; 4], fallback: impl Fn() -> Vector3) -> C
     }
 }
 
+/// IPC's edge-edge mollifier: the edge-edge distance is not differentiable where the
+/// two edges are parallel (the closest points are not unique), so an edge-edge pair's
+/// barrier is multiplied by m(c) = 2 c/ε - c^2/ε^2 for c = |a × b|^2 < ε (1 above),
+/// ε = 1e-3 |a|^2 |b|^2 with the edges' rest lengths ([`mollifier_threshold`]): the
+/// product is C^1 and vanishes for parallel edges, whose contact the point-triangle
+/// pairs carry. Returns m and its gradient with respect to the four points (p1, p2,
+/// q1, q2) of the pair at constant ε (zero when m = 1).
+pub fn edge_mollifier(
+    p1: &Vector3,
+    p2: &Vector3,
+    q1: &Vector3,
+    q2: &Vector3,
+    eps: f64,
+) -> (f64, [Vector3; 4]) {
+    let (a, b) = (p2 - p1, q2 - q1);
+    let axb = a.cross(&b);
+    let c = axb.norm_squared();
+    if c >= eps || eps == 0.0 {
+        return (1.0, [Vector3::zeros(); 4]);
+    }
+    let m = 2.0 * c / eps - c * c / (eps * eps);
+    let dm = 2.0 / eps - 2.0 * c / (eps * eps);
+    // dc = 2 (a × b) . (da × b + a × db)
+    let da = b.cross(&axb) * (2.0 * dm);
+    let db = axb.cross(&a) * (2.0 * dm);
+    (m, [-da, da, -db, db])
+}
+
+/// ε of [`edge_mollifier`] for edges of rest lengths |a|, |b| (a ribbon is isometric and
+/// a collider rigid: their current lengths, which no motion changes).
+pub fn mollifier_threshold(p1: &Vector3, p2: &Vector3, q1: &Vector3, q2: &Vector3) -> f64 {
+    1e-3 * (p2 - p1).norm_squared() * (q2 - q1).norm_squared()
+}
+
 /// Conservative advancement of a pair along a motion t in [0, 1] (additive CCD, Li et
 /// al. 2021): `gap(t)` is the pair's gap (distance minus the thickness it keeps) at t,
 /// `rate` an upper bound on how fast the distance can change per unit t (the sum of
@@ -297,9 +343,9 @@ pub fn advance_from(
         }
         g = gap(t);
         if !(g - min_gap > 1e-3 * first) {
-            // within a thousandth of the first clearance (or, by round-off, below it:
-            // then back to where the bound still held)
-            if g < min_gap {
+            // within a thousandth of the first clearance; below it by more than
+            // round-off (the bound says it cannot be), back to where it still held
+            if !(g >= min_gap - 1e-9 * first) {
                 t -= dt;
             }
             return t.max(0.0);
@@ -536,6 +582,53 @@ mod tests {
             &Vector3::new(2.0, 0.0, 0.3),
         );
         assert!((r.distance - 0.3).abs() < 1e-12, "{r:?}");
+    }
+
+    #[test]
+    fn the_edge_mollifier_is_c1_and_its_gradient_matches_finite_differences() {
+        let x = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.3, 0.01, 0.2),
+            Vector3::new(1.2, 0.03, 0.2),
+        ];
+        let eps = mollifier_threshold(&x[0], &x[1], &x[2], &x[3]);
+        let (m, g) = edge_mollifier(&x[0], &x[1], &x[2], &x[3], eps);
+        assert!(m > 0.0 && m < 1.0, "nearly parallel: {m}");
+        for i in 0..4 {
+            for k in 0..3 {
+                let h = 1e-8;
+                let (mut xp, mut xm) = (x, x);
+                xp[i][k] += h;
+                xm[i][k] -= h;
+                let fd = (edge_mollifier(&xp[0], &xp[1], &xp[2], &xp[3], eps).0
+                    - edge_mollifier(&xm[0], &xm[1], &xm[2], &xm[3], eps).0)
+                    / (2.0 * h);
+                assert!(
+                    (fd - g[i][k]).abs() < 1e-5 * g[i].norm().max(1.0),
+                    "{i} {k}: {fd} vs {}",
+                    g[i][k]
+                );
+            }
+        }
+        // parallel: 0, with a zero gradient; crossing at right angles: 1
+        let par = edge_mollifier(
+            &x[0],
+            &x[1],
+            &Vector3::new(0.0, 0.0, 1.0),
+            &Vector3::new(2.0, 0.0, 1.0),
+            eps,
+        );
+        assert_eq!(par.0, 0.0);
+        assert!(par.1.iter().all(|v| v.norm() == 0.0));
+        let cross = edge_mollifier(
+            &x[0],
+            &x[1],
+            &Vector3::new(0.5, -1.0, 1.0),
+            &Vector3::new(0.5, 1.0, 1.0),
+            eps,
+        );
+        assert_eq!(cross.0, 1.0);
     }
 
     #[test]

@@ -16,7 +16,7 @@ use super::objective::{ContactTerms, FrictionLag, GradientMode, Objective, RimHi
 use super::params::SolverSettings;
 use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
 use super::step::{SolveOutcome, StepSolver};
-use crate::contact::barrier::{barrier, point_triangle, BarrierOutcome};
+use crate::contact::barrier::{barrier, point_triangle, BarrierOutcome, PairSource};
 use crate::contact::obstacles::{interpolate_pose, CellMesh, ContactEnv};
 use crate::geometry::{Pose, Vector3};
 
@@ -119,9 +119,15 @@ impl RibbonContact {
     }
 
     /// The smallest gap (distance beyond the thickness, m) of any pair inside the
-    /// barrier at `q` with the colliders at their start poses: +∞ when none is, <= 0
-    /// when something touches or overlaps (a scene cannot start like that).
-    pub(super) fn gap_at(&mut self, env: &ContactEnv, step: ContactStep, q: &[f64]) -> f64 {
+    /// barrier at `q` with the colliders at their start poses, and what that pair is
+    /// against: +∞ when none is, <= 0 when something touches or overlaps (a scene cannot
+    /// start like that).
+    pub(super) fn gap_at(
+        &mut self,
+        env: &ContactEnv,
+        step: ContactStep,
+        q: &[f64],
+    ) -> (f64, PairSource) {
         self.prepare(env, &step);
         let objective = Objective::new(
             step.strip,
@@ -132,7 +138,8 @@ impl RibbonContact {
         )
         .with_contact(Some(&self.terms));
         objective.evaluate(q, &mut step.solver.workspace, None, None);
-        step.solver.workspace.contact.min_gap
+        let c = &step.solver.workspace.contact;
+        (c.min_gap, c.min_source)
     }
 
     /// Cells, constants, the colliders' poses, the sorting axis and the lagged friction

@@ -7,6 +7,7 @@ use super::objective::{Equality, Layout, NormalGuide, PointForce, RimHistory, St
 use super::params::{BaseMode, KineticModel, RibbonParams};
 use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
 use super::step::StepSolver;
+use crate::contact::barrier::PairSource;
 use crate::contact::{BodyTopology, ContactEnv};
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3, VertexRegion};
 use crate::sim::handle::{HandleSpec, OrientationMode};
@@ -374,22 +375,7 @@ impl RibbonSim {
                 None,
                 &mut q,
             ),
-            Some(env) => {
-                let step = ContactStep {
-                    solver: &mut self.solver,
-                    strip: self.strip,
-                    floating: self.layout.floating,
-                    history: &self.history,
-                    base,
-                    terms: &mut self.terms,
-                    settings: &self.params.solver,
-                    triangles: &self.mesh.triangles,
-                    period: self.params.loop_closure.map(|_| self.strip.length),
-                    frames: &self.frames,
-                    dt,
-                };
-                self.contact.solve(env, step, &mut q)
-            }
+            Some(env) => self.contact_step(base, dt, |c, step| c.solve(env, step, &mut q)),
         };
         let finite = q.iter().all(|x| x.is_finite()) && outcome.objective.is_finite();
         let mut report = ObjectStepReport {
@@ -431,6 +417,29 @@ impl RibbonSim {
         // a rejected step keeps its NaN violation: the new state is unknown, and 0 would
         // read as "every constraint met"
         report
+    }
+
+    /// `f` with the ribbon's contact state and what a step with contact needs of it.
+    fn contact_step<R>(
+        &mut self,
+        base: Pose,
+        dt: f64,
+        f: impl FnOnce(&mut RibbonContact, ContactStep) -> R,
+    ) -> R {
+        let step = ContactStep {
+            solver: &mut self.solver,
+            strip: self.strip,
+            floating: self.layout.floating,
+            history: &self.history,
+            base,
+            terms: &mut self.terms,
+            settings: &self.params.solver,
+            triangles: &self.mesh.triangles,
+            period: self.params.loop_closure.map(|_| self.strip.length),
+            frames: &self.frames,
+            dt,
+        };
+        f(&mut self.contact, step)
     }
 
     /// Move what the handles drive to their `targets` (`world_from_gripper`): a driven
@@ -771,27 +780,14 @@ impl ContactBody for RibbonSim {
 
     /// The smallest gap of the current state against `env` (see
     /// [`ContactBody::barrier_gap`]).
-    fn barrier_gap(&mut self, env: &ContactEnv) -> f64 {
+    fn barrier_gap(&mut self, env: &ContactEnv) -> (f64, PairSource) {
         let base = match &self.params.base {
             BaseMode::Prescribed { pose, .. } => *pose,
             BaseMode::Floating { .. } => self.coords.base,
         };
         let q = self.q.clone();
         let dt = self.terms.h;
-        let step = ContactStep {
-            solver: &mut self.solver,
-            strip: self.strip,
-            floating: self.layout.floating,
-            history: &self.history,
-            base,
-            terms: &mut self.terms,
-            settings: &self.params.solver,
-            triangles: &self.mesh.triangles,
-            period: self.params.loop_closure.map(|_| self.strip.length),
-            frames: &self.frames,
-            dt,
-        };
-        self.contact.gap_at(env, step, &q)
+        self.contact_step(base, dt, |c, step| c.gap_at(env, step, &q))
     }
 
     /// Replace the reconstructed mesh of the last step by the collision-free one

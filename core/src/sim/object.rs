@@ -149,9 +149,13 @@ pub trait ContactBody {
     /// last step of `dt` s.
     fn apply_contact_correction(&mut self, corrected: &[Point3], dt: f64);
     /// With contact inside the step: the smallest gap (m, beyond the thickness) of the
-    /// current state against `env`, +∞ when nothing is within the barrier's reach.
-    fn barrier_gap(&mut self, _env: &crate::contact::ContactEnv) -> f64 {
-        f64::INFINITY
+    /// current state against `env` and what it is against; +∞ when nothing is within
+    /// the barrier's reach.
+    fn barrier_gap(
+        &mut self,
+        _env: &crate::contact::ContactEnv,
+    ) -> (f64, crate::contact::barrier::PairSource) {
+        (f64::INFINITY, Default::default())
     }
 }
 

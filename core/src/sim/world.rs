@@ -2,6 +2,7 @@ use std::sync::Arc;
 
 use rayon::prelude::*;
 
+use crate::contact::barrier::PairSource;
 use crate::contact::{
     BarrierSettings, BodyInput, CellMesh, Collider, ContactEnv, ContactReport, ContactStage,
     OtherMesh,
@@ -116,17 +117,19 @@ impl World {
     }
 
     /// With barrier contact: the smallest gap (m, beyond the thickness) of any contact
-    /// body against the colliders (at the current targets) and the other bodies, and
-    /// that body's index; None without barrier contact or without bodies.
-    pub fn barrier_start_gap(&mut self) -> Option<(f64, usize)> {
+    /// body against the colliders (at the current targets) and the other bodies: the
+    /// gap, that body's index and what the pair is against (another body as its object
+    /// index); None without barrier contact or without bodies.
+    pub fn barrier_start_gap(&mut self) -> Option<(f64, usize, PairSource)> {
         let barrier = self.barrier.as_ref()?;
         let poses: Vec<Pose> = barrier
             .colliders
             .iter()
             .map(|c| c.world_pose(&self.last_targets))
             .collect();
-        let mut worst: Option<(f64, usize)> = None;
-        for index in 0..self.objects.len() {
+        let mut worst: Option<(f64, usize, PairSource)> = None;
+        let count = self.objects.len();
+        for index in 0..count {
             let (before, rest) = self.objects.split_at_mut(index);
             let (object, after) = rest.split_first_mut().expect("index < len");
             let others: Vec<OtherMesh> = before
@@ -147,10 +150,17 @@ impl World {
                 poses1: &poses,
                 others: &others,
             };
+            let bodies: Vec<usize> = (0..count)
+                .filter(|&j| j != index && barrier.cells[j].is_some())
+                .collect();
             if let Some(body) = object.contact_body_mut() {
-                let g = body.barrier_gap(&env);
-                if worst.is_none_or(|(w, _)| g < w) {
-                    worst = Some((g, index));
+                let (g, source) = body.barrier_gap(&env);
+                let source = match source {
+                    PairSource::Body(b) => PairSource::Body(bodies[b]),
+                    s => s,
+                };
+                if worst.is_none_or(|(w, _, _)| g < w) {
+                    worst = Some((g, index, source));
                 }
             }
         }

@@ -15,7 +15,10 @@ use std::sync::Arc;
 use super::accumulate::{sliding_rate, Accumulator};
 use super::kinetic::interpolate;
 use super::{Objective, Vec8};
-use crate::contact::barrier::{barrier, edge_edge, friction_mollifier, point_triangle, Closest};
+use crate::contact::barrier::{
+    barrier, edge_edge, edge_mollifier, friction_mollifier, mollifier_threshold, point_triangle,
+    Closest, PairSource,
+};
 use crate::contact::obstacles::{bounds, boxes_near, sort_boxes, window, CellMesh, Obstacles};
 use crate::geometry::{Point3, Vector3};
 
@@ -105,6 +108,8 @@ pub struct ContactWorkspace {
     /// Pairs inside the barrier at the last evaluation, and the smallest gap, m.
     pub active: usize,
     pub min_gap: f64,
+    /// What the pair of the smallest gap is against.
+    pub min_source: PairSource,
     /// Barrier and friction energy of the last evaluation, J.
     pub barrier_energy: f64,
     pub friction_energy: f64,
@@ -127,6 +132,9 @@ struct Side {
     weights: [f64; 3],
     count: usize,
     element: usize,
+    /// An edge-edge pair's mollifier m and its gradient at this side's points (1 and 0
+    /// for every other pair).
+    mollifier: (f64, [Vector3; 3]),
 }
 
 impl Side {
@@ -136,6 +144,7 @@ impl Side {
             weights: [1.0, 0.0, 0.0],
             count: 1,
             element,
+            mollifier: (1.0, [Vector3::zeros(); 3]),
         }
     }
     fn edge(e: [u32; 2], w: [f64; 2], element: usize) -> Side {
@@ -144,6 +153,7 @@ impl Side {
             weights: [w[0], w[1], 0.0],
             count: 2,
             element,
+            mollifier: (1.0, [Vector3::zeros(); 3]),
         }
     }
     fn triangle(t: [u32; 3], w: [f64; 3], element: usize) -> Side {
@@ -152,6 +162,7 @@ impl Side {
             weights: w,
             count: 3,
             element,
+            mollifier: (1.0, [Vector3::zeros(); 3]),
         }
     }
 }
@@ -162,6 +173,8 @@ struct Found<'p> {
     feasible: bool,
     active: usize,
     min_gap: f64,
+    /// What the pair of the smallest gap is against.
+    min_source: PairSource,
     pairs: &'p mut Vec<PairTerm>,
     collider_force: &'p mut Vec<f64>,
     wrench: &'p mut Vec<Vec8>,
@@ -170,12 +183,15 @@ struct Found<'p> {
 impl Found<'_> {
     /// Counts a pair at gap s; false when it is outside the barrier or infeasible (then
     /// nothing more is to be added).
-    fn enter(&mut self, s: f64, activation: f64) -> bool {
+    fn enter(&mut self, s: f64, activation: f64, source: PairSource) -> bool {
         if s >= activation {
             return false;
         }
         self.active += 1;
-        self.min_gap = self.min_gap.min(s);
+        if s < self.min_gap {
+            self.min_gap = s;
+            self.min_source = source;
+        }
         if s <= 0.0 {
             self.feasible = false;
             return false;
@@ -206,6 +222,7 @@ impl Objective<'_> {
             feasible: true,
             active: 0,
             min_gap: f64::INFINITY,
+            min_source: PairSource::Itself,
             pairs: &mut cw.pairs,
             collider_force: &mut cw.collider_force,
             wrench: &mut cw.wrench,
@@ -221,6 +238,7 @@ impl Objective<'_> {
         let (value, feasible) = (found.value, found.feasible);
         cw.active = found.active;
         cw.min_gap = found.min_gap;
+        cw.min_source = found.min_source;
         cw.barrier_energy = value;
         let friction = self.friction_terms(acc, ct, &mut cw.wrench);
         cw.friction_energy = friction;
@@ -278,7 +296,14 @@ impl Objective<'_> {
                     weights: [1.0, 0.0, 0.0, 0.0],
                 };
                 let side = Side::vertex(v, element_of_vertex(ct, v));
-                self.static_pair(acc, ct, &pair, (half, Some(solid.collider)), &side, found);
+                self.static_pair(
+                    acc,
+                    ct,
+                    &pair,
+                    (half, PairSource::Collider(solid.collider)),
+                    &side,
+                    found,
+                );
             }
         }
     }
@@ -301,7 +326,14 @@ impl Objective<'_> {
                 let pair = point_triangle(&f.x[0], &x[0], &x[1], &x[2]);
                 let w = [pair.weights[1], pair.weights[2], pair.weights[3]];
                 let side = Side::triangle(tri, w, t / 2);
-                self.static_pair(acc, ct, &pair, (f.offset, Some(f.collider)), &side, found);
+                self.static_pair(
+                    acc,
+                    ct,
+                    &pair,
+                    (f.offset, PairSource::Collider(f.collider)),
+                    &side,
+                    found,
+                );
             }
         }
         for f in &obs.edges {
@@ -309,8 +341,18 @@ impl Objective<'_> {
                 for e in cells.owned_edges(t) {
                     let (a, b) = (vertex_position(acc, e[0]), vertex_position(acc, e[1]));
                     let pair = edge_edge(&f.x[0], &f.x[1], &a, &b);
-                    let side = Side::edge(*e, [pair.weights[2], pair.weights[3]], t / 2);
-                    self.static_pair(acc, ct, &pair, (f.offset, Some(f.collider)), &side, found);
+                    let eps = mollifier_threshold(&f.x[0], &f.x[1], &a, &b);
+                    let (m, gm) = edge_mollifier(&f.x[0], &f.x[1], &a, &b, eps);
+                    let mut side = Side::edge(*e, [pair.weights[2], pair.weights[3]], t / 2);
+                    side.mollifier = (m, [gm[2], gm[3], Vector3::zeros()]);
+                    self.static_pair(
+                        acc,
+                        ct,
+                        &pair,
+                        (f.offset, PairSource::Collider(f.collider)),
+                        &side,
+                        found,
+                    );
                 }
             }
         }
@@ -320,7 +362,14 @@ impl Objective<'_> {
                     let x = vertex_position(acc, v);
                     let pair = point_triangle(&x, &f.x[0], &f.x[1], &f.x[2]);
                     let side = Side::vertex(v, t / 2);
-                    self.static_pair(acc, ct, &pair, (f.offset, Some(f.collider)), &side, found);
+                    self.static_pair(
+                        acc,
+                        ct,
+                        &pair,
+                        (f.offset, PairSource::Collider(f.collider)),
+                        &side,
+                        found,
+                    );
                 }
             }
         }
@@ -365,52 +414,79 @@ impl Objective<'_> {
                 for &v in own.owned_vertices(t) {
                     let pair = point_triangle(&vertex_position(acc, v), &ox[0], &ox[1], &ox[2]);
                     let side = Side::vertex(v, e);
-                    self.static_pair(acc, ct, &pair, (ct.thickness, None), &side, found);
+                    self.static_pair(
+                        acc,
+                        ct,
+                        &pair,
+                        (ct.thickness, PairSource::Body(b)),
+                        &side,
+                        found,
+                    );
                 }
                 for &ov in body.cells.owned_vertices(o) {
                     let pair = point_triangle(&other(ov), &x[0], &x[1], &x[2]);
                     let w = [pair.weights[1], pair.weights[2], pair.weights[3]];
                     let side = Side::triangle(tri, w, e);
-                    self.static_pair(acc, ct, &pair, (ct.thickness, None), &side, found);
+                    self.static_pair(
+                        acc,
+                        ct,
+                        &pair,
+                        (ct.thickness, PairSource::Body(b)),
+                        &side,
+                        found,
+                    );
                 }
                 for edge in own.owned_edges(t) {
                     let (a, bb) = (vertex_position(acc, edge[0]), vertex_position(acc, edge[1]));
                     for oe in body.cells.owned_edges(o) {
-                        let pair = edge_edge(&a, &bb, &other(oe[0]), &other(oe[1]));
-                        let side = Side::edge(*edge, [pair.weights[0], pair.weights[1]], e);
-                        self.static_pair(acc, ct, &pair, (ct.thickness, None), &side, found);
+                        let (oa, ob) = (other(oe[0]), other(oe[1]));
+                        let pair = edge_edge(&a, &bb, &oa, &ob);
+                        let eps = mollifier_threshold(&a, &bb, &oa, &ob);
+                        let (m, gm) = edge_mollifier(&a, &bb, &oa, &ob, eps);
+                        let mut side = Side::edge(*edge, [pair.weights[0], pair.weights[1]], e);
+                        side.mollifier = (m, [gm[0], gm[1], Vector3::zeros()]);
+                        self.static_pair(
+                            acc,
+                            ct,
+                            &pair,
+                            (ct.thickness, PairSource::Body(b)),
+                            &side,
+                            found,
+                        );
                     }
                 }
             }
         }
     }
 
-    /// A pair with the ribbon's points in `side` against something static (collider
-    /// `collider`, if one), at distance `pair.distance` keeping `offset` (m).
+    /// A pair with the ribbon's points in `side` against something static (`source`),
+    /// at distance `pair.distance` keeping `offset` (m).
     fn static_pair(
         &self,
         acc: &mut Accumulator,
         ct: &ContactTerms,
         pair: &Closest,
-        (offset, collider): (f64, Option<usize>),
+        (offset, source): (f64, PairSource),
         side: &Side,
         found: &mut Found,
     ) {
         let s = pair.distance - offset;
-        if !found.enter(s, ct.activation) {
+        if !found.enter(s, ct.activation, source) {
             return;
         }
         let (b, db, ddb) = barrier(s, ct.activation);
-        found.value += ct.weight * b;
+        let m = side.mollifier.0;
+        found.value += ct.weight * m * b;
         if !acc.forces {
             return;
         }
-        if let Some(k) = collider {
-            found.collider_force[k] += ct.weight * db.abs();
+        if let PairSource::Collider(k) = source {
+            found.collider_force[k] += ct.weight * m * db.abs();
         }
-        let u = self.side_gradient(acc, found, side, &pair.normal, ct.weight * db);
+        let u = self.side_gradient(acc, found, side, &pair.normal, ct.weight * m * db);
+        self.mollifier_gradient(acc, found, side, ct.weight * b);
         if let Some(hs) = acc.ws_hessian.as_deref_mut() {
-            hs[side.element] += u * u.transpose() * (ct.weight * ddb);
+            hs[side.element] += u * u.transpose() * (ct.weight * m * ddb);
         }
     }
 
@@ -444,6 +520,39 @@ impl Objective<'_> {
             u += jacobian_row(&x, normal, self.sliding_column(acc, e, j, top)) * w;
         }
         u
+    }
+
+    /// The gradient `value` ∇m of an edge-edge pair's mollifier at the points of `side`
+    /// (nothing for other pairs). Its second-order terms are left out of the Newton
+    /// matrix: they act only on nearly parallel edges, which the point-triangle pairs
+    /// hold.
+    fn mollifier_gradient(
+        &self,
+        acc: &mut Accumulator,
+        found: &mut Found,
+        side: &Side,
+        value: f64,
+    ) {
+        let (m, grad) = &side.mollifier;
+        if *m >= 1.0 {
+            return;
+        }
+        for i in 0..side.count {
+            let v = side.vertices[i];
+            let (j, top) = ((v / 2) as usize, v % 2 == 1);
+            let x = vertex_position(acc, v);
+            let material = self.rim_material(acc, j, top);
+            let du = sliding_rate(self.strip.width, top);
+            add_force(
+                acc,
+                found.wrench,
+                side.element,
+                &material,
+                &x,
+                &(grad[i] * value),
+                (j, du),
+            );
+        }
     }
 
     /// Material position of rim vertex (j, top) at the current creases.
@@ -653,9 +762,14 @@ impl Objective<'_> {
             return;
         }
         let p = |v: u32| vertex_position(acc, v);
-        let pair = edge_edge(&p(e1[0]), &p(e1[1]), &p(e2[0]), &p(e2[1]));
-        let first = Side::edge(e1, [pair.weights[0], pair.weights[1]], el1);
-        let second = Side::edge(e2, [pair.weights[2], pair.weights[3]], el2);
+        let x = [p(e1[0]), p(e1[1]), p(e2[0]), p(e2[1])];
+        let pair = edge_edge(&x[0], &x[1], &x[2], &x[3]);
+        let eps = mollifier_threshold(&x[0], &x[1], &x[2], &x[3]);
+        let (m, gm) = edge_mollifier(&x[0], &x[1], &x[2], &x[3], eps);
+        let mut first = Side::edge(e1, [pair.weights[0], pair.weights[1]], el1);
+        let mut second = Side::edge(e2, [pair.weights[2], pair.weights[3]], el2);
+        first.mollifier = (m, [gm[0], gm[1], Vector3::zeros()]);
+        second.mollifier = (m, [gm[2], gm[3], Vector3::zeros()]);
         self.self_pair(acc, ct, &pair, &first, &second, found);
     }
 
@@ -671,23 +785,26 @@ impl Objective<'_> {
         found: &mut Found,
     ) {
         let s = pair.distance - ct.thickness;
-        if !found.enter(s, ct.activation) {
+        if !found.enter(s, ct.activation, PairSource::Itself) {
             return;
         }
         let (b, db, ddb) = barrier(s, ct.activation);
-        found.value += ct.weight * b;
+        let m = first.mollifier.0;
+        found.value += ct.weight * m * b;
         if !acc.forces {
             return;
         }
-        let u1 = self.side_gradient(acc, found, first, &pair.normal, ct.weight * db);
-        let u2 = self.side_gradient(acc, found, second, &pair.normal, ct.weight * db);
+        let u1 = self.side_gradient(acc, found, first, &pair.normal, ct.weight * m * db);
+        let u2 = self.side_gradient(acc, found, second, &pair.normal, ct.weight * m * db);
+        self.mollifier_gradient(acc, found, first, ct.weight * b);
+        self.mollifier_gradient(acc, found, second, ct.weight * b);
         if acc.ws_hessian.is_some() {
             found.pairs.push(PairTerm {
                 e1: first.element as u32,
                 e2: second.element as u32,
                 u1,
                 u2,
-                weight: ct.weight * ddb,
+                weight: ct.weight * m * ddb,
             });
         }
     }

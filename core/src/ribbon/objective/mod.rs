@@ -31,6 +31,8 @@ pub mod chain;
 mod contact_ccd;
 mod contact_chain;
 pub mod contact_terms;
+#[cfg(test)]
+mod contact_tests;
 mod gradient;
 mod hessian;
 pub mod kinetic;
