@@ -344,9 +344,6 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         // is stale)
         let trials = if state.chord { 1 } else { 40 };
         let (accepted, alpha, f_new) = self.line_search(problem, x, lower, upper, state, trials);
-        if std::env::var_os("PN_DEBUG").is_some() {
-            eprintln!("it {} a0 {:.3e} acc {} a {:.3e} f {:.9e} -> {:.9e} pg {:.3e} damp {:.1e} free {} chord {} fb {}", state.iterations, self.first_alpha, accepted, alpha, state.f, f_new, state.pg, self.damping, self.free.len(), state.chord, direction.fallback);
-        }
         if let Some(next) = self.after_search(problem, x, state, accepted, alpha) {
             return next;
         }
