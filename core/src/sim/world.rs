@@ -398,7 +398,7 @@ impl BarrierState {
             .collect();
         let count = objects.len();
         let mut reports = vec![ObjectStepReport::default(); count];
-        let order: Vec<usize> = if step_index % 2 == 0 {
+        let order: Vec<usize> = if step_index.is_multiple_of(2) {
             (0..count).collect()
         } else {
             (0..count).rev().collect()
