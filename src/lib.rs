@@ -12,14 +12,21 @@
 
 // The simulation core, its own crate (core/): re-exported so that `crate::ribbon::...`
 // reads the same in the edges and in a library user's code.
-pub use developable_core::{baseline, contact, geometry, metrics, optim, paper, ribbon, sim};
+pub use developable_core::{
+    baseline, camera, contact, geometry, metrics, optim, paper, ribbon, sim,
+};
 
+// The edges, in layers (ARCHITECTURE.md, "Layers"; tests/layers.rs): each module
+// imports only the core and the modules of the layers below its own.
 pub mod cli;
-pub mod record;
-pub mod render;
-pub mod report;
-pub mod ros;
-pub mod runner;
-pub mod scene;
-pub mod stats;
-pub mod stress;
+pub mod foxglove; //      4: transports
+pub mod record; //        4
+pub mod render; //        1: offline pictures
+pub mod report; //        6: tools built on runs
+pub mod ros; //           5: the node (DDS), driving the recorder and Foxglove
+pub mod runner; //        3: headless runs
+pub mod scene; //         1: scene files
+pub mod session; //       3: a simulation as the node runs it, without transport
+pub mod stats; //         1: run statistics
+pub mod stress; //        6
+pub mod wire; //          2: messages, CDR, schemas, QoS //           7: the command line

@@ -10,7 +10,10 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::camera::tint::{self, mix, BACKGROUND, FLOOR};
+use crate::camera::{world_colliders, Frame, Renderer, Snapshot};
 use crate::geometry::{SurfaceMesh, Vector3, VertexRegion};
+use crate::scene::{CameraMount, Scene};
 
 /// What can go wrong making a picture.
 #[derive(Debug, thiserror::Error)]
@@ -31,6 +34,10 @@ pub enum RenderError {
         path: PathBuf,
         source: png::EncodingError,
     },
+    #[error("the scene has no camera `{name}` (its cameras: {known})")]
+    NoCamera { name: String, known: String },
+    #[error("camera `{name}` follows the TF frame `{frame}`: a picture needs a camera with position and look_at")]
+    TfCamera { name: String, frame: String },
 }
 
 /// Camera and picture size.
@@ -75,17 +82,10 @@ pub fn parse_size(s: &str) -> Result<(u32, u32), RenderError> {
 const SS: u32 = 2;
 /// Vertical field of view, rad: mild perspective (a 35 mm lens is ~0.7).
 const FOV: f64 = 0.55;
-/// Background, a cool off-white; far parts of the scene fade toward it.
-const BACKGROUND: [f64; 3] = [246.0, 247.0, 250.0];
 /// Largest fraction of the background mixed into the farthest point (depth cue).
 const FOG: f64 = 0.35;
-const FLOOR: [f64; 3] = [228.0, 228.0, 222.0];
 /// Share of the floor's brightness left in the shadow.
 const SHADOW: f64 = 0.78;
-/// Colour the back side (material -z) is mixed toward, and how far: a light grey, so
-/// the back reads as the same region's other side.
-const BACK_TINT: [f64; 3] = [205.0, 207.0, 212.0];
-const BACK_MIX: f64 = 0.7;
 const LINE: [f64; 3] = [35.0, 38.0, 48.0];
 const SINGULAR: [f64; 3] = [215.0, 30.0, 30.0];
 /// Adjacent triangles whose normals differ by more than this are a crease, rad.
@@ -125,7 +125,7 @@ pub fn render_png(
 }
 
 /// Write `image` as an 8-bit RGB PNG.
-fn write_png(image: &Image, path: &Path) -> Result<(), RenderError> {
+pub fn write_png(image: &Image, path: &Path) -> Result<(), RenderError> {
     let file = std::fs::File::create(path).map_err(|source| RenderError::Io {
         path: path.to_path_buf(),
         source,
@@ -232,30 +232,6 @@ impl Camera {
     }
 }
 
-/// Colour of a surface triangle from its vertices' regions: curved when at least two
-/// of its vertices are curved or singular (a vertex on the border of a flat region
-/// belongs to the curved region beside it too); a singular vertex is shown as a dot,
-/// not by colouring its fan.
-fn region_color(m: &SurfaceMesh, t: &[u32; 3]) -> [f64; 3] {
-    let bent = t
-        .iter()
-        .filter(|&&i| {
-            !matches!(
-                m.regions
-                    .get(i as usize)
-                    .copied()
-                    .unwrap_or(VertexRegion::Flat),
-                VertexRegion::Flat
-            )
-        })
-        .count();
-    if bent >= 2 {
-        [235.0, 150.0, 55.0]
-    } else {
-        [80.0, 135.0, 215.0]
-    }
-}
-
 fn triangle(m: &SurfaceMesh, t: &[u32; 3]) -> Option<[Vector3; 3]> {
     let p = t.map(|i| m.vertices[i as usize].coords);
     let ok = p.iter().all(|v| v.iter().all(|x| x.is_finite()));
@@ -272,14 +248,10 @@ fn draw_surface(r: &mut Raster, cam: &Camera, m: &SurfaceMesh) {
         let front = n.dot(&cam.forward) < 0.0;
         let facing = if front { n } else { -n };
         let lambert = facing.dot(&light).max(0.0);
-        let shade = 0.42 + 0.58 * lambert;
-        let base = region_color(m, t);
-        let base = if front {
-            base
-        } else {
-            mix(base, BACK_TINT, BACK_MIX)
-        };
-        let color = base.map(|c| c * shade);
+        let shade = tint::shade(lambert);
+        // the material +z side in its region's colour, the other side pale (the tints
+        // the camera uses too)
+        let color = tint::surface(m, t, front).map(|c| c * shade);
         r.fill(&p.map(|q| cam.to_screen(&q)), color, 0.0);
     }
 }
@@ -360,10 +332,6 @@ fn draw_singular_points(r: &mut Raster, cam: &Camera, m: &SurfaceMesh) {
             r.disc(s, SS as f64 * 2.3, SINGULAR, bias);
         }
     }
-}
-
-fn mix(a: [f64; 3], b: [f64; 3], t: f64) -> [f64; 3] {
-    [0, 1, 2].map(|k| a[k] + (b[k] - a[k]) * t)
 }
 
 /// The supersampled picture being drawn: colours and camera depths.
@@ -529,6 +497,121 @@ impl Raster {
             rgb,
         }
     }
+}
+
+/// The frame camera `name` of `scene` sees at the scene's current time: frame index
+/// floor(t rate) for the noise, the scene's `seed`.
+pub fn camera_frame(scene: &Scene, name: &str) -> Result<Frame, RenderError> {
+    let Some(cam) = scene.cameras.iter().find(|c| c.name == name) else {
+        let known: Vec<&str> = scene.cameras.iter().map(|c| c.name.as_str()).collect();
+        return Err(RenderError::NoCamera {
+            name: name.into(),
+            known: if known.is_empty() {
+                "none".into()
+            } else {
+                known.join(", ")
+            },
+        });
+    };
+    let pose = match &cam.mount {
+        CameraMount::Fixed(pose) => *pose,
+        CameraMount::TfFrame(frame) => {
+            return Err(RenderError::TfCamera {
+                name: name.into(),
+                frame: frame.clone(),
+            })
+        }
+    };
+    let world = &scene.world;
+    let mut snapshot = Snapshot::default();
+    snapshot.capture(world);
+    let mut renderer = Renderer::new(cam.camera, world_colliders(world));
+    // a tick lands on t = k / rate: a nanosecond's slack for the rounding of t
+    let index = (world.time() * cam.rate + 1e-9).floor().max(0.0) as u64;
+    let key = cam.noise_key(scene.source.seed, index);
+    Ok(renderer.render(&snapshot, &pose, &key).clone())
+}
+
+/// A camera frame's colour image.
+pub fn color_image(frame: &Frame) -> Image {
+    Image {
+        width: frame.width,
+        height: frame.height,
+        rgb: frame.color.clone(),
+    }
+}
+
+/// A camera frame's depth, colour-mapped (turbo: blue at the nearest depth of the
+/// frame, red at the farthest; black where there is no depth), and that range, m (None:
+/// no depth anywhere).
+pub fn depth_image(frame: &Frame) -> (Image, Option<[f32; 2]>) {
+    let depths = frame
+        .depth
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+    let range = depths
+        .clone()
+        .filter(|d| d.is_finite())
+        .fold(None::<[f32; 2]>, |r, d| match r {
+            None => Some([d, d]),
+            Some([lo, hi]) => Some([lo.min(d), hi.max(d)]),
+        });
+    let [lo, hi] = range.unwrap_or([0.0, 1.0]);
+    let span = (hi - lo).max(1e-6);
+    let rgb = depths
+        .flat_map(|d| match d.is_finite() {
+            true => turbo(((d - lo) / span) as f64),
+            false => [0, 0, 0],
+        })
+        .collect();
+    let image = Image {
+        width: frame.width,
+        height: frame.height,
+        rgb,
+    };
+    (image, range)
+}
+
+/// Where `render --camera` writes the depth picture beside OUT.png: OUT_depth.png.
+pub fn depth_path(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "camera".into());
+    out.with_file_name(format!("{stem}_depth.png"))
+}
+
+/// Google's turbo colour map (Mikhailov 2019, the polynomial approximation) at x in
+/// [0, 1].
+fn turbo(x: f64) -> [u8; 3] {
+    let x = x.clamp(0.0, 1.0);
+    let p = [1.0, x, x * x, x * x * x, x.powi(4), x.powi(5)];
+    let dot = |c: [f64; 6]| (0..6).map(|k| c[k] * p[k]).sum::<f64>();
+    let r = dot([
+        0.13572138,
+        4.61539260,
+        -42.66032258,
+        132.13108234,
+        -152.94239396,
+        59.28637943,
+    ]);
+    let g = dot([
+        0.09140261,
+        2.19418839,
+        4.84296658,
+        -14.18503333,
+        4.27729857,
+        2.82956604,
+    ]);
+    let b = dot([
+        0.10667330,
+        12.64194608,
+        -60.58204836,
+        110.36276771,
+        -89.90310912,
+        27.34824973,
+    ]);
+    [r, g, b].map(|c| (255.0 * c).round().clamp(0.0, 255.0) as u8)
 }
 
 #[cfg(test)]

@@ -7,38 +7,34 @@ use crate::scene::Scene;
 use crate::sim::{Phase, PhaseClock, StepReport};
 use crate::stats::{RunStats, StatsCollector};
 
-/// Why a run stopped early: its step observer failed (the run's statistics up to there
-/// are lost; the recorder's bag stays readable up to the failure).
-#[derive(Debug, thiserror::Error)]
-pub enum ObserverError {
-    /// Recording the step failed (a full disk, an unwritable folder).
-    #[error(transparent)]
-    Record(#[from] crate::record::RecordError),
-}
-
-/// Called after every step with the world and the report (recording, progress).
+/// Called after every step with the world and the report (recording, progress). An
+/// observer that can fail (a recorder on a full disk) names its error type; the run
+/// stops at its first error (the statistics up to there are lost; a recorder's bag
+/// stays readable up to the failure). Observers that cannot fail use `Infallible`.
 pub trait StepObserver {
+    type Error;
     fn after_step(
         &mut self,
         scene: &Scene,
         report: &StepReport,
         step_ms: f64,
-    ) -> Result<(), ObserverError>;
+    ) -> Result<(), Self::Error>;
 }
 
 impl StepObserver for () {
-    fn after_step(&mut self, _: &Scene, _: &StepReport, _: f64) -> Result<(), ObserverError> {
+    type Error = std::convert::Infallible;
+    fn after_step(&mut self, _: &Scene, _: &StepReport, _: f64) -> Result<(), Self::Error> {
         Ok(())
     }
 }
 
 /// Run `scene` from its current state to its duration. `should_stop` is polled
 /// between steps (Ctrl-C).
-pub fn run(
+pub fn run<O: StepObserver + ?Sized>(
     scene: &mut Scene,
-    observer: &mut dyn StepObserver,
+    observer: &mut O,
     should_stop: &dyn Fn() -> bool,
-) -> Result<RunStats, ObserverError> {
+) -> Result<RunStats, O::Error> {
     let solver_kind = scene
         .world
         .objects()

@@ -7,14 +7,14 @@ use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use developable_sim::record::bag::{BagOptions, BagWriter};
-use developable_sim::record::metadata::Qos;
 use developable_sim::record::read::{mcap_files, reindex, scan, BagEvent, BagMessage, McapStream};
 use developable_sim::record::recorder::RunRecorder;
 use developable_sim::record::replay::{replay, ReplayOptions, ReplayReport, TopicReport};
-use developable_sim::ros::cdr;
-use developable_sim::ros::msgs::{
-    Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints, Time,
+use developable_sim::wire::cdr;
+use developable_sim::wire::msgs::{
+    Clock, MarkerArray, PoseStamped, SimCommand, SimStatus, SingularPoints, Time,
 };
+use developable_sim::wire::qos::Qos;
 use developable_sim::{runner, scene};
 
 mod common;
@@ -52,8 +52,9 @@ fn a_recorded_run_replays_bit_for_bit() {
     let bag = record(&dir, 0.3, BagOptions::default());
     let meta = metadata(&bag);
     let info = &meta.rosbag2_bagfile_information;
-    // 31 states (step 0..30) x (status, clock, markers, singular points)
-    assert_eq!(info.message_count, 31 * 4);
+    // 31 states (step 0..30) x (status, clock, markers, singular points), and the 30
+    // step commands
+    assert_eq!(info.message_count, 31 * 4 + 30);
     let r = replay(&bag, &ReplayOptions::default()).unwrap();
     assert_eq!(r.steps, 30);
     assert_eq!(r.topics.len(), 4);
@@ -266,6 +267,9 @@ fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&BagMessage) -> Option<V
                             "geometry_msgs/msg/PoseStamped" => {
                                 out.add_topic::<PoseStamped>(&m.topic, Qos::SENSOR_DATA)
                             }
+                            "developable_sim/msg/SimCommand" => {
+                                out.add_topic::<SimCommand>(&m.topic, Qos::DATA)
+                            }
                             other => panic!("unexpected type {other}"),
                         }
                         .unwrap()
@@ -368,6 +372,21 @@ fn a_nan_with_other_bits_is_a_difference() {
         assert_eq!(status.differing, 1, "{status:?}");
         assert_eq!(status.max_abs_difference, f64::INFINITY);
     }
+}
+
+/// A bag with no output this build can read (here: its messages removed, the session
+/// record kept) is not "identical": nothing was reproduced.
+#[test]
+fn a_bag_with_nothing_to_compare_is_not_identical() {
+    let (dir, bag) = record_tenth("nothing");
+    let empty = dir.join("empty");
+    rewrite(&bag, &empty, |_| None);
+    let r = replay(&empty, &ReplayOptions::default()).unwrap();
+    assert!(
+        !r.identical && r.topics.iter().all(|t| t.compared == 0),
+        "{r:?}"
+    );
+    replay_cli_says(&empty, 1, "NOTHING COMPARED");
 }
 
 #[test]

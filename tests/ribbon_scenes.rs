@@ -89,12 +89,13 @@ fn spinning_full_kinetics_deforms_lumped_stays_flat() {
     /// Largest |c| or |psi| seen after any step.
     struct Peak(f64);
     impl runner::StepObserver for Peak {
+        type Error = std::convert::Infallible;
         fn after_step(
             &mut self,
             scene: &Scene,
             _: &developable_sim::sim::StepReport,
             _: f64,
-        ) -> Result<(), runner::ObserverError> {
+        ) -> Result<(), Self::Error> {
             let q = ribbon(scene).coordinates();
             for x in q.crease_direction.iter().chain(&q.bending_angle) {
                 self.0 = self.0.max(x.abs());

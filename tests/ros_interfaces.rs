@@ -4,9 +4,9 @@
 
 use std::collections::BTreeSet;
 
-use developable_sim::ros::introspect::{to_value, Value};
-use developable_sim::ros::msgs::*;
-use developable_sim::ros::schema::{is_primitive, parse_msg, FieldDef, DEFINITIONS, SERVICES};
+use developable_sim::wire::introspect::{to_value, Value};
+use developable_sim::wire::msgs::*;
+use developable_sim::wire::schema::{is_primitive, parse_msg, FieldDef, DEFINITIONS, SERVICES};
 
 /// `package/msg/Type` of a Rust struct name (each name is unique among the definitions).
 fn ros_type_of(rust_name: &str) -> String {
@@ -145,6 +145,15 @@ fn every_message_struct_matches_its_msg_definition() {
         &mut seen,
     );
     root(to_value(&Clock::default()).unwrap(), Clock::TYPE, &mut seen);
+    root(
+        to_value(&SimCommand {
+            string_array_value: vec!["a".into()],
+            ..Default::default()
+        })
+        .unwrap(),
+        SimCommand::TYPE,
+        &mut seen,
+    );
     root(
         to_value(&TFMessage {
             transforms: vec![TransformStamped::default()],

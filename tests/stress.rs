@@ -222,28 +222,32 @@ fn an_absurd_force_never_yields_a_corrupt_state() {
 
 #[test]
 fn the_node_status_counts_unconverged_steps() {
-    use developable_sim::ros::input::InputPolicy;
-    use developable_sim::ros::session::{FrameContent, Session};
+    use developable_sim::session::input::InputPolicy;
+    use developable_sim::session::names::NodeNames;
+    use developable_sim::session::{Command, Content, OutputTable, RunOutputs, Session};
+    use developable_sim::wire::msgs::SimStatus;
     let path = config().join("scenes/ribbon_two_grippers.yaml");
     let s = scene::load(&path, &one_iteration()).unwrap();
     let policy = InputPolicy {
         frame_id: s.frame_id.clone(),
         accept_empty_frame_id: false,
-        max_stamp_lead: developable_sim::ros::input::DEFAULT_MAX_STAMP_LEAD,
+        max_stamp_lead: developable_sim::session::input::DEFAULT_MAX_STAMP_LEAD,
     };
-    let topics = s.handle_topics.clone();
-    let mut session = Session::new(s, policy, topics);
-    let content = FrameContent {
-        markers: false,
-        singular_points: false,
-        status: true,
+    let names = NodeNames::resolve(&s, "developable_sim", "/", &[]).unwrap();
+    let run = RunOutputs {
+        own_clock: true,
+        recording: false,
     };
-    let mut last = None;
+    let table = OutputTable::for_scene(&s, &names, run).unwrap();
+    let status_row = table.find("status", developable_sim::session::Scope::Object(0));
+    let mut session = Session::new(s, policy, names.handles.clone(), table);
+    let mut last: Option<SimStatus> = None;
     for _ in 0..3 {
-        let (report, ms) = session.step();
-        last = session.frame(Some(&report), ms, content).objects[0]
-            .status
-            .clone();
+        session.apply(&Command::Step);
+        let frame = session.frame(Content::Statuses).unwrap();
+        last = frame
+            .decode(status_row.expect("a status row"))
+            .map(|r| r.unwrap());
     }
     let status = last.expect("status asked for");
     assert!(!status.converged);

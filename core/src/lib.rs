@@ -17,6 +17,7 @@
 #![allow(clippy::needless_range_loop, clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod baseline;
+pub mod camera;
 pub mod contact;
 pub mod geometry;
 pub mod metrics;

@@ -73,6 +73,11 @@ pub struct RenderArgs {
     /// Picture size in pixels, WIDTHxHEIGHT.
     #[arg(long, default_value = "960x540")]
     pub size: String,
+    /// Render this camera of the scene's `cameras:` instead (its own size and view):
+    /// OUT.png is its colour image, OUT_depth.png its depth, colour-mapped (turbo,
+    /// blue near to red far over the frame's depth range, black: no depth).
+    #[arg(long, value_name = "NAME", conflicts_with_all = ["view", "size"])]
+    pub camera: Option<String>,
 }
 
 impl RenderArgs {

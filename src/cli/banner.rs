@@ -2,6 +2,7 @@
 //! service it reads and writes, one line each (the caller prints them on stderr).
 
 use crate::ros::node::{Lockstep, NodeConfig, Pacing};
+use crate::session::{OutputTable, RunOutputs};
 
 /// The banner's lines, prefixed `[developable_sim]`.
 pub fn banner(config: &NodeConfig) -> Vec<String> {
@@ -27,32 +28,19 @@ pub fn banner(config: &NodeConfig) -> Vec<String> {
             scene.frame_id, h.name
         ));
     }
-    let outputs = &scene.outputs;
-    for o in &names.objects {
-        if outputs.markers {
+    // the outputs table as the node builds it (`SimNode::new`)
+    let run = RunOutputs {
+        own_clock: !config.use_sim_time,
+        recording: config.record.is_some(),
+    };
+    if let Ok(table) = OutputTable::for_scene(scene, names, run) {
+        for row in table.rows.iter().filter(|r| r.want.published) {
             lines.push(format!(
-                "[developable_sim]   out: {} (visualization_msgs/msg/MarkerArray)",
-                o.markers
+                "[developable_sim]   out: {} ({})",
+                row.topic,
+                row.type_name()
             ));
         }
-        if outputs.singular_points {
-            lines.push(format!(
-                "[developable_sim]   out: {} (developable_sim/msg/SingularPoints)",
-                o.singular_points
-            ));
-        }
-        if outputs.status {
-            lines.push(format!(
-                "[developable_sim]   out: {} (developable_sim/msg/SimStatus)",
-                o.status
-            ));
-        }
-    }
-    if outputs.clock {
-        lines.push(format!(
-            "[developable_sim]   out: {} (rosgraph_msgs/msg/Clock)",
-            names.clock
-        ));
     }
     lines.push(format!(
         "[developable_sim]   services: {} {} (std_srvs/srv/Trigger), {} (std_srvs/srv/SetBool)",

@@ -12,7 +12,8 @@ pub mod stop;
 pub mod summary;
 
 use crate::record::recorder::RunRecorder;
-use crate::runner::{ObserverError, StepObserver};
+use crate::record::RecordError;
+use crate::runner::StepObserver;
 use crate::scene::Scene;
 use crate::sim::{ReachWatch, StepReport};
 
@@ -37,12 +38,13 @@ pub struct CliObserver<'a> {
 }
 
 impl StepObserver for CliObserver<'_> {
+    type Error = RecordError;
     fn after_step(
         &mut self,
         scene: &Scene,
         report: &StepReport,
         step_ms: f64,
-    ) -> Result<(), ObserverError> {
+    ) -> Result<(), RecordError> {
         let world = &scene.world;
         for m in self
             .reach

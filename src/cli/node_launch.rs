@@ -7,15 +7,15 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
+use crate::foxglove::{FoxgloveConfig, DEFAULT_BIND};
 use crate::record::bag::{BagOptions, Compression};
-use crate::ros::foxglove::{FoxgloveConfig, DEFAULT_BIND};
-use crate::ros::input::{InputPolicy, DEFAULT_MAX_STAMP_LEAD};
-use crate::ros::names::{normalize_namespace, NameError, NodeNames};
 use crate::ros::node::{Lockstep, NodeConfig, Pacing};
-use crate::ros::params::{self, ParamValue, Params, ParamsError, RosArgs};
-use crate::ros::session::MarkerStyle;
 use crate::ros::tf::DEFAULT_MAX_LAG;
 use crate::scene::{self, Scene, SceneError};
+use crate::session::input::{InputPolicy, DEFAULT_MAX_STAMP_LEAD};
+use crate::session::names::{normalize_namespace, NameError, NodeNames};
+use crate::session::params::{self, ParamValue, Params, ParamsError, RosArgs};
+use crate::session::MarkerStyle;
 
 use super::args::NodeArgs;
 use super::bag_name::bag_folder;

@@ -109,6 +109,8 @@ pub fn replay_summary(r: &ReplayReport) -> Vec<String> {
     }
     lines.push(if r.identical {
         "identical: every recorded output reproduced bit for bit".to_string()
+    } else if r.topics.iter().all(|t| t.compared == 0) {
+        "NOTHING COMPARED: the bag holds no recorded output this build can read".to_string()
     } else {
         format!("DIFFERENT: largest difference {:.3e}", r.max_abs_difference)
     });

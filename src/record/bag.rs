@@ -13,9 +13,9 @@ use std::io::{BufWriter, Seek, Write};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use super::metadata::{self, write_metadata_file, Qos, TopicSummary};
+use super::metadata::{self, write_metadata_file, Qos, QosRecord, TopicSummary};
 use super::RecordError;
-use crate::ros::msgs::RosMessage;
+use crate::wire::msgs::RosMessage;
 
 /// MCAP chunk compression.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -212,13 +212,25 @@ impl BagWriter {
         name: &str,
         qos: Qos,
     ) -> Result<TopicId, RecordError> {
-        let schema = match self.schemas.get(M::TYPE) {
+        self.add_topic_of(name, (M::TYPE, M::HASH, &M::schema), qos)
+    }
+
+    /// Add a topic of message type `type_name` (`pkg/msg/Type`) with its REP-2011 hash
+    /// and `ros2msg` schema (made only for the first topic of the type), offered with
+    /// `qos`.
+    pub fn add_topic_of(
+        &mut self,
+        name: &str,
+        (type_name, type_hash, schema): (&str, &str, &dyn Fn() -> String),
+        qos: Qos,
+    ) -> Result<TopicId, RecordError> {
+        let schema = match self.schemas.get(type_name) {
             Some(id) => *id,
             None => {
-                let text = M::schema();
+                let text = schema();
                 let r = self
                     .writer()?
-                    .add_schema(M::TYPE, "ros2msg", text.as_bytes());
+                    .add_schema(type_name, "ros2msg", text.as_bytes());
                 let id = match r {
                     Ok(id) => id,
                     Err(e) => {
@@ -226,13 +238,13 @@ impl BagWriter {
                         return Err(self.fail(e));
                     }
                 };
-                self.schemas.insert(M::TYPE.to_string(), id);
+                self.schemas.insert(type_name.to_string(), id);
                 id
             }
         };
         let mut meta = BTreeMap::new();
         meta.insert("offered_qos_profiles".to_string(), qos.yaml());
-        meta.insert("topic_type_hash".to_string(), M::HASH.to_string());
+        meta.insert("topic_type_hash".to_string(), type_hash.to_string());
         let r = self.writer()?.add_channel(schema, name, "cdr", &meta);
         let channel = match r {
             Ok(c) => c,
@@ -243,9 +255,9 @@ impl BagWriter {
         };
         self.topics.push(TopicState {
             name: name.to_string(),
-            type_name: M::TYPE.to_string(),
+            type_name: type_name.to_string(),
             qos,
-            type_hash: M::HASH.to_string(),
+            type_hash: type_hash.to_string(),
             channel,
             count: 0,
         });
@@ -293,7 +305,7 @@ impl BagWriter {
         log_time_ns: u64,
         msg: &M,
     ) -> Result<(), RecordError> {
-        let data = crate::ros::cdr::encode(msg)?;
+        let data = crate::wire::cdr::encode(msg)?;
         self.write_raw(topic, log_time_ns, log_time_ns, &data)
     }
 
@@ -435,12 +447,4 @@ fn folder_name(dir: &Path) -> String {
         .map(|s| s.to_string_lossy().into_owned())
         .filter(|s| !s.is_empty() && s != "." && s != "..")
         .unwrap_or_else(|| "bag".into())
-}
-
-/// Wall-clock time, ns since the Unix epoch.
-pub fn now_ns() -> u64 {
-    std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map(|d| d.as_nanos() as u64)
-        .unwrap_or(0)
 }

@@ -6,50 +6,21 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use super::RecordError;
+pub use crate::wire::qos::Qos;
 
 /// rosbag2 metadata version written (Jazzy).
 const VERSION: u32 = 9;
 
-/// The offered QoS of a recorded topic (what rosbag2 stores so `ros2 bag play` can
-/// offer the same). Only the policies the node uses; the rest are ROS defaults.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Qos {
-    /// KEEP_LAST depth.
-    pub depth: u32,
-    /// Reliable (true) or best effort.
-    pub reliable: bool,
-    /// Transient local (true) or volatile.
-    pub transient_local: bool,
+/// How rosbag2 writes a topic's offered QoS.
+pub trait QosRecord {
+    /// As rosbag2 Jazzy writes it.
+    fn entry(&self) -> QosEntry;
+    /// The `offered_qos_profiles` channel-metadata string (a YAML list).
+    fn yaml(&self) -> String;
 }
 
-impl Qos {
-    /// Sensor data: best effort, keep last 5, volatile (handle inputs).
-    pub const SENSOR_DATA: Qos = Qos {
-        depth: 5,
-        reliable: false,
-        transient_local: false,
-    };
-    /// `/clock`: best effort, keep last 1.
-    pub const CLOCK: Qos = Qos {
-        depth: 1,
-        reliable: false,
-        transient_local: false,
-    };
-    /// Markers: reliable, keep last 1, transient local (late joiners get the mesh).
-    pub const MARKERS: Qos = Qos {
-        depth: 1,
-        reliable: true,
-        transient_local: true,
-    };
-    /// Data outputs (status, singular points): reliable, keep last 10, volatile.
-    pub const DATA: Qos = Qos {
-        depth: 10,
-        reliable: true,
-        transient_local: false,
-    };
-
-    /// As rosbag2 Jazzy writes it.
-    pub fn entry(&self) -> QosEntry {
+impl QosRecord for Qos {
+    fn entry(&self) -> QosEntry {
         QosEntry {
             history: "keep_last".into(),
             depth: self.depth,
@@ -73,8 +44,7 @@ impl Qos {
         }
     }
 
-    /// The `offered_qos_profiles` channel-metadata string (a YAML list).
-    pub fn yaml(&self) -> String {
+    fn yaml(&self) -> String {
         serde_yaml::to_string(&vec![self.entry()]).unwrap_or_default()
     }
 }

@@ -41,7 +41,7 @@ pub enum RecordError {
     #[error("{path}: {message}")]
     Bag { path: PathBuf, message: String },
     #[error("encoding a message: {0}")]
-    Cdr(#[from] crate::ros::cdr::CdrError),
+    Cdr(#[from] crate::wire::cdr::CdrError),
 }
 
 /// An MCAP error and, for an I/O error, the OS error under it.

@@ -67,6 +67,9 @@ pub struct McapStream {
     pub reached_data_end: bool,
     /// The MCAP header's `library` (who wrote the file), once read.
     pub library: Option<String>,
+    /// The records of a chunk the writer never closed, read after the reader stopped at
+    /// it (see [`open_chunk_records`]), and why it stopped.
+    open_chunk: Option<(std::collections::VecDeque<RawRecord>, String)>,
 }
 
 /// How `reindex` ends the `library` of the files it rewrites: such a file was cut short
@@ -91,6 +94,7 @@ impl McapStream {
             truncated: None,
             reached_data_end: false,
             library: None,
+            open_chunk: None,
         })
     }
 
@@ -111,14 +115,27 @@ impl Iterator for McapStream {
 
     fn next(&mut self) -> Option<Self::Item> {
         while !self.done {
+            if let Some((records, why)) = self.open_chunk.as_mut() {
+                let Some((opcode, data)) = records.pop_front() else {
+                    let why = why.clone();
+                    return self.stop(why);
+                };
+                match mcap::parse_record(opcode, &data) {
+                    Ok(record) => match self.handle(record) {
+                        Some(event) => return Some(event),
+                        None => continue,
+                    },
+                    Err(e) => return self.stop(e.to_string()),
+                }
+            }
             let event = match self.reader.next_event() {
                 None => {
                     self.done = true;
                     return None;
                 }
                 Some(Err(e)) => {
-                    let why = e.to_string();
-                    return self.stop(why);
+                    self.reader_failed(e.to_string());
+                    continue;
                 }
                 Some(Ok(e)) => e,
             };
@@ -146,64 +163,171 @@ impl Iterator for McapStream {
                             return self.stop(why);
                         }
                     };
-                    match record {
-                        Record::Header(h) => self.library = Some(h.library),
-                        Record::Schema { header, data } => {
-                            self.schemas.insert(
-                                header.id,
-                                (header.name, header.encoding, data.into_owned()),
-                            );
-                        }
-                        Record::Channel(c) => {
-                            let (type_name, schema_encoding, schema) =
-                                self.schemas.get(&c.schema_id).cloned().unwrap_or_default();
-                            self.channels.insert(
-                                c.id,
-                                ChannelInfo {
-                                    id: c.id,
-                                    topic: c.topic,
-                                    type_name,
-                                    schema_encoding,
-                                    schema,
-                                    message_encoding: c.message_encoding,
-                                    metadata: c.metadata,
-                                },
-                            );
-                        }
-                        Record::Message { header, data } => {
-                            let Some(ch) = self.channels.get(&header.channel_id) else {
-                                let why =
-                                    format!("message on unknown channel {}", header.channel_id);
-                                return self.stop(why);
-                            };
-                            return Some(Ok(BagEvent::Message(BagMessage {
-                                channel: ch.id,
-                                topic: ch.topic.clone(),
-                                type_name: ch.type_name.clone(),
-                                sequence: header.sequence,
-                                log_time: header.log_time,
-                                publish_time: header.publish_time,
-                                data: data.into_owned(),
-                            })));
-                        }
-                        Record::Metadata(m) => {
-                            return Some(Ok(BagEvent::Metadata {
-                                name: m.name,
-                                values: m.metadata,
-                            }))
-                        }
-                        Record::DataEnd(_) => {
-                            self.reached_data_end = true;
-                            self.done = true;
-                            return None;
-                        }
-                        _ => {}
+                    let taken = take_record(
+                        &mut self.schemas,
+                        &mut self.channels,
+                        &mut self.library,
+                        record,
+                    );
+                    if let Some(event) = self.outcome(taken) {
+                        return Some(event);
                     }
                 }
             }
         }
         None
     }
+}
+
+impl McapStream {
+    /// The reader stopped (`why`): when at a chunk its writer never closed (a crash, a
+    /// full disk), read on inside it; otherwise stop.
+    fn reader_failed(&mut self, why: String) {
+        match open_chunk_records(&self.path) {
+            Some(records) if !records.is_empty() => {
+                let why = format!(
+                    "{why}; the last chunk was never closed: its {} complete records were read",
+                    records.len()
+                );
+                self.open_chunk = Some((records.into(), why));
+            }
+            _ => {
+                self.stop(why);
+            }
+        }
+    }
+
+    /// Take one record's outcome (see [`take_record`]).
+    fn handle(&mut self, record: Record) -> Option<Result<BagEvent, RecordError>> {
+        let taken = take_record(
+            &mut self.schemas,
+            &mut self.channels,
+            &mut self.library,
+            record,
+        );
+        self.outcome(taken)
+    }
+
+    fn outcome(&mut self, taken: Taken) -> Option<Result<BagEvent, RecordError>> {
+        match taken {
+            Taken::Event(e) => Some(Ok(e)),
+            Taken::Stop(why) => self.stop(why),
+            Taken::DataEnd => {
+                self.reached_data_end = true;
+                self.done = true;
+                None
+            }
+            Taken::Nothing => None,
+        }
+    }
+}
+
+/// What one record means to the stream.
+enum Taken {
+    Event(BagEvent),
+    Stop(String),
+    DataEnd,
+    Nothing,
+}
+
+/// Take one record: remember schemas and channels (and the writing library), turn
+/// messages and metadata into events.
+fn take_record(
+    schemas: &mut BTreeMap<u16, (String, String, Vec<u8>)>,
+    channels: &mut BTreeMap<u16, ChannelInfo>,
+    library: &mut Option<String>,
+    record: Record,
+) -> Taken {
+    match record {
+        Record::Header(h) => *library = Some(h.library),
+        Record::Schema { header, data } => {
+            schemas.insert(header.id, (header.name, header.encoding, data.into_owned()));
+        }
+        Record::Channel(c) => {
+            let (type_name, schema_encoding, schema) =
+                schemas.get(&c.schema_id).cloned().unwrap_or_default();
+            channels.insert(
+                c.id,
+                ChannelInfo {
+                    id: c.id,
+                    topic: c.topic,
+                    type_name,
+                    schema_encoding,
+                    schema,
+                    message_encoding: c.message_encoding,
+                    metadata: c.metadata,
+                },
+            );
+        }
+        Record::Message { header, data } => {
+            let Some(ch) = channels.get(&header.channel_id) else {
+                return Taken::Stop(format!("message on unknown channel {}", header.channel_id));
+            };
+            return Taken::Event(BagEvent::Message(BagMessage {
+                channel: ch.id,
+                topic: ch.topic.clone(),
+                type_name: ch.type_name.clone(),
+                sequence: header.sequence,
+                log_time: header.log_time,
+                publish_time: header.publish_time,
+                data: data.into_owned(),
+            }));
+        }
+        Record::Metadata(m) => {
+            return Taken::Event(BagEvent::Metadata {
+                name: m.name,
+                values: m.metadata,
+            })
+        }
+        Record::DataEnd(_) => return Taken::DataEnd,
+        _ => {}
+    }
+    Taken::Nothing
+}
+
+/// An MCAP record as (opcode, body).
+type RawRecord = (u8, Vec<u8>);
+
+/// The complete records inside the first chunk of `path` that its writer never closed:
+/// an uncompressed chunk whose length is still the writer's placeholder (all ones),
+/// because the recorder died (or its disk filled) while the chunk was open. The MCAP
+/// reader cannot size such a chunk; its records up to the first one cut short are
+/// intact. None when the file has no such chunk.
+fn open_chunk_records(path: &Path) -> Option<Vec<RawRecord>> {
+    let bytes = std::fs::read(path).ok()?;
+    let u64_at = |at: usize| -> Option<u64> {
+        Some(u64::from_le_bytes(bytes.get(at..at + 8)?.try_into().ok()?))
+    };
+    let mut at = mcap::MAGIC.len();
+    loop {
+        let opcode = *bytes.get(at)?;
+        let len = u64_at(at + 1)?;
+        if opcode == mcap::records::op::CHUNK && len == u64::MAX {
+            break;
+        }
+        at = at.checked_add(9)?.checked_add(usize::try_from(len).ok()?)?;
+    }
+    // the chunk header: start, end, uncompressed size (u64 each), crc (u32),
+    // compression (u32 length + text), records length (u64)
+    let mut k = at + 9 + 8 * 3 + 4;
+    let name_len = u32::from_le_bytes(bytes.get(k..k + 4)?.try_into().ok()?) as usize;
+    if name_len != 0 {
+        return None; // compressed: its records cannot be read without the whole frame
+    }
+    k += 4 + 8;
+    let mut records = Vec::new();
+    while let (Some(&opcode), Some(len)) = (bytes.get(k), u64_at(k + 1)) {
+        let start = k + 9;
+        let Some(end) = usize::try_from(len).ok().and_then(|l| start.checked_add(l)) else {
+            break;
+        };
+        let Some(data) = bytes.get(start..end) else {
+            break; // cut short
+        };
+        records.push((opcode, data.to_vec()));
+        k = end;
+    }
+    Some(records)
 }
 
 /// The MCAP files of a bag folder, in name order.

@@ -1,35 +1,93 @@
 //! What a session records and in which order.
 //!
-//! Topics: every handle input (as received, rejected ones included: replay runs them
-//! through the same filter), and every output the node publishes, plus each object's
-//! status even when the scene does not publish it (it is the step ledger replay
-//! follows). Order in the file: the inputs taken before a step, then that step's
-//! frame: statuses first, then `/clock`, markers and singular points. A
-//! `developable_sim` MCAP metadata record at the start holds the scene (YAML after
-//! overrides) and the input policy, so `replay` rebuilds the same simulation.
+//! A bag holds the commands the node applied, in order, and the frames they produced.
+//! Commands: every handle pose as received, on the handle's topic (rejected ones
+//! included: replay runs them through the same filter), a handle's failed TF lookups on
+//! `<handle topic>/tf_lookup_failed`, and every other command (steps, resets, pauses,
+//! parameter changes) as a `developable_sim/msg/SimCommand` on `~/commands`. Frames:
+//! every recorded row of the session's outputs table (each object's status even when
+//! the scene does not publish it), statuses first. A `developable_sim` MCAP metadata
+//! record at the start holds the scene (YAML after overrides), the input policy and the
+//! recorded outputs, so `replay` rebuilds the same session.
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::bag::{now_ns, BagOptions, BagWriter, TopicId};
+use super::bag::{BagOptions, BagWriter, TopicId};
 use super::metadata::Qos;
 use super::RecordError;
-use crate::ros::input::InputPolicy;
-use crate::ros::msgs::{Clock, MarkerArray, PoseStamped, SimStatus, SingularPoints};
-use crate::ros::names::NodeNames;
-use crate::ros::session::{Frame, FrameContent, Session};
-use crate::runner::{ObserverError, StepObserver};
+use crate::runner::StepObserver;
 use crate::scene::Scene;
+use crate::session::input::InputPolicy;
+use crate::session::names::NodeNames;
+use crate::session::outputs::{kind_named, OutputRow, Want};
+use crate::session::{Command, Content, Frame, OutputTable, RunOutputs, Scope, Session};
 use crate::sim::StepReport;
+use crate::wire::clock::now_ns;
+use crate::wire::msgs::{PoseStamped, SimCommand, Time};
 
 fn default_max_stamp_lead() -> f64 {
-    crate::ros::input::DEFAULT_MAX_STAMP_LEAD
+    crate::session::input::DEFAULT_MAX_STAMP_LEAD
 }
 
 /// Name of the MCAP metadata record describing the session.
 pub const SESSION_RECORD: &str = "developable_sim";
+
+/// The recording format this build writes: 2 records the commands (`~/commands`) and
+/// the outputs table; 1 (before 2026-12-07) had neither, and replay follows its
+/// statuses instead.
+pub const FORMAT: u32 = 2;
+
+/// One recorded output: its kind (`session::outputs::OUTPUTS` names), scope and topic.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RecordedOutput {
+    pub kind: String,
+    /// `global`, `object` or `handle`.
+    pub scope: String,
+    /// The object's or handle's index (0 for global).
+    #[serde(default)]
+    pub index: usize,
+    pub topic: String,
+}
+
+impl RecordedOutput {
+    fn of(row: &OutputRow) -> RecordedOutput {
+        let (scope, index) = match row.scope {
+            Scope::Global => ("global", 0),
+            Scope::Object(o) => ("object", o),
+            Scope::Handle(h) => ("handle", h),
+        };
+        RecordedOutput {
+            kind: row.kind.name.to_string(),
+            scope: scope.to_string(),
+            index,
+            topic: row.topic.clone(),
+        }
+    }
+
+    /// The row this output is in a replay (recorded, not published).
+    pub fn row(&self) -> Result<OutputRow, String> {
+        let kind =
+            kind_named(&self.kind).ok_or_else(|| format!("unknown output `{}`", self.kind))?;
+        let scope = match self.scope.as_str() {
+            "global" => Scope::Global,
+            "object" => Scope::Object(self.index),
+            "handle" => Scope::Handle(self.index),
+            s => return Err(format!("unknown scope `{s}` of output `{}`", self.kind)),
+        };
+        Ok(OutputRow {
+            kind,
+            scope,
+            topic: self.topic.clone(),
+            want: Want {
+                published: false,
+                recorded: true,
+            },
+        })
+    }
+}
 
 /// The session description stored in the bag (values of the metadata record).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -46,20 +104,32 @@ pub struct SessionInfo {
     pub line_width: f64,
     pub sphere_diameter: f64,
     pub handle_topics: Vec<String>,
-    pub clock_topic: Option<String>,
-    /// The colliders' markers, when recorded (bags from before it existed have none).
-    #[serde(default)]
-    pub colliders_topic: Option<String>,
-    /// Per object: (markers, singular points, status); None when not recorded.
-    pub object_topics: Vec<(Option<String>, Option<String>, String)>,
     /// Per handle: the input topic its status reports (`/tf` for a TF-driven handle);
     /// bags from before it existed: `handle_topics`.
     #[serde(default)]
     pub status_handle_topics: Vec<String>,
     /// Per handle: the bag topic of its failed TF lookups (see
-    /// [`SessionRecorder::record_tf_failure`]); bags from before it existed have none.
+    /// [`SessionRecorder::record_command`]); bags from before it existed have none.
     #[serde(default)]
     pub tf_failure_topics: Vec<String>,
+    /// Format 2: the commands' topic.
+    #[serde(default)]
+    pub commands_topic: Option<String>,
+    /// Format 2: whether the session started paused.
+    #[serde(default)]
+    pub start_paused: bool,
+    /// Format 2: the recorded rows of the outputs table, in the session's order.
+    #[serde(default)]
+    pub outputs: Vec<RecordedOutput>,
+    /// Format 1: the clock's topic when recorded.
+    #[serde(default)]
+    pub clock_topic: Option<String>,
+    /// Format 1: the colliders' markers, when recorded.
+    #[serde(default)]
+    pub colliders_topic: Option<String>,
+    /// Format 1: per object (markers, singular points, status); None when not recorded.
+    #[serde(default)]
+    pub object_topics: Vec<(Option<String>, Option<String>, String)>,
 }
 
 /// The bag topic of a handle's failed TF lookups: beside its input topic, so it reads as
@@ -71,7 +141,7 @@ fn tf_failure_topic(handle_topic: &str) -> String {
 impl SessionInfo {
     fn to_record(&self) -> BTreeMap<String, String> {
         let mut m = BTreeMap::new();
-        m.insert("format".into(), "1".into());
+        m.insert("format".into(), FORMAT.to_string());
         m.insert("version".into(), env!("CARGO_PKG_VERSION").into());
         m.insert("scene_name".into(), self.scene_name.clone());
         m.insert(
@@ -81,51 +151,33 @@ impl SessionInfo {
         m
     }
 
-    pub fn from_record(values: &BTreeMap<String, String>) -> Result<SessionInfo, String> {
+    /// The description and the recording's format (1 when the record predates it).
+    pub fn from_record(values: &BTreeMap<String, String>) -> Result<(SessionInfo, u32), String> {
         let json = values
             .get("session")
             .ok_or("the developable_sim record has no `session` entry")?;
-        serde_json::from_str(json).map_err(|e| format!("unreadable session description: {e}"))
+        let format = match values.get("format") {
+            Some(f) => f
+                .parse::<u32>()
+                .map_err(|_| format!("unreadable recording format `{f}`"))?,
+            None => 1,
+        };
+        if format > FORMAT {
+            return Err(format!(
+                "recording format {format} is newer than this build's ({FORMAT}): replay it \
+                 with the developable_sim that recorded it"
+            ));
+        }
+        let info = serde_json::from_str(json)
+            .map_err(|e| format!("unreadable session description: {e}"))?;
+        Ok((info, format))
     }
-}
 
-struct ObjectIds {
-    markers: Option<TopicId>,
-    singular_points: Option<TopicId>,
-    status: TopicId,
-}
-
-/// Records a session into a bag.
-pub struct SessionRecorder {
-    bag: BagWriter,
-    handles: Vec<TopicId>,
-    /// Per handle: its TF-failure topic, created at the first failure.
-    tf_failure_topics: Vec<String>,
-    tf_failures: Vec<Option<TopicId>>,
-    clock: Option<TopicId>,
-    colliders: Option<TopicId>,
-    objects: Vec<ObjectIds>,
-    last_ns: u64,
-}
-
-impl SessionRecorder {
-    /// Create the bag `dir` for `session`. `published`: the outputs published (and so
-    /// recorded); statuses are always recorded. `clock`: whether `/clock` is published.
-    pub fn create(
-        dir: &Path,
-        options: BagOptions,
-        session: &Session,
-        names: &NodeNames,
-        published: FrameContent,
-        clock: bool,
-    ) -> Result<SessionRecorder, RecordError> {
-        let mut options = options;
-        options
-            .custom_data
-            .insert("developable_sim.scene".into(), session.scene.name.clone());
-        let mut bag = BagWriter::create(dir, options)?;
+    /// The session `session` (its scene, policy, style and recorded outputs) as a bag
+    /// describes it; `names`: the node's resolved names.
+    fn of(session: &Session, names: &NodeNames, dir: &Path) -> Result<SessionInfo, RecordError> {
         let scene = &session.scene;
-        let info = SessionInfo {
+        Ok(SessionInfo {
             scene_name: scene.name.clone(),
             scene_file: scene.file.display().to_string(),
             scene_yaml: serde_yaml::to_string(&scene.source).map_err(|e| RecordError::Bag {
@@ -138,49 +190,68 @@ impl SessionRecorder {
             line_width: session.style.line_width,
             sphere_diameter: session.style.sphere_diameter,
             handle_topics: names.handles.clone(),
-            clock_topic: clock.then(|| names.clock.clone()),
-            colliders_topic: (published.markers && session.has_colliders())
-                .then(|| names.colliders.clone()),
-            object_topics: names
-                .objects
-                .iter()
-                .map(|o| {
-                    (
-                        published.markers.then(|| o.markers.clone()),
-                        published.singular_points.then(|| o.singular_points.clone()),
-                        o.status.clone(),
-                    )
-                })
-                .collect(),
             status_handle_topics: session.handle_topics.clone(),
             tf_failure_topics: names.handles.iter().map(|t| tf_failure_topic(t)).collect(),
-        };
+            commands_topic: Some(names.commands.clone()),
+            start_paused: session.paused,
+            outputs: session
+                .table
+                .rows
+                .iter()
+                .filter(|r| r.want.recorded)
+                .map(RecordedOutput::of)
+                .collect(),
+            clock_topic: None,
+            colliders_topic: None,
+            object_topics: Vec::new(),
+        })
+    }
+}
+
+/// Records a session into a bag.
+pub struct SessionRecorder {
+    bag: BagWriter,
+    handles: Vec<TopicId>,
+    /// Per handle: its TF-failure topic, created at the first failure.
+    tf_failure_topics: Vec<String>,
+    tf_failures: Vec<Option<TopicId>>,
+    commands: TopicId,
+    /// Per row of the session's outputs table: its bag topic (None: not recorded).
+    outputs: Vec<Option<TopicId>>,
+    last_ns: u64,
+}
+
+impl SessionRecorder {
+    /// Create the bag `dir` for `session` (the rows of its outputs table marked
+    /// recorded), whose topics and services `names` resolved.
+    pub fn create(
+        dir: &Path,
+        options: BagOptions,
+        session: &Session,
+        names: &NodeNames,
+    ) -> Result<SessionRecorder, RecordError> {
+        let mut options = options;
+        options
+            .custom_data
+            .insert("developable_sim.scene".into(), session.scene.name.clone());
+        let mut bag = BagWriter::create(dir, options)?;
+        let info = SessionInfo::of(session, names, dir)?;
         bag.write_metadata(SESSION_RECORD, info.to_record())?;
         let mut handles = Vec::new();
         for t in &names.handles {
             handles.push(bag.add_topic::<PoseStamped>(t, Qos::SENSOR_DATA)?);
         }
-        let clock = if clock {
-            Some(bag.add_topic::<Clock>(&names.clock, Qos::CLOCK)?)
-        } else {
-            None
-        };
-        let colliders = match &info.colliders_topic {
-            Some(t) => Some(bag.add_topic::<MarkerArray>(t, Qos::MARKERS)?),
-            None => None,
-        };
-        let mut objects = Vec::new();
-        for (m, s, st) in &info.object_topics {
-            objects.push(ObjectIds {
-                markers: match m {
-                    Some(t) => Some(bag.add_topic::<MarkerArray>(t, Qos::MARKERS)?),
-                    None => None,
-                },
-                singular_points: match s {
-                    Some(t) => Some(bag.add_topic::<SingularPoints>(t, Qos::DATA)?),
-                    None => None,
-                },
-                status: bag.add_topic::<SimStatus>(st, Qos::DATA)?,
+        let commands = bag.add_topic::<SimCommand>(&names.commands, Qos::DATA)?;
+        let mut outputs = Vec::new();
+        for row in &session.table.rows {
+            let p = row.kind.producer;
+            outputs.push(match row.want.recorded {
+                true => Some(bag.add_topic_of(
+                    &row.topic,
+                    (p.type_name(), p.type_hash(), &|| p.schema()),
+                    row.kind.qos,
+                )?),
+                false => None,
             });
         }
         Ok(SessionRecorder {
@@ -188,9 +259,8 @@ impl SessionRecorder {
             handles,
             tf_failures: vec![None; info.tf_failure_topics.len()],
             tf_failure_topics: info.tf_failure_topics,
-            clock,
-            colliders,
-            objects,
+            commands,
+            outputs,
             last_ns: 0,
         })
     }
@@ -209,31 +279,43 @@ impl SessionRecorder {
         self.stamp()
     }
 
-    /// Record a pose taken from handle `handle`'s topic at `arrival_ns` (from
-    /// [`Self::arrival_ns`]). `publish_ns`: its source timestamp (ns since the epoch),
-    /// if known.
-    pub fn record_input(
-        &mut self,
-        handle: usize,
-        msg: &PoseStamped,
-        arrival_ns: u64,
-        publish_ns: Option<u64>,
-    ) -> Result<(), RecordError> {
-        let Some(id) = self.handles.get(handle).copied() else {
-            return Ok(());
-        };
-        let t = arrival_ns;
-        let data = crate::ros::cdr::encode(msg)?;
-        self.bag.write_raw(id, t, publish_ns.unwrap_or(t), &data)
+    /// Record a command about to be applied to the state at simulated time `stamp`: a
+    /// pose on its handle's topic at its arrival time (from [`Self::arrival_ns`]), a
+    /// failed TF lookup on the handle's failure topic (created at the first one), every
+    /// other command on `~/commands`.
+    pub fn record_command(&mut self, command: &Command, stamp: Time) -> Result<(), RecordError> {
+        match command {
+            Command::Pose {
+                handle,
+                pose,
+                arrival_ns,
+                publish_ns,
+            } => {
+                let Some(id) = self.handles.get(*handle).copied() else {
+                    return Ok(());
+                };
+                let data = crate::wire::cdr::encode(pose)?;
+                let t = *arrival_ns;
+                self.bag.write_raw(id, t, publish_ns.unwrap_or(t), &data)
+            }
+            Command::TfLookupFailed {
+                handle,
+                what,
+                arrival_ns,
+            } => self.record_tf_failure(*handle, what, *arrival_ns),
+            other => match other.to_msg(stamp) {
+                Some(m) => {
+                    let t = self.stamp();
+                    self.bag.write(self.commands, t, &m)
+                }
+                None => Ok(()),
+            },
+        }
     }
 
-    /// Record a failed TF lookup for handle `handle` at `arrival_ns`: `what` is the
-    /// handle's TF frame at the lookup time (a TF-driven handle; identity pose) or the
-    /// pose that could not be brought into the scene frame (a pose in another frame of
-    /// the tree, older than the buffer or too far ahead). `replay` counts it as the node
-    /// did (`rejected_tf_lookup`; the handle keeps its target): the TF tree itself is not
-    /// in the bag, so the lookup's outcome is.
-    pub fn record_tf_failure(
+    /// A failed TF lookup for handle `handle` at `arrival_ns` (see
+    /// [`Command::TfLookupFailed`]); `replay` counts it as the node did.
+    fn record_tf_failure(
         &mut self,
         handle: usize,
         what: &PoseStamped,
@@ -250,36 +332,17 @@ impl SessionRecorder {
                 id
             }
         };
-        let data = crate::ros::cdr::encode(what)?;
+        let data = crate::wire::cdr::encode(what)?;
         self.bag.write_raw(id, arrival_ns, arrival_ns, &data)
     }
 
-    /// Record a frame: statuses, then clock, markers and singular points.
+    /// Record a frame: every recorded row that has a message, in table order.
     pub fn record_frame(&mut self, frame: &Frame) -> Result<(), RecordError> {
-        for i in 0..frame.objects.len().min(self.objects.len()) {
-            if let Some(s) = &frame.objects[i].status {
+        for k in 0..self.outputs.len().min(frame.messages.len()) {
+            if let (Some(id), Some(m)) = (self.outputs[k], &frame.messages[k]) {
                 let t = self.stamp();
-                self.bag.write(self.objects[i].status, t, s)?;
+                self.bag.write_raw(id, t, t, m)?;
             }
-        }
-        if let Some(c) = self.clock {
-            let t = self.stamp();
-            self.bag.write(c, t, &frame.clock)?;
-        }
-        for i in 0..frame.objects.len().min(self.objects.len()) {
-            let (markers, singular) = (self.objects[i].markers, self.objects[i].singular_points);
-            if let (Some(id), Some(m)) = (markers, &frame.objects[i].markers) {
-                let t = self.stamp();
-                self.bag.write(id, t, m)?;
-            }
-            if let (Some(id), Some(s)) = (singular, &frame.objects[i].singular_points) {
-                let t = self.stamp();
-                self.bag.write(id, t, s)?;
-            }
-        }
-        if let (Some(id), Some(m)) = (self.colliders, &frame.colliders) {
-            let t = self.stamp();
-            self.bag.write(id, t, m)?;
         }
         Ok(())
     }
@@ -300,20 +363,14 @@ impl SessionRecorder {
     }
 }
 
-/// What a recorded frame must contain given the scene's outputs: statuses always.
-pub fn recorded_content(published: FrameContent) -> FrameContent {
-    FrameContent {
-        status: true,
-        ..published
-    }
-}
-
-/// Records a headless run (`run --record`) exactly as the node would publish it with
-/// nobody driving the handles: a [`crate::runner::StepObserver`].
+/// Records a headless run (`run --record`) exactly as the node would with nobody
+/// driving the handles: a step command, then the step's frame (a
+/// [`crate::runner::StepObserver`]).
 pub struct RunRecorder {
     session: Session,
     recorder: Option<SessionRecorder>,
-    content: FrameContent,
+    /// Simulated time of the state the next step starts from.
+    stamp: Time,
 }
 
 impl RunRecorder {
@@ -323,37 +380,30 @@ impl RunRecorder {
         dir: &Path,
         options: BagOptions,
     ) -> Result<RunRecorder, RecordError> {
-        let names = NodeNames::resolve(scene, "developable_sim", "/", &[]).map_err(|e| {
-            RecordError::Bag {
-                path: dir.to_path_buf(),
-                message: e.to_string(),
-            }
-        })?;
+        let bag_error = |message: String| RecordError::Bag {
+            path: dir.to_path_buf(),
+            message,
+        };
+        let names = NodeNames::resolve(scene, "developable_sim", "/", &[])
+            .map_err(|e| bag_error(e.to_string()))?;
         let policy = InputPolicy {
             frame_id: scene.frame_id.clone(),
             accept_empty_frame_id: false,
-            max_stamp_lead: crate::ros::input::DEFAULT_MAX_STAMP_LEAD,
+            max_stamp_lead: crate::session::input::DEFAULT_MAX_STAMP_LEAD,
         };
-        let session = Session::new(scene.clone(), policy, names.handles.clone());
-        let published = FrameContent {
-            markers: scene.outputs.markers,
-            singular_points: scene.outputs.singular_points,
-            status: scene.outputs.status,
+        let run = RunOutputs {
+            own_clock: true,
+            recording: true,
         };
-        let mut recorder = SessionRecorder::create(
-            dir,
-            options,
-            &session,
-            &names,
-            published,
-            scene.outputs.clock,
-        )?;
-        let content = recorded_content(published);
-        recorder.record_frame(&session.frame(None, 0.0, content))?;
+        let table =
+            OutputTable::for_scene(scene, &names, run).map_err(|e| bag_error(e.to_string()))?;
+        let session = Session::new(scene.clone(), policy, names.handles.clone(), table);
+        let mut recorder = SessionRecorder::create(dir, options, &session, &names)?;
+        recorder.record_frame(&session.frame(Content::All)?)?;
         Ok(RunRecorder {
+            stamp: session.stamp(),
             session,
             recorder: Some(recorder),
-            content,
         })
     }
 
@@ -367,18 +417,21 @@ impl RunRecorder {
 }
 
 impl StepObserver for RunRecorder {
+    type Error = RecordError;
     fn after_step(
         &mut self,
         scene: &Scene,
         report: &StepReport,
         step_ms: f64,
-    ) -> Result<(), ObserverError> {
+    ) -> Result<(), RecordError> {
         // the runner's scene, not a copy: cloning the world each step cost a deep copy
         // of every object (meshes, histories, the contact stage)
+        let before = std::mem::replace(&mut self.stamp, Time::from_secs(report.time));
         let frame = self
             .session
-            .frame_of(scene, Some(report), step_ms * 1e-3, self.content);
+            .frame_of(scene, Some(report), step_ms * 1e-3, Content::All)?;
         if let Some(r) = self.recorder.as_mut() {
+            r.record_command(&Command::Step, before)?;
             r.record_frame(&frame)?;
         }
         Ok(())

@@ -1,13 +1,15 @@
-//! `developable_sim replay BAG`: rebuild the recorded simulation, feed it the recorded
-//! handle poses in recorded order (through the same input filter), step it whenever
-//! the recording stepped (the statuses are the ledger: `step` counts steps since the
-//! last reset, `episode` counts resets), and compare every recorded output with the
-//! recomputed one bit for bit (`f64::to_bits`: -0.0 and +0.0 differ, and so do NaNs
-//! with different bits). An output the replay produces for a state that the bag lacks
-//! is a difference too (except in the last state of a bag cut short, or repaired by
-//! `bag reindex` after it was). The same build
-//! gives zero difference; otherwise the report names the largest difference per topic
-//! and the first differing field, and `developable_sim replay` exits with code 1.
+//! `developable_sim replay BAG`: rebuild the recorded session, apply the recorded
+//! commands in recorded order through the same function the node used
+//! (`Session::apply`: poses through the same input filter, steps, resets, pauses,
+//! parameter changes), and compare every recorded output with the recomputed one bit
+//! for bit (`f64::to_bits`: -0.0 and +0.0 differ, and so do NaNs with different bits).
+//! Bags of format 1 (recorded before commands were) carry no commands: their statuses
+//! are the ledger (`step` counts steps since the last reset, `episode` resets), and
+//! the steps and resets they imply are applied. An output the replay produces for a
+//! state that the bag lacks is a difference too (except in the last state of a bag cut
+//! short, or repaired by `bag reindex` after it was). The same build gives zero
+//! difference; otherwise the report names the largest difference per topic and the
+//! first differing field, and `developable_sim replay` exits with code 1.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -15,14 +17,14 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use super::read::{mcap_files, BagEvent, BagMessage, McapStream, REINDEX_LIBRARY_SUFFIX};
-use super::recorder::{SessionInfo, SESSION_RECORD};
+use super::recorder::{RecordedOutput, SessionInfo, SESSION_RECORD};
 use super::RecordError;
-use crate::ros::cdr;
-use crate::ros::input::InputPolicy;
-use crate::ros::introspect::{compare, to_value, Value};
-use crate::ros::msgs::{Clock, MarkerArray, PoseStamped, RosMessage, SimStatus, SingularPoints};
-use crate::ros::session::{Frame, FrameContent, Session};
-use crate::sim::StepReport;
+use crate::session::input::InputPolicy;
+use crate::session::outputs::OutputRow;
+use crate::session::{Command, Content, Frame, OutputTable, Scope, Session};
+use crate::wire::cdr;
+use crate::wire::introspect::{compare, Value};
+use crate::wire::msgs::{PoseStamped, SimCommand, SimStatus};
 
 /// Replay settings.
 #[derive(Clone, Debug, Default)]
@@ -73,59 +75,6 @@ pub struct ReplayReport {
     pub truncated: Option<String>,
     /// Wall time of the re-simulation, s.
     pub wall_s: f64,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-enum Output {
-    Clock,
-    Markers(usize),
-    Singular(usize),
-    Status(usize),
-    Colliders,
-}
-
-impl Output {
-    fn type_name(self) -> &'static str {
-        match self {
-            Output::Clock => Clock::TYPE,
-            Output::Markers(_) | Output::Colliders => MarkerArray::TYPE,
-            Output::Singular(_) => SingularPoints::TYPE,
-            Output::Status(_) => SimStatus::TYPE,
-        }
-    }
-
-    /// Whether `frame` holds this output.
-    fn in_frame(self, frame: &Frame) -> bool {
-        match self {
-            Output::Clock => true,
-            Output::Markers(o) => frame.objects[o].markers.is_some(),
-            Output::Singular(o) => frame.objects[o].singular_points.is_some(),
-            Output::Status(o) => frame.objects[o].status.is_some(),
-            Output::Colliders => frame.colliders.is_some(),
-        }
-    }
-}
-
-/// Count, per topic, the outputs `frame` (the state `step`) holds that the bag did not
-/// record for that state (`seen`).
-fn count_missing(
-    frame: &Frame,
-    step: u64,
-    routes: &BTreeMap<String, Route>,
-    seen: &std::collections::BTreeSet<Output>,
-    per_topic: &mut BTreeMap<String, TopicReport>,
-) {
-    for (topic, route) in routes {
-        let Route::Output(out) = *route else { continue };
-        if seen.contains(&out) || !out.in_frame(frame) {
-            continue;
-        }
-        let entry = topic_entry(per_topic, topic, out.type_name());
-        entry.missing += 1;
-        if entry.first_difference.is_empty() {
-            entry.first_difference = format!("step {step}: produced by the replay, not in the bag");
-        }
-    }
 }
 
 fn topic_entry<'a>(
@@ -201,70 +150,78 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
         .iter()
         .map(|t| t.max_abs_difference)
         .fold(0.0, f64::max);
-    report.identical = report
-        .topics
-        .iter()
-        .all(|t| t.differing == 0 && t.missing == 0 && t.structural.is_none());
+    // identical means reproduced: a bag with no readable output proves nothing
+    let compared: u64 = report.topics.iter().map(|t| t.compared).sum();
+    report.identical = compared > 0
+        && report
+            .topics
+            .iter()
+            .all(|t| t.differing == 0 && t.missing == 0 && t.structural.is_none());
     report.wall_s = start.elapsed().as_secs_f64();
     Ok(report)
+}
+
+/// What a recorded topic is to the replay.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Route {
+    /// A handle's poses (commands).
+    Input(usize),
+    /// A handle's failed TF lookups (commands).
+    TfFailure(usize),
+    /// The other commands (`~/commands`).
+    Commands,
+    /// A row of the outputs table.
+    Output(usize),
 }
 
 /// The re-simulated session and its comparison with the bag so far.
 struct Replayed {
     session: Session,
-    /// What each recorded topic is to the replay.
+    /// The recording's format (see `recorder::FORMAT`).
+    format: u32,
     routes: BTreeMap<String, Route>,
-    /// The outputs the bag recorded (the replay's frames make only these).
-    content: FrameContent,
-    /// The recorded state being compared: (episode, step).
-    current: Option<(u32, u64)>,
-    /// The replay's outputs for it.
-    frame: Option<Frame>,
-    /// The last step's report and its duration, s.
-    last_step: Option<(StepReport, f64)>,
-    /// Inputs were fed since `frame` was made.
+    /// The replay's messages for the recorded state being compared, and its step.
+    frame: Frame,
+    frame_step: u64,
+    /// Format 1: (episode, step) of that state, from the statuses.
+    current: (u32, u64),
+    /// Format 1: inputs were applied since `frame` was made.
     inputs_since_frame: bool,
     per_topic: BTreeMap<String, TopicReport>,
-    /// The outputs recorded for the current state.
-    seen: std::collections::BTreeSet<Output>,
+    /// The rows the bag recorded for the current state.
+    seen: std::collections::BTreeSet<usize>,
 }
 
 impl Replayed {
-    /// The session the bag's SESSION_RECORD `values` describe (see [`start_session`]).
+    /// The session the bag's SESSION_RECORD `values` describe, at its initial state.
     fn start(
         (dir, file): (&Path, &Path),
         values: &BTreeMap<String, String>,
         options: &ReplayOptions,
         report: &mut ReplayReport,
     ) -> Result<Self, RecordError> {
-        let mut routes = BTreeMap::new();
-        let mut content = FrameContent {
-            markers: false,
-            singular_points: false,
-            status: true,
-        };
-        let (session, _info) = start_session(
-            (dir, file),
-            values,
-            options,
-            report,
-            (&mut routes, &mut content),
-        )?;
+        let (info, format) = SessionInfo::from_record(values)
+            .map_err(|m| bag_error(dir, format!("{}: {m}", file.display())))?;
+        let (session, routes) = start_session(&info, options, report)
+            .map_err(|m| bag_error(dir, format!("{}: {m}", file.display())))?;
+        let frame = session
+            .frame(Content::All)
+            .map_err(|e| bag_error(dir, e.to_string()))?;
         Ok(Replayed {
             session,
+            format,
             routes,
-            content,
-            current: None,
-            frame: None,
-            last_step: None,
+            frame,
+            frame_step: 0,
+            current: (0, 0),
             inputs_since_frame: false,
             per_topic: BTreeMap::new(),
             seen: std::collections::BTreeSet::new(),
         })
     }
 
-    /// Feed a recorded input to the session, or compare a recorded output; messages on
-    /// other topics are skipped.
+    /// Apply a recorded command, or compare a recorded output; messages on other topics
+    /// are skipped.
     fn message(
         &mut self,
         dir: &Path,
@@ -274,114 +231,175 @@ impl Replayed {
         let Some(route) = self.routes.get(&m.topic).copied() else {
             return Ok(());
         };
-        match route {
-            Route::Input(h) => {
-                let pose: PoseStamped = decode(dir, m)?;
-                // the node judged the stamp against the arrival time it recorded as the
-                // message's log time
-                let _ = self.session.offer(h, &pose, m.log_time);
-                report.inputs += 1;
-                self.inputs_since_frame = true;
+        let command = match route {
+            Route::Input(handle) => Command::Pose {
+                handle,
+                pose: decode(dir, m)?,
+                // the node judged the stamp against the arrival time it recorded as
+                // the message's log time
+                arrival_ns: m.log_time,
+                publish_ns: None,
+            },
+            Route::TfFailure(handle) => Command::TfLookupFailed {
+                handle,
+                what: decode::<PoseStamped>(dir, m)?,
+                arrival_ns: m.log_time,
+            },
+            Route::Commands => {
+                let msg: SimCommand = decode(dir, m)?;
+                Command::from_msg(&msg).map_err(|e| bag_error(dir, format!("{}: {e}", m.topic)))?
             }
-            Route::TfFailure(h) => {
-                // the node looked the handle's frame up and found no transform
-                let _: PoseStamped = decode(dir, m)?;
-                self.session.reject_tf(h);
-                report.inputs += 1;
-                self.inputs_since_frame = true;
-            }
-            Route::Output(out) => self.output(dir, m, out, report)?,
+            Route::Output(row) => return self.output(dir, m, row, report),
+        };
+        if matches!(route, Route::Input(_) | Route::TfFailure(_)) {
+            report.inputs += 1;
+            self.inputs_since_frame = true;
+        }
+        self.apply(dir, &command, report)
+    }
+
+    /// Apply `command` as the node did; a new state (or the statuses of a pause
+    /// toggled) becomes the frame the following outputs are compared with.
+    fn apply(
+        &mut self,
+        dir: &Path,
+        command: &Command,
+        report: &mut ReplayReport,
+    ) -> Result<(), RecordError> {
+        let applied = self.session.apply(command);
+        match command {
+            Command::Step => report.steps += 1,
+            Command::Reset => report.resets += 1,
+            _ => {}
+        }
+        if let Some(frame) = self.session.frame_after(&applied) {
+            let frame = frame.map_err(|e| bag_error(dir, e.to_string()))?;
+            self.next_frame(frame);
         }
         Ok(())
     }
 
-    /// Compare the recorded output `m` with the replay's for the current state.
+    /// `frame` is now the state compared: the outputs the current one produced and the
+    /// bag lacks are counted first.
+    fn next_frame(&mut self, frame: Frame) {
+        self.count_missing();
+        self.seen.clear();
+        self.frame = frame;
+        self.frame_step = self.session.scene.world.steps_taken();
+        self.inputs_since_frame = false;
+    }
+
+    /// Count, per topic, the outputs the current frame holds that the bag did not record
+    /// for its state.
+    fn count_missing(&mut self) {
+        let step = self.frame_step;
+        for (k, row) in self.session.table.rows.iter().enumerate() {
+            if self.seen.contains(&k) || self.frame.messages.get(k).is_none_or(|m| m.is_none()) {
+                continue;
+            }
+            let entry = topic_entry(&mut self.per_topic, &row.topic, row.type_name());
+            entry.missing += 1;
+            if entry.first_difference.is_empty() {
+                entry.first_difference =
+                    format!("step {step}: produced by the replay, not in the bag");
+            }
+        }
+    }
+
+    /// Compare the recorded output `m` (row `row`) with the replay's for the current
+    /// state; in a format-1 bag a status first brings the session to its state.
     fn output(
         &mut self,
         dir: &Path,
         m: &BagMessage,
-        out: Output,
+        row: usize,
         report: &mut ReplayReport,
     ) -> Result<(), RecordError> {
-        let recorded = match out {
-            Output::Clock => to_value(&decode::<Clock>(dir, m)?),
-            Output::Markers(_) | Output::Colliders => to_value(&decode::<MarkerArray>(dir, m)?),
-            Output::Singular(_) => to_value(&decode::<SingularPoints>(dir, m)?),
-            Output::Status(_) => {
-                let st: SimStatus = decode(dir, m)?;
-                self.status(dir, &m.topic, &st, report)?;
-                to_value(&st)
+        let kind = self.session.table.rows[row].kind;
+        if self.format == 1 && kind.name == "status" {
+            let st: SimStatus = decode(dir, m)?;
+            self.follow_ledger(dir, &m.topic, &st, report)?;
+        }
+        let step = self.frame_step;
+        let computed = self.frame.messages.get(row).cloned().flatten();
+        let entry = topic_entry(&mut self.per_topic, &m.topic, &m.type_name);
+        self.seen.insert(row);
+        entry.compared += 1;
+        let Some(computed) = computed else {
+            entry.differing += 1;
+            entry.structural.get_or_insert_with(|| {
+                format!("step {step}: recorded but not produced by the replay")
+            });
+            if entry.first_difference.is_empty() {
+                entry.first_difference =
+                    format!("step {step}: recorded, not produced by the replay");
+            }
+            return Ok(());
+        };
+        if computed[..] == m.data[..] {
+            return Ok(());
+        }
+        let value = |bytes: &[u8]| kind.producer.value(bytes).map_err(|e| bag_error(dir, e));
+        let (mut r, mut c) = (value(&m.data)?, value(&computed)?);
+        if kind.name == "status" {
+            let skipped = if self.format == 1 {
+                WALL_CLOCK_STATUS_FIELDS_FORMAT_1
+            } else {
+                WALL_CLOCK_STATUS_FIELDS
+            };
+            for f in skipped {
+                r.zero_field(f);
+                c.zero_field(f);
             }
         }
-        .map_err(|e| bag_error(dir, e.to_string()))?;
-        let Some(f) = &self.frame else {
-            return Err(bag_error(
-                dir,
-                format!("{}: output before the first status", m.topic),
-            ));
-        };
-        let computed = match out {
-            Output::Clock => Some(to_value(&f.clock)),
-            Output::Markers(o) => f.objects[o].markers.as_ref().map(to_value),
-            Output::Singular(o) => f.objects[o].singular_points.as_ref().map(to_value),
-            Output::Status(o) => f.objects[o].status.as_ref().map(to_value),
-            Output::Colliders => f.colliders.as_ref().map(to_value),
-        }
-        .transpose()
-        .map_err(|e| bag_error(dir, e.to_string()))?;
-        self.seen.insert(out);
-        let entry = topic_entry(&mut self.per_topic, &m.topic, &m.type_name);
-        let step = self.current.map(|c| c.1).unwrap_or(0);
-        tally(entry, step, out, recorded, computed);
+        tally(entry, step, &r, &c);
         Ok(())
     }
 
-    /// A status names the recorded state it belongs to: a new state closes the current
-    /// one (counting the outputs the bag lacks) and brings the session to it; the same
-    /// state published again (pause toggled) carries the inputs taken since its frame.
-    fn status(
+    /// Format 1: a status names the recorded state it belongs to; a new state brings
+    /// the session to it (the step or reset it implies); the same state published
+    /// again (pause toggled) carries the inputs taken since its frame.
+    fn follow_ledger(
         &mut self,
         dir: &Path,
         topic: &str,
         st: &SimStatus,
         report: &mut ReplayReport,
     ) -> Result<(), RecordError> {
-        let key = (st.episode, st.step);
-        if self.current != Some(key) {
-            if let (Some(f), Some((_, step))) = (&self.frame, self.current) {
-                count_missing(f, step, &self.routes, &self.seen, &mut self.per_topic);
+        let (episode, step) = (st.episode, st.step);
+        let (cur_episode, cur_step) = self.current;
+        if (episode, step) == self.current {
+            if self.inputs_since_frame {
+                let frame = self.session.frame(Content::Statuses);
+                self.frame = frame.map_err(|e| bag_error(dir, e.to_string()))?;
+                self.inputs_since_frame = false;
             }
-            self.seen.clear();
-            advance(
-                &mut self.session,
-                self.current,
-                key,
-                self.content,
-                &mut self.frame,
-                &mut self.last_step,
-                report,
-            )
-            .map_err(|e| bag_error(dir, format!("{topic} at {}: {e}", key.1)))?;
-            self.current = Some(key);
-            self.inputs_since_frame = false;
-        } else if self.inputs_since_frame {
-            // the same state published again (pause toggled):
-            // its status carries the inputs taken since
-            self.frame = Some(self.session.frame(
-                self.last_step.as_ref().map(|(r, _)| r),
-                self.last_step.as_ref().map_or(0.0, |(_, d)| *d),
-                self.content,
-            ));
-            self.inputs_since_frame = false;
+            return Ok(());
         }
+        if step == 0 && episode > cur_episode {
+            // the reset counts one episode: land on the recorded one
+            self.session.counters.episode = episode - 1;
+            self.apply(dir, &Command::Reset, report)?;
+        } else if episode == cur_episode && step == cur_step + 1 {
+            self.apply(dir, &Command::Step, report)?;
+        } else {
+            return Err(bag_error(
+                dir,
+                format!(
+                    "{topic}: status (episode {episode}, step {step}) follows (episode \
+                     {cur_episode}, step {cur_step}): messages are missing from the bag"
+                ),
+            ));
+        }
+        self.current = (episode, step);
         Ok(())
     }
 
     /// The comparison per topic, the last state's missing outputs counted unless the bag
     /// was `truncated` in it.
     fn finish(mut self, truncated: bool) -> Vec<TopicReport> {
-        if let (Some(f), Some((_, step)), false) = (&self.frame, self.current, truncated) {
-            count_missing(f, step, &self.routes, &self.seen, &mut self.per_topic);
+        if !truncated {
+            self.count_missing();
         }
         self.per_topic.into_values().collect()
     }
@@ -400,184 +418,147 @@ fn bag_error(dir: &Path, message: String) -> RecordError {
     }
 }
 
-/// The session a bag's SESSION_RECORD describes: its scene rebuilt (or the one given in
-/// `options`), the topics routed to inputs and outputs, the outputs it recorded.
+/// The rows a format-1 bag recorded (it named its topics, not its outputs): statuses,
+/// the clock, markers, singular points, colliders.
+fn format_1_rows(info: &SessionInfo) -> Vec<RecordedOutput> {
+    let out = |kind: &str, scope: &str, index: usize, topic: &String| RecordedOutput {
+        kind: kind.into(),
+        scope: scope.into(),
+        index,
+        topic: topic.clone(),
+    };
+    let objects = info.object_topics.iter().enumerate();
+    let mut rows: Vec<RecordedOutput> = objects
+        .clone()
+        .map(|(o, (_, _, st))| out("status", "object", o, st))
+        .collect();
+    rows.extend(
+        info.clock_topic
+            .iter()
+            .map(|t| out("clock", "global", 0, t)),
+    );
+    for (o, (m, sp, _)) in objects {
+        rows.extend(m.iter().map(|t| out("markers", "object", o, t)));
+        rows.extend(sp.iter().map(|t| out("singular_points", "object", o, t)));
+    }
+    rows.extend(
+        info.colliders_topic
+            .iter()
+            .map(|t| out("colliders", "global", 0, t)),
+    );
+    rows
+}
+
+/// The session a bag's description rebuilds (its scene, or the one given in
+/// `options`), with the recorded outputs as its table, and where each recorded topic
+/// goes.
 fn start_session(
-    (dir, file): (&Path, &Path),
-    values: &BTreeMap<String, String>,
+    info: &SessionInfo,
     options: &ReplayOptions,
     report: &mut ReplayReport,
-    (routes, content): (&mut BTreeMap<String, Route>, &mut FrameContent),
-) -> Result<(Session, SessionInfo), RecordError> {
-    let i = SessionInfo::from_record(values)
-        .map_err(|m| bag_error(dir, format!("{}: {m}", file.display())))?;
+) -> Result<(Session, BTreeMap<String, Route>), String> {
     let scene = match &options.scene {
         Some(p) => crate::scene::load(p, &[]),
-        None => crate::scene::load_str(&i.scene_yaml, Path::new(&i.scene_file), &[]),
+        None => crate::scene::load_str(&info.scene_yaml, Path::new(&info.scene_file), &[]),
     }
-    .map_err(|e| bag_error(dir, format!("cannot rebuild the scene: {e}")))?;
+    .map_err(|e| format!("cannot rebuild the scene: {e}"))?;
     report.scene = scene.name.clone();
-    if scene.world.handles().len() != i.handle_topics.len()
-        || scene.world.object_names().len() != i.object_topics.len()
-    {
-        return Err(bag_error(
-            dir,
-            format!(
-                "the scene has {} handles and {} objects, the bag {} and {}",
-                scene.world.handles().len(),
-                scene.world.object_names().len(),
-                i.handle_topics.len(),
-                i.object_topics.len()
-            ),
-        ));
-    }
-    let policy = InputPolicy {
-        frame_id: i.frame_id.clone(),
-        accept_empty_frame_id: i.accept_empty_frame_id,
-        max_stamp_lead: i.max_stamp_lead,
-    };
-    let status_topics = if i.status_handle_topics.len() == i.handle_topics.len() {
-        i.status_handle_topics.clone()
+    let recorded = if info.outputs.is_empty() {
+        format_1_rows(info)
     } else {
-        i.handle_topics.clone()
+        info.outputs.clone()
     };
-    let mut s = Session::new(scene, policy, status_topics);
-    s.style.line_width = i.line_width;
-    s.style.sphere_diameter = i.sphere_diameter;
-    for (h, t) in i.handle_topics.iter().enumerate() {
+    let rows = recorded
+        .iter()
+        .map(RecordedOutput::row)
+        .collect::<Result<Vec<_>, _>>()?;
+    check_scopes(&scene, info, &rows)?;
+    let policy = InputPolicy {
+        frame_id: info.frame_id.clone(),
+        accept_empty_frame_id: info.accept_empty_frame_id,
+        max_stamp_lead: info.max_stamp_lead,
+    };
+    let status_topics = if info.status_handle_topics.len() == info.handle_topics.len() {
+        info.status_handle_topics.clone()
+    } else {
+        info.handle_topics.clone()
+    };
+    let mut routes = BTreeMap::new();
+    for (h, t) in info.handle_topics.iter().enumerate() {
         routes.insert(t.clone(), Route::Input(h));
     }
-    for (h, t) in i.tf_failure_topics.iter().enumerate() {
+    for (h, t) in info.tf_failure_topics.iter().enumerate() {
         routes.insert(t.clone(), Route::TfFailure(h));
     }
-    if let Some(c) = &i.clock_topic {
-        routes.insert(c.clone(), Route::Output(Output::Clock));
+    if let Some(t) = &info.commands_topic {
+        routes.insert(t.clone(), Route::Commands);
     }
-    if let Some(c) = &i.colliders_topic {
-        content.markers = true;
-        routes.insert(c.clone(), Route::Output(Output::Colliders));
+    for (k, r) in rows.iter().enumerate() {
+        routes.insert(r.topic.clone(), Route::Output(k));
     }
-    for (o, (m, sp, st)) in i.object_topics.iter().enumerate() {
-        if let Some(m) = m {
-            content.markers = true;
-            routes.insert(m.clone(), Route::Output(Output::Markers(o)));
-        }
-        if let Some(sp) = sp {
-            content.singular_points = true;
-            routes.insert(sp.clone(), Route::Output(Output::Singular(o)));
-        }
-        routes.insert(st.clone(), Route::Output(Output::Status(o)));
-    }
-    Ok((s, i))
+    let mut s = Session::new(scene, policy, status_topics, OutputTable { rows });
+    s.style.line_width = info.line_width;
+    s.style.sphere_diameter = info.sphere_diameter;
+    s.paused = info.start_paused;
+    Ok((s, routes))
 }
 
-/// Count one recorded output against what the replay computed for it.
-fn tally(
-    entry: &mut TopicReport,
-    step: u64,
-    out: Output,
-    recorded: Value,
-    computed: Option<Value>,
-) {
-    entry.compared += 1;
-    match computed {
-        None => {
-            entry.differing += 1;
-            entry.structural.get_or_insert_with(|| {
-                format!("step {step}: recorded but not produced by the replay")
-            });
-            if entry.first_difference.is_empty() {
-                entry.first_difference =
-                    format!("step {step}: recorded, not produced by the replay");
-            }
+/// The rebuilt scene has the handles and objects the bag's topics refer to.
+fn check_scopes(
+    scene: &crate::scene::Scene,
+    info: &SessionInfo,
+    rows: &[OutputRow],
+) -> Result<(), String> {
+    let (handles, objects) = (
+        scene.world.handles().len(),
+        scene.world.object_names().len(),
+    );
+    let out_of_range = rows.iter().any(|r| match r.scope {
+        Scope::Global => false,
+        Scope::Object(o) => o >= objects,
+        Scope::Handle(h) => h >= handles,
+    });
+    let recorded_objects = rows.iter().filter(|r| r.kind.name == "status").count();
+    if handles != info.handle_topics.len() || out_of_range || recorded_objects != objects {
+        return Err(format!(
+            "the scene has {handles} handles and {objects} objects, the bag {} and {}",
+            info.handle_topics.len(),
+            recorded_objects
+        ));
+    }
+    Ok(())
+}
+
+/// Count one recorded output `r` against what the replay computed for it, `c`.
+fn tally(entry: &mut TopicReport, step: u64, r: &Value, c: &Value) {
+    let d = compare(r, c);
+    if !d.is_zero() {
+        entry.differing += 1;
+        if entry.first_difference.is_empty() {
+            let at = d.structural.as_deref().unwrap_or(&d.first_path);
+            entry.first_difference = format!("step {step}: {at}");
         }
-        Some(mut c) => {
-            let mut r = recorded;
-            if matches!(out, Output::Status(_)) {
-                for f in WALL_CLOCK_STATUS_FIELDS {
-                    r.zero_field(f);
-                    c.zero_field(f);
-                }
-            }
-            let d = compare(&r, &c);
-            if !d.is_zero() {
-                entry.differing += 1;
-                if entry.first_difference.is_empty() {
-                    let at = d.structural.as_deref().unwrap_or(&d.first_path);
-                    entry.first_difference = format!("step {step}: {at}");
-                }
-            }
-            if d.max_abs > entry.max_abs_difference {
-                entry.max_abs_difference = d.max_abs;
-                entry.max_at = format!("step {step}: {}", d.max_path);
-            }
-            if let Some(sd) = d.structural {
-                entry
-                    .structural
-                    .get_or_insert_with(|| format!("step {step}: {sd}"));
-            }
-        }
+    }
+    if d.max_abs > entry.max_abs_difference {
+        entry.max_abs_difference = d.max_abs;
+        entry.max_at = format!("step {step}: {}", d.max_path);
+    }
+    if let Some(sd) = d.structural {
+        entry
+            .structural
+            .get_or_insert_with(|| format!("step {step}: {sd}"));
     }
 }
 
-/// Status fields that depend on the wall clock or on the node's run state, not on the
+/// Status fields that depend on the wall clock or on the node's transport, not on the
 /// simulation: not compared.
-const WALL_CLOCK_STATUS_FIELDS: &[&str] = &[
+const WALL_CLOCK_STATUS_FIELDS: &[&str] =
+    &["step_duration", "overrun_ticks", "dropped_publications"];
+
+/// Format 1 also: `paused` (its pause commands were not recorded).
+const WALL_CLOCK_STATUS_FIELDS_FORMAT_1: &[&str] = &[
     "step_duration",
     "overrun_ticks",
     "dropped_publications",
     "paused",
 ];
-
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Route {
-    Input(usize),
-    /// A failed TF lookup of this handle.
-    TfFailure(usize),
-    Output(Output),
-}
-
-/// Bring the session to the recorded state `key` = (episode, step).
-fn advance(
-    s: &mut Session,
-    current: Option<(u32, u64)>,
-    key: (u32, u64),
-    content: FrameContent,
-    frame: &mut Option<Frame>,
-    last_step: &mut Option<(StepReport, f64)>,
-    report: &mut ReplayReport,
-) -> Result<(), String> {
-    let (episode, step) = key;
-    match current {
-        None if step == 0 => {
-            *frame = Some(s.frame(None, 0.0, content));
-        }
-        None => {
-            return Err(format!(
-                "the recording starts at step {step}, not at the initial state"
-            ))
-        }
-        Some((cur_episode, cur_step)) => {
-            if step == 0 && episode > cur_episode {
-                s.reset();
-                while s.episode < episode {
-                    s.episode += 1;
-                }
-                report.resets += 1;
-                *last_step = None;
-                *frame = Some(s.frame(None, 0.0, content));
-            } else if episode == cur_episode && step == cur_step + 1 {
-                let (r, d) = s.step();
-                report.steps += 1;
-                *frame = Some(s.frame(Some(&r), d, content));
-                *last_step = Some((r, d));
-            } else {
-                return Err(format!(
-                    "status (episode {episode}, step {step}) follows (episode {cur_episode}, step \
-                     {cur_step}): messages are missing from the bag"
-                ));
-            }
-        }
-    }
-    Ok(())
-}

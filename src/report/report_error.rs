@@ -19,8 +19,6 @@ pub enum ReportError {
         source: Box<ReportError>,
     },
     #[error(transparent)]
-    Observer(#[from] crate::runner::ObserverError),
-    #[error(transparent)]
     Baseline(#[from] crate::baseline::BaselineError),
     /// A folder or file could not be read or written.
     #[error("{message}")]

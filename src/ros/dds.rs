@@ -2,12 +2,14 @@
 //! error type, QoS profiles from the recorded-QoS descriptions, topic type names, and
 //! publishers whose writer history is bounded by their QoS depth.
 
+use bytes::Bytes;
+use ros2_client::dds::rustdds::no_key::{DataWriter, SerializerAdapter};
+use ros2_client::dds::rustdds::RepresentationIdentifier;
 use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{Context, MessageTypeName, Name, Node, NodeName, Publisher, QosProfile};
-use serde::Serialize;
+use ros2_client::{Context, MessageTypeName, Name, Node, NodeName, QosProfile};
 
-use super::msgs::RosMessage;
-use crate::record::metadata::Qos;
+use crate::wire::msgs::RosMessage;
+use crate::wire::qos::Qos;
 
 /// A problem starting or running the node.
 #[derive(Debug, thiserror::Error)]
@@ -22,7 +24,7 @@ pub enum NodeError {
     #[error("{0}")]
     Config(String),
     #[error("{0}")]
-    Foxglove(#[from] super::foxglove::FoxgloveStartError),
+    Foxglove(#[from] crate::foxglove::FoxgloveStartError),
 }
 
 pub(crate) fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> NodeError + '_ {
@@ -54,20 +56,53 @@ fn writer_topic(
     )
 }
 
-/// A publisher on `topic` (a resolved ROS name) whose writer keeps its QoS depth and
-/// never blocks (see [`writer_topic`]). `what` names it in errors.
-pub(crate) fn bounded_publisher<M: RosMessage + Serialize>(
+/// A message already encoded as CDR (with its 4-byte encapsulation header), as the
+/// session's frames hold it: DDS, the bags and Foxglove send the same bytes, encoded
+/// once.
+#[derive(Clone, Debug)]
+pub struct RawCdr(pub Bytes);
+
+/// RustDDS's serializer adapter for [`RawCdr`]: the payload is the bytes after the
+/// encapsulation header (RustDDS writes the header from [`Self::output_encoding`]).
+pub struct RawCdrAdapter;
+
+impl SerializerAdapter<RawCdr> for RawCdrAdapter {
+    type Error = std::io::Error;
+
+    fn output_encoding() -> RepresentationIdentifier {
+        RepresentationIdentifier::CDR_LE
+    }
+
+    fn to_bytes(value: &RawCdr) -> Result<Bytes, std::io::Error> {
+        // the session encodes little endian (`wire::cdr::encode`): 00 01 00 00
+        match value.0.get(..4) {
+            Some([0x00, 0x01, _, _]) => Ok(value.0.slice(4..)),
+            _ => Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidData,
+                "not a CDR little-endian payload",
+            )),
+        }
+    }
+}
+
+/// A writer of pre-encoded messages of one type.
+pub type RawPublisher = DataWriter<RawCdr, RawCdrAdapter>;
+
+/// A writer on `topic` (a resolved ROS name) of messages of type `type_name`
+/// (`pkg/msg/Type`) that keeps its QoS depth and never blocks (see [`writer_topic`]).
+/// `what` names it in errors.
+pub(crate) fn raw_publisher(
     node: &mut Node,
     context: &Context,
     node_name: &NodeName,
-    topic: &str,
+    (topic, type_name): (&str, &str),
     q: Qos,
     what: &str,
-) -> Result<Publisher<M>, NodeError> {
+) -> Result<RawPublisher, NodeError> {
     let name = Name::parse(topic).map_err(dds("topic name"))?;
-    let t = writer_topic(context, node_name, &name, topic_type::<M>(), q)
+    let t = writer_topic(context, node_name, &name, message_type_name(type_name), q)
         .map_err(|e| NodeError::Dds(format!("{what} topic: {e:?}")))?;
-    node.create_publisher(&t, Some(qos(q)))
+    node.create_datawriter::<RawCdr, RawCdrAdapter>(&t, Some(qos(q)))
         .map_err(|e| NodeError::Dds(format!("{what} publisher: {e:?}")))
 }
 
@@ -92,12 +127,19 @@ pub(crate) fn qos(q: Qos) -> QosProfile {
 
 /// A publication's outcome without its message (a failed write hands the message
 /// back; only why it failed is kept).
-pub(crate) fn sent<M>(r: ros2_client::WriteResult<(), M>) -> Result<(), String> {
+pub(crate) fn sent<M>(
+    r: ros2_client::dds::rustdds::dds::result::WriteResult<(), M>,
+) -> Result<(), String> {
     r.map_err(|e| e.to_string())
 }
 
 pub(crate) fn topic_type<M: RosMessage>() -> MessageTypeName {
-    let mut parts = M::TYPE.split('/');
+    message_type_name(M::TYPE)
+}
+
+/// `pkg/msg/Type` as ros2-client names it.
+fn message_type_name(type_name: &str) -> MessageTypeName {
+    let mut parts = type_name.split('/');
     let pkg = parts.next().unwrap_or("");
     let ty = parts.nth(1).unwrap_or("");
     MessageTypeName::new(pkg, ty)

@@ -12,25 +12,12 @@ use std::time::Duration;
 use ros2_client::dds::rustdds::mio1::{Interest, Poll, Token};
 use ros2_client::{Name, Node, Subscription};
 
-use super::dds::{dds, qos, topic_type, NodeError};
-use super::msgs::{Clock, PoseStamped, TFMessage, Time};
-use super::tf::{frame_name, LookupError, TfBuffer};
-use crate::record::metadata::Qos;
+use crate::ros::dds::{dds, qos, topic_type, NodeError};
+use crate::ros::tf::{frame_name, LookupError, TfBuffer};
+use crate::wire::msgs::{Clock, PoseStamped, TFMessage, Time};
+use crate::wire::qos::Qos;
 
-/// `/tf` as tf2's listener reads it: reliable, volatile, keep last 100.
-pub const TF_QOS: Qos = Qos {
-    depth: 100,
-    reliable: true,
-    transient_local: false,
-};
-/// `/tf_static`: reliable, transient local (a late joiner gets the whole static tree).
-const TF_STATIC_QOS: Qos = Qos {
-    depth: 100,
-    reliable: true,
-    transient_local: true,
-};
-
-fn subscription<M: super::msgs::RosMessage>(
+fn subscription<M: crate::wire::msgs::RosMessage>(
     node: &mut Node,
     topic: &str,
     q: Qos,
@@ -70,8 +57,8 @@ impl TfIn {
         max_lag: Duration,
     ) -> Result<TfIn, NodeError> {
         Ok(TfIn {
-            tf: subscription(node, tf, TF_QOS, poll, Token(token))?,
-            tf_static: subscription(node, tf_static, TF_STATIC_QOS, poll, Token(token + 1))?,
+            tf: subscription(node, tf, Qos::TF, poll, Token(token))?,
+            tf_static: subscription(node, tf_static, Qos::TF_STATIC, poll, Token(token + 1))?,
             buffer: TfBuffer::default(),
             max_lag,
         })
@@ -123,7 +110,7 @@ impl TfIn {
         );
         let mut out = msg.clone();
         out.header.frame_id = scene.to_string();
-        out.pose = super::convert::pose(&(scene_from_frame * frame_from_gripper));
+        out.pose = crate::wire::convert::pose(&(scene_from_frame * frame_from_gripper));
         Ok(Some(out))
     }
 }
@@ -137,11 +124,11 @@ pub fn tf_pose(
 ) -> Result<PoseStamped, LookupError> {
     let pose = tf.lookup(scene, frame, time_ns)?;
     Ok(PoseStamped {
-        header: super::msgs::Header {
+        header: crate::wire::msgs::Header {
             stamp: Time::from_nanos(time_ns as i64),
             frame_id: scene.to_string(),
         },
-        pose: super::convert::pose(&pose),
+        pose: crate::wire::convert::pose(&pose),
     })
 }
 

@@ -1,27 +1,16 @@
-//! The ROS 2 edge: message structs mirroring `msg/*.msg` and the standard interfaces,
-//! their CDR encoding and schemas, names, parameters, the handle-input filter, the
-//! session (frames of messages per simulation state) and the DDS node itself.
+//! The ROS 2 transport: the DDS node (ros2-client / RustDDS) that joins a domain,
+//! subscribes to handle poses, TF and an external clock, serves the services and the
+//! parameters, and publishes the session's frames; it drives the recorder and the
+//! Foxglove server beside DDS.
 //!
-//! The only module that knows ROS. The simulation core never imports it; conversions
-//! from core types happen here ([`convert`], [`session`]).
+//! Architecture invariant: the only module that knows DDS. Messages, encodings and QoS
+//! come from `wire`; what a state publishes and how inputs are judged from `session`.
 
-pub mod cdr;
-pub mod convert;
 pub mod dds;
-pub mod foxglove;
-pub mod frames;
 pub mod graph;
-pub mod input;
-pub mod introspect;
-pub mod msgs;
-pub mod names;
 pub mod node;
 pub mod node_stats;
-pub mod param_msgs;
 pub mod param_server;
-pub mod params;
 pub mod reply;
-pub mod schema;
 pub mod services;
-pub mod session;
 pub mod tf;

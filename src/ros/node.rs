@@ -16,20 +16,24 @@ use std::time::{Duration, Instant};
 
 use ros2_client::dds::rustdds::mio1::{Events, Waker};
 
-use super::dds::sent;
-pub use super::dds::NodeError;
-use super::foxglove::{Advertised, FoxgloveConfig, FoxgloveOut};
-use super::input::InputPolicy;
-use super::names::NodeNames;
-use super::node_stats::DropLog;
-pub use super::node_stats::NodeStats;
-use super::param_server::ParamTable;
-use super::params::{ParamValue, Params};
-use super::session::{Frame, FrameContent, MarkerStyle, Session};
+use ros2_client::dds::rustdds::Timestamp;
+
+use crate::foxglove::{FoxgloveConfig, FoxgloveOut};
 use crate::record::bag::BagOptions;
-use crate::record::recorder::{recorded_content, SessionRecorder};
+use crate::record::recorder::SessionRecorder;
+pub use crate::ros::dds::NodeError;
+use crate::ros::dds::{sent, RawCdr};
+use crate::ros::node_stats::DropLog;
+pub use crate::ros::node_stats::NodeStats;
+use crate::ros::param_server::ParamTable;
 use crate::scene::Scene;
-use crate::sim::{ReachWatch, StepReport};
+use crate::session::input::InputPolicy;
+use crate::session::names::NodeNames;
+use crate::session::params::{ParamValue, Params};
+use crate::session::{
+    Applied, Command, Content, Frame, MarkerStyle, OutputTable, RunOutputs, Session,
+};
+use crate::sim::ReachWatch;
 
 mod control;
 mod endpoints;
@@ -105,7 +109,6 @@ pub struct SimNode {
     params: ParamTable,
     session: Session,
     recorder: Option<SessionRecorder>,
-    published: FrameContent,
     cfg_duration: Option<f64>,
     pacing: Pacing,
     lockstep: Lockstep,
@@ -113,8 +116,6 @@ pub struct SimNode {
     // state
     /// Says when a handle target goes out of reach and when it is reached again.
     reach: ReachWatch,
-    last_report: Option<StepReport>,
-    last_step_duration: f64,
     /// When each handle's last accepted pose arrived (until markers go out).
     pending_input: Vec<Option<Instant>>,
     stats: NodeStats,
@@ -150,18 +151,12 @@ fn lockstep_needs_a_pose_topic(cfg: &NodeConfig) -> Result<(), NodeError> {
 /// The Foxglove server for `cfg.foxglove`, advertising what the node publishes.
 fn start_foxglove(
     cfg: &NodeConfig,
-    io: &Endpoints,
-    published: FrameContent,
+    outputs: &OutputTable,
 ) -> Result<Option<FoxgloveOut>, NodeError> {
     let Some(f) = &cfg.foxglove else {
         return Ok(None);
     };
-    let what = Advertised {
-        content: published,
-        colliders: io.colliders.is_some(),
-        tf: io.tf_out.is_some(),
-    };
-    let out = FoxgloveOut::start(f, &cfg.names, what)?;
+    let out = FoxgloveOut::start(f, &cfg.names, outputs)?;
     eprintln!(
         "[developable_sim] Foxglove: open ws://{}:{} in Foxglove",
         f.bind,
@@ -210,28 +205,29 @@ impl SimNode {
             .enumerate()
             .filter_map(|(i, f)| f.clone().map(|f| (i, f)))
             .collect();
+        // the outputs the scene and the node's settings ask for; recorded-only rows
+        // (statuses not published) only when recording
+        let run = RunOutputs {
+            own_clock: !cfg.use_sim_time,
+            recording: cfg.record.is_some(),
+        };
+        let table = OutputTable::for_scene(&cfg.scene, &cfg.names, run)
+            .map_err(|e| NodeError::Config(e.to_string()))?;
         let io = Endpoints::open(
             cfg.domain_id,
             &cfg.names,
-            &cfg.scene,
-            cfg.use_sim_time,
-            cfg.tf_max_lag,
+            &table,
+            (cfg.use_sim_time, cfg.tf_max_lag),
             &tf_handles,
         )?;
         let (params, markers_rate) = param_table(&cfg);
-        let outputs = cfg.scene.outputs;
-        let published = FrameContent {
-            markers: outputs.markers,
-            singular_points: outputs.singular_points,
-            status: outputs.status,
-        };
-        let foxglove = start_foxglove(&cfg, &io, published)?;
+        let foxglove = start_foxglove(&cfg, &table)?;
         let names = cfg.names;
         let mut handle_topics = names.handles.clone();
         for (h, _) in &tf_handles {
             handle_topics[*h] = names.tf.clone();
         }
-        let mut session = Session::new(cfg.scene, cfg.policy, handle_topics);
+        let mut session = Session::new(cfg.scene, cfg.policy, handle_topics, table);
         session.style = cfg.style;
         session.paused = cfg.start_paused;
         let recorder = match &cfg.record {
@@ -240,8 +236,6 @@ impl SimNode {
                 options.clone(),
                 &session,
                 &names,
-                published,
-                outputs.clock && !cfg.use_sim_time,
             )?),
             None => None,
         };
@@ -261,15 +255,12 @@ impl SimNode {
             params,
             session,
             recorder,
-            published,
             cfg_duration: cfg.duration,
             pacing: cfg.pacing,
             lockstep: cfg.lockstep,
             pending_input: vec![None; names.handles.len()],
             names,
             reach: ReachWatch::default(),
-            last_report: None,
-            last_step_duration: 0.0,
             stats,
             drop_log: DropLog::default(),
             latency: Latency::new(),
@@ -299,8 +290,7 @@ impl SimNode {
     /// Run until `stop` is set (then woken) or the duration is reached.
     pub fn run(mut self, stop: &AtomicBool) -> Result<NodeStats, NodeError> {
         self.latency.start();
-        let frame = self.session.frame(None, 0.0, self.content());
-        self.emit(&frame, None);
+        self.emit_current(Content::All, None);
         let mut next_tick = Instant::now() + self.period();
         let mut events = Events::with_capacity(64);
         // under use_sim_time the external clock drives the steps
@@ -317,7 +307,7 @@ impl SimNode {
             };
             // held service replies are re-checked every RECHECK
             let timeout = if self.replies_waiting() {
-                timeout.min(super::reply::RECHECK)
+                timeout.min(crate::ros::reply::RECHECK)
             } else {
                 timeout
             };
@@ -346,7 +336,7 @@ impl SimNode {
                 if period > Duration::ZERO && after > next_tick + period {
                     let behind = after.duration_since(next_tick).as_secs_f64();
                     let missed = (behind / period.as_secs_f64()).floor() as u64;
-                    self.session.overrun_ticks += missed;
+                    self.session.counters.overrun_ticks += missed;
                     next_tick += period * missed as u32;
                 }
                 if period == Duration::ZERO {
@@ -359,88 +349,96 @@ impl SimNode {
         Ok(self.finish())
     }
 
-    fn content(&self) -> FrameContent {
-        if self.recorder.is_some() {
-            let r = recorded_content(self.published);
-            FrameContent {
-                markers: r.markers,
-                singular_points: r.singular_points,
-                status: true,
+    /// Record `command`, apply it to the session and publish what it produced: the
+    /// one path of every external action (see `session::command`). `trigger`: when the
+    /// tick started or the input that caused it arrived (latency).
+    fn command(&mut self, command: Command, trigger: Option<Instant>) -> Applied {
+        let stamp = self.session.stamp();
+        self.record(|r| r.record_command(&command, stamp));
+        let applied = self.session.apply(&command);
+        if command == Command::Step {
+            self.after_step();
+        }
+        match self.session.frame_after(&applied) {
+            Some(Ok(frame)) => self.emit(&frame, trigger),
+            Some(Err(e)) => self.encode_failed(&e),
+            None => {}
+        }
+        applied
+    }
+
+    /// Statistics and the reach messages of the step just taken.
+    fn after_step(&mut self) {
+        self.stats.steps += 1;
+        if let Some((report, step_s)) = self.session.last_step() {
+            self.latency.step(*step_s);
+            let world = &self.session.scene.world;
+            for m in self
+                .reach
+                .update(report, world.object_names(), world.handles())
+            {
+                eprintln!("[developable_sim] {m}");
             }
-        } else {
-            self.published
         }
     }
 
     /// One step now; `trigger` is when the tick started or the lock-step input came.
     fn tick(&mut self, trigger: Instant) {
         self.offer_tf_targets();
-        let (report, step_s) = self.session.step();
-        let world = &self.session.scene.world;
-        for m in self
-            .reach
-            .update(&report, world.object_names(), world.handles())
-        {
-            eprintln!("[developable_sim] {m}");
-        }
-        self.latency.step(step_s);
-        self.stats.steps += 1;
-        let frame = self.session.frame(Some(&report), step_s, self.content());
-        self.last_report = Some(report);
-        self.last_step_duration = step_s;
-        self.emit(&frame, Some(trigger));
+        self.command(Command::Step, Some(trigger));
     }
 
-    /// Publish a frame (clock, markers, singular points, status), then record it.
-    fn emit(&mut self, frame: &Frame, trigger: Option<Instant>) {
-        // (topic, why) of every publication that failed
-        let mut failed: Vec<(String, String)> = Vec::new();
-        let mut check = |r: Result<(), String>, topic: &String| {
-            if let Err(e) = r {
-                failed.push((topic.clone(), e));
-            }
-        };
-        let names = &self.names;
-        if let Some(c) = &self.io.clock {
-            check(sent(c.publish(frame.clock)), &names.clock);
+    /// Publish the current state's `content` (start-up).
+    fn emit_current(&mut self, content: Content, trigger: Option<Instant>) {
+        match self.session.frame(content) {
+            Ok(frame) => self.emit(&frame, trigger),
+            Err(e) => self.encode_failed(&e),
         }
+    }
+
+    /// A message of ours that CDR cannot encode is a bug: said, counted as dropped.
+    fn encode_failed(&mut self, e: &crate::wire::cdr::CdrError) {
+        eprintln!("[developable_sim] error: a frame could not be encoded: {e}");
+        self.note_dropped(vec![("(frame)".into(), e.to_string())]);
+    }
+
+    /// Publish a frame (every published row; the markers only when due), send it to
+    /// Foxglove, then record it.
+    fn emit(&mut self, frame: &Frame, trigger: Option<Instant>) {
         let t = self.session.scene.world.time();
         let markers_due = match (self.markers_period, self.last_markers) {
             (Some(period), Some(last)) => t - last >= period - 0.5 * self.session.scene.world.dt(),
             _ => true,
         };
-        if markers_due && frame.objects.iter().any(|o| o.markers.is_some()) {
+        // (topic, why) of every publication that failed
+        let mut failed: Vec<(String, String)> = Vec::new();
+        let rows = &self.session.table.rows;
+        let mut markers_sent = false;
+        for ((row, msg), publisher) in rows.iter().zip(&frame.messages).zip(&self.io.pubs) {
+            let (Some(msg), Some(publisher)) = (msg, publisher) else {
+                continue;
+            };
+            if row.kind.throttled {
+                if !markers_due {
+                    continue;
+                }
+                markers_sent = true;
+            }
+            let written = publisher.write(RawCdr(msg.clone()), Some(Timestamp::now()));
+            if let Err(e) = sent(written) {
+                failed.push((row.topic.clone(), e));
+            }
+        }
+        if markers_sent {
             self.last_markers = Some(t);
         }
-        for ((o, p), n) in frame.objects.iter().zip(&self.io.pubs).zip(&names.objects) {
-            if let (Some(m), Some(publisher), true) = (&o.markers, &p.markers, markers_due) {
-                check(sent(publisher.publish(m.clone())), &n.markers);
-            }
-        }
-        let tf = (self.io.tf_out.is_some())
-            .then(|| super::frames::tf_message(&self.session, frame.stamp));
-        if let (Some(publisher), Some(tf)) = (&self.io.tf_out, &tf) {
-            check(sent(publisher.publish(tf.clone())), &names.tf);
-        }
-        if let (Some(m), Some(publisher)) = (&frame.colliders, &self.io.colliders) {
-            check(sent(publisher.publish(m.clone())), &names.colliders);
-        }
-        let published_at = Instant::now();
         if let Some(t) = trigger {
             let inputs = self.pending_input.iter_mut().filter_map(|p| p.take());
-            self.latency.published(published_at, t, inputs);
-        }
-        for ((o, p), n) in frame.objects.iter().zip(&self.io.pubs).zip(&names.objects) {
-            if let (Some(s), Some(publisher)) = (&o.singular_points, &p.singular_points) {
-                check(sent(publisher.publish(s.clone())), &n.singular_points);
-            }
-            if let (Some(s), Some(publisher)) = (&o.status, &p.status) {
-                check(sent(publisher.publish(s.clone())), &n.status);
-            }
+            self.latency.published(Instant::now(), t, inputs);
         }
         self.note_dropped(failed);
         if let Some(f) = self.foxglove.as_mut() {
-            f.emit(frame, markers_due, tf.as_ref());
+            f.emit(&self.session.table, frame, markers_due);
         }
         self.record(|r| r.record_frame(frame));
     }
@@ -449,8 +447,8 @@ impl SimNode {
     /// frame on, `--stats`) and says the first one per topic and episode on stderr.
     fn note_dropped(&mut self, failed: Vec<(String, String)>) {
         self.stats.dropped_publications += failed.len() as u64;
-        self.session.dropped_publications += failed.len() as u64;
-        let episode = self.session.episode;
+        self.session.counters.dropped_publications += failed.len() as u64;
+        let episode = self.session.counters.episode;
         for (topic, why) in failed {
             if self.drop_log.first(&topic, episode) {
                 eprintln!(
@@ -489,13 +487,13 @@ impl SimNode {
         // replies still held for clients not yet discovered get a short grace
         let grace = Instant::now() + Duration::from_millis(250);
         while self.replies_waiting() && Instant::now() < grace {
-            std::thread::sleep(super::reply::RECHECK);
+            std::thread::sleep(crate::ros::reply::RECHECK);
             self.flush_replies();
         }
         let mut stats = std::mem::take(&mut self.stats);
         stats.sim_time = self.session.scene.world.time();
         self.latency.finish(&mut stats);
-        stats.overrun_ticks = self.session.overrun_ticks;
+        stats.overrun_ticks = self.session.counters.overrun_ticks;
         if let Some(r) = self.recorder.take() {
             stats.recorded = r.counts();
             let dir = r.dir().to_path_buf();

@@ -3,8 +3,10 @@
 //! be set while the node runs (the node applies them), the others are refused with a
 //! reason (they shape what the node built at start-up).
 
-use super::param_msgs::{parameter_type as pt, *};
-use super::params::{set_from_command_line, Declared, ParamType, ParamValue, Params, DECLARED};
+use crate::session::params::{
+    set_from_command_line, Declared, ParamType, ParamValue, Params, DECLARED,
+};
+use crate::wire::param_msgs::{parameter_type as pt, *};
 
 /// Parameters that can change at run time, with the bound their value must keep
 /// (lower bound, whether the bound itself is allowed).

@@ -2,7 +2,7 @@
 //! calls them): `~/reset`, `~/set_paused`, `~/step` (std_srvs) and the parameter
 //! services `~/list_parameters`, `~/get_parameters`, `~/set_parameters`,
 //! `~/describe_parameters`, `~/get_parameter_types` (rcl_interfaces). Every reply is
-//! held until the client's reply reader is matched ([`super::reply`]).
+//! held until the client's reply reader is matched ([`crate::ros::reply`]).
 //!
 //! ros2-client's own parameter services are hard-wired to the Enhanced (Fast DDS)
 //! mapping, which Cyclone clients cannot call; the node turns them off
@@ -17,11 +17,11 @@ use ros2_client::{
     ServiceTypeName,
 };
 
-use super::dds::{dds, NodeError};
-use super::msgs::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
-use super::names::NodeNames;
-use super::param_msgs::*;
-use super::reply::{ClientWriters, Flushed, HeldReplies};
+use crate::ros::dds::{dds, NodeError};
+use crate::ros::reply::{ClientWriters, Flushed, HeldReplies};
+use crate::session::names::NodeNames;
+use crate::wire::msgs::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
+use crate::wire::param_msgs::*;
 
 /// One server and the replies it holds.
 pub struct Service<Req: Message + 'static, Resp: Message + 'static> {

@@ -28,7 +28,7 @@ use transforms::Registry;
 
 use crate::geometry::{Pose, Rotation};
 
-use super::msgs::{Quaternion, TransformStamped, Vector3};
+use crate::wire::msgs::TransformStamped;
 
 /// How long dynamic transforms are kept behind a frame's newest stamp (tf2's default).
 const CACHE_TIME: Duration = Duration::from_secs(10);
@@ -128,7 +128,7 @@ impl TfBuffer {
         if !norm.is_finite() {
             return Err(InsertError::NonFinite);
         }
-        if norm < super::input::MIN_QUATERNION_NORM {
+        if norm < crate::session::input::MIN_QUATERNION_NORM {
             return Err(InsertError::ZeroQuaternion);
         }
         let stamp = if is_static {
@@ -240,24 +240,6 @@ fn to_pose(t: &Transform) -> Pose {
         nalgebra::Translation3::new(v.x, v.y, v.z),
         Rotation::new_normalize(nalgebra::Quaternion::new(q.w, q.x, q.y, q.z)),
     )
-}
-
-/// A pose as a transform message's translation and rotation.
-pub fn to_transform(p: &Pose) -> super::msgs::Transform {
-    let q = p.rotation.quaternion();
-    super::msgs::Transform {
-        translation: Vector3 {
-            x: p.translation.vector.x,
-            y: p.translation.vector.y,
-            z: p.translation.vector.z,
-        },
-        rotation: Quaternion {
-            x: q.i,
-            y: q.j,
-            z: q.k,
-            w: q.w,
-        },
-    }
 }
 
 #[cfg(test)]

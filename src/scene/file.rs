@@ -5,10 +5,11 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::camera_file::{build_cameras, CameraFile};
 use super::check::Check;
 use super::contact::{build_contact, ColliderFile, ContactFile};
 use super::handle_file::{parse_handle, ForceFile, HandleFile};
-use super::paper_file::{build_paper, PaperFile, PaperScene};
+use super::paper_file::{prepare_paper, PaperFile, PaperScene, PreparedPaper};
 use super::ribbon_file::{ribbon_entries, ribbon_params, RibbonFile};
 use super::{Outputs, Scene, SceneError};
 use crate::geometry::{Point2, Pose, Vector3};
@@ -78,6 +79,9 @@ pub struct SceneFile {
     /// What is published / recorded.
     #[serde(default)]
     pub outputs: OutputsFile,
+    /// Simulated RGB-D cameras (see [`CameraFile`]). Default none.
+    #[serde(default)]
+    pub cameras: Vec<CameraFile>,
 }
 
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -182,64 +186,193 @@ impl Default for OutputsFile {
     }
 }
 
+/// A handle as parsed: its spec (initial target still to place) and the initial pose
+/// the file gives, if any.
+type ParsedHandle = (HandleSpec, Option<Pose>);
+
+/// An object section of a scene file.
+enum ObjectEntry<'a> {
+    /// A ribbon (keys under `key`: `ribbon` or `ribbons.<i>`).
+    Ribbon {
+        key: String,
+        file: &'a RibbonFile,
+    },
+    Paper(&'a PaperFile),
+}
+
+/// An object validated together with the handles on it, waiting for the scene's whole
+/// handle list (a ribbon's handle terms, a sheet's held vertices are built from it).
+enum Prepared {
+    Ribbon(RibbonSetup, Vec<RibbonForce>),
+    Paper(PreparedPaper),
+}
+
 impl SceneFile {
-    /// Validate and build the world.
+    /// Validate and build the scene: the world, then the cameras.
     pub fn build(self, file: &Path) -> Result<Scene, SceneError> {
+        let cameras = build_cameras(&Check { file }, &self.cameras)?;
+        let mut scene = self.build_world(file)?;
+        scene.cameras = cameras;
+        Ok(scene)
+    }
+
+    /// Validate and build the world: the objects (each kind validates its section and
+    /// the handles on it, then is built with the scene's handle list), then the contact
+    /// stage if the scene declares one.
+    fn build_world(self, file: &Path) -> Result<Scene, SceneError> {
         let ck = Check { file };
         let (duration, dt, gravity) = self.time_and_frame(&ck)?;
         let solver = self.solver_settings(&ck)?;
-        if self.paper.is_some() {
+        let entries = self.object_entries(&ck)?;
+        let object_names: Vec<String> = entries.iter().map(|(n, _)| n.clone()).collect();
+        let names = ObjectNames {
+            ck: &ck,
+            names: &object_names,
+        };
+        let (mut specs, topics) = self.parse_handles(&ck, &names)?;
+        let mut prepared = Vec::new();
+        for (index, (_, entry)) in entries.iter().enumerate() {
+            prepared.push(match entry {
+                ObjectEntry::Ribbon { key, file } => {
+                    let setup = self.prepare_ribbon(&ck, (key, file), (gravity, solver), &specs)?;
+                    let forces = self.ribbon_forces(&ck, &names, index)?;
+                    place_on_ribbon(&setup, index, &mut specs);
+                    Prepared::Ribbon(setup, forces)
+                }
+                ObjectEntry::Paper(paper) => {
+                    let scene = self.paper_scene(paper);
+                    Prepared::Paper(prepare_paper(scene, &ck, gravity, &mut specs)?)
+                }
+            });
+        }
+        self.check_forces(&names)?;
+        let handles: Vec<HandleSpec> = specs.into_iter().map(|(spec, _)| spec).collect();
+        let mut objects = Vec::new();
+        for (index, (p, (name, entry))) in prepared.into_iter().zip(&entries).enumerate() {
+            let sim: Box<dyn ObjectSim> = match (p, entry) {
+                (Prepared::Ribbon(setup, forces), ObjectEntry::Ribbon { key, file }) => Box::new(
+                    ribbon_sim(&ck, (key, file), setup, &forces, index, &handles)?,
+                ),
+                (Prepared::Paper(paper), _) => Box::new(paper.build(&ck, index, &handles)?),
+                (Prepared::Ribbon(..), ObjectEntry::Paper(_)) => {
+                    unreachable!("prepared in the entries' order")
+                }
+            };
+            objects.push((name.clone(), sim));
+        }
+        let world = World::new(objects, handles, dt);
+        let world = build_contact(&self.colliders, self.contact.as_ref(), &ck, file, world)?;
+        Ok(self.into_scene(file, duration, world, topics))
+    }
+
+    /// The scene's objects in order: its ribbons (`ribbon:` or `ribbons:`) or one
+    /// `paper:` sheet (a scene with both kinds is not supported yet).
+    fn object_entries(&self, ck: &Check) -> Result<Vec<(String, ObjectEntry<'_>)>, SceneError> {
+        if let Some(paper) = &self.paper {
             if self.ribbon.is_some() || !self.ribbons.is_empty() {
                 return Err(ck.fail(
                     "paper",
                     "a scene holds either ribbons (`ribbon:` or `ribbons:`) or one `paper:` sheet, not both",
                 ));
             }
-            let (world, topics) = build_paper(self.paper_scene(), &ck, dt, gravity)?;
-            return Ok(self.into_scene(file, duration, world, topics));
+            return Ok(vec![("paper".into(), ObjectEntry::Paper(paper))]);
         }
-        let (entries, object_names) = ribbon_entries(&ck, &self.ribbon, &self.ribbons)?;
-        let names = ObjectNames {
-            ck: &ck,
-            names: &object_names,
-        };
-        // handles (validated before the ribbon: a driven base names one)
-        let RibbonHandles { specs, topics } = self.ribbon_handles(&ck, &names, &entries)?;
+        let (entries, names) = ribbon_entries(ck, &self.ribbon, &self.ribbons)?;
+        Ok(names
+            .into_iter()
+            .zip(entries)
+            .map(|(name, (key, file))| (name, ObjectEntry::Ribbon { key, file }))
+            .collect())
+    }
 
-        // the ribbons: parameters first (a probe of each places default handle targets)
-        let mut setups = Vec::new();
-        for (rk, ribbon) in &entries {
-            let (params, initial) = ribbon_params(&ck, rk, ribbon, gravity, solver, &specs)?;
-            let imperfection = Imperfection {
-                amplitude: ck.non_negative(
-                    &format!("{rk}.initial_shape.imperfection"),
-                    ribbon.initial_shape.imperfection,
-                )?,
-                seed: self.seed,
-            };
-            setups.push(RibbonSetup {
-                params,
-                initial,
-                imperfection,
-            });
+    /// Every handle's common keys (name, object, axes, orientation, trajectory, topic),
+    /// each on the object it names; returns the specs with their explicit initial poses,
+    /// and the topics (same order).
+    fn parse_handles(
+        &self,
+        ck: &Check,
+        names: &ObjectNames,
+    ) -> Result<(Vec<ParsedHandle>, Vec<String>), SceneError> {
+        let mut handle_names = std::collections::BTreeSet::new();
+        let mut specs = Vec::new();
+        let mut topics = Vec::new();
+        for (i, h) in self.handles.iter().enumerate() {
+            let key = format!("handles.{i}");
+            let object = names.index(&format!("{key}.object"), &h.object)?;
+            let (spec, initial, topic) = parse_handle(ck, &key, h, object, &mut handle_names)?;
+            specs.push((spec, initial));
+            topics.push(topic);
         }
+        Ok((specs, topics))
+    }
+
+    /// A ribbon's parameters and initial shape, checked with the handles on it (their
+    /// grasp points lie on its strip; only paper handles release).
+    fn prepare_ribbon(
+        &self,
+        ck: &Check,
+        (rk, ribbon): (&str, &RibbonFile),
+        (gravity, solver): (Vector3, SolverSettings),
+        specs: &[ParsedHandle],
+    ) -> Result<RibbonSetup, SceneError> {
+        let index = self.ribbon_index(rk);
+        for (i, (spec, _)) in specs.iter().enumerate() {
+            if spec.object != index {
+                continue;
+            }
+            let key = format!("handles.{i}");
+            let point = spec.material_point;
+            if point.x < 0.0
+                || point.x > ribbon.length
+                || point.y.abs() > 0.5 * ribbon.width + 1e-12
+            {
+                return Err(ck.fail(
+                    &format!("{key}.point"),
+                    format!(
+                        "[{}, {}] is outside the ribbon [0, {}] x [-{}, {}] (m)",
+                        point.x,
+                        point.y,
+                        ribbon.length,
+                        ribbon.width / 2.0,
+                        ribbon.width / 2.0
+                    ),
+                ));
+            }
+            if self.handles[i].release_at.is_some() {
+                return Err(ck.fail(
+                    &format!("{key}.release_at"),
+                    "only paper objects support releasing a handle",
+                ));
+            }
+        }
+        let (params, initial) = ribbon_params(ck, rk, ribbon, gravity, solver, specs)?;
+        let imperfection = Imperfection {
+            amplitude: ck.non_negative(
+                &format!("{rk}.initial_shape.imperfection"),
+                ribbon.initial_shape.imperfection,
+            )?,
+            seed: self.seed,
+        };
+        Ok(RibbonSetup {
+            params,
+            initial,
+            imperfection,
+        })
+    }
+
+    /// The index of the ribbon whose keys are under `rk` (`ribbon` or `ribbons.<i>`).
+    fn ribbon_index(&self, rk: &str) -> usize {
+        rk.strip_prefix("ribbons.")
+            .and_then(|i| i.parse().ok())
+            .unwrap_or(0)
+    }
+
+    /// Every force names an object of the scene.
+    fn check_forces(&self, names: &ObjectNames) -> Result<(), SceneError> {
         for (i, f) in self.forces.iter().enumerate() {
-            let key = format!("forces.{i}");
-            names.index(&format!("{key}.object"), &f.object)?;
+            names.index(&format!("forces.{i}.object"), &f.object)?;
         }
-        let handles = default_handle_targets(specs, &setups);
-        let mut objects = Vec::new();
-        for (index, ((rk, ribbon), setup)) in entries.iter().zip(setups).enumerate() {
-            let forces = self.ribbon_forces(&ck, &names, index)?;
-            let sim = ribbon_sim(&ck, (rk, ribbon), setup, &forces, index, &handles)?;
-            objects.push((
-                object_names[index].clone(),
-                Box::new(sim) as Box<dyn ObjectSim>,
-            ));
-        }
-        let world = World::new(objects, handles, dt);
-        let world = build_contact(&self.colliders, self.contact.as_ref(), &ck, file, world)?;
-        Ok(self.into_scene(file, duration, world, topics))
+        Ok(())
     }
 
     /// The duration and the time step h (s, h <= duration), gravity (m/s^2), and the
@@ -261,52 +394,6 @@ impl SceneFile {
             ck.positive("outputs.markers_rate", rate)?;
         }
         Ok((duration, dt, gravity))
-    }
-
-    /// The handles of a ribbon scene, each on a ribbon's strip, with their topics; the
-    /// targets without an initial pose are placed later
-    /// ([`default_handle_targets`]).
-    fn ribbon_handles(
-        &self,
-        ck: &Check,
-        names: &ObjectNames,
-        entries: &[(String, &RibbonFile)],
-    ) -> Result<RibbonHandles, SceneError> {
-        let mut handle_names = std::collections::BTreeSet::new();
-        let mut specs = Vec::new();
-        let mut topics = Vec::new();
-        for (i, h) in self.handles.iter().enumerate() {
-            let key = format!("handles.{i}");
-            let object = names.index(&format!("{key}.object"), &h.object)?;
-            let (spec, initial, topic) = parse_handle(ck, &key, h, object, &mut handle_names)?;
-            let ribbon = entries[object].1;
-            let point = spec.material_point;
-            if point.x < 0.0
-                || point.x > ribbon.length
-                || point.y.abs() > 0.5 * ribbon.width + 1e-12
-            {
-                return Err(ck.fail(
-                    &format!("{key}.point"),
-                    format!(
-                        "[{}, {}] is outside the ribbon [0, {}] x [-{}, {}] (m)",
-                        point.x,
-                        point.y,
-                        ribbon.length,
-                        ribbon.width / 2.0,
-                        ribbon.width / 2.0
-                    ),
-                ));
-            }
-            if h.release_at.is_some() {
-                return Err(ck.fail(
-                    &format!("{key}.release_at"),
-                    "only paper objects support releasing a handle",
-                ));
-            }
-            topics.push(topic);
-            specs.push((spec, initial));
-        }
-        Ok(RibbonHandles { specs, topics })
     }
 
     /// The point forces on ribbon `index`: material point (m) and force (N).
@@ -372,10 +459,10 @@ impl SceneFile {
 }
 
 impl SceneFile {
-    /// What a paper scene reads besides its `paper:` section.
-    fn paper_scene(&self) -> PaperScene<'_> {
+    /// What a paper object reads besides its `paper:` section.
+    fn paper_scene<'a>(&'a self, paper: &'a PaperFile) -> PaperScene<'a> {
         PaperScene {
-            paper: self.paper.as_ref(),
+            paper,
             handles: &self.handles,
             has_colliders: !self.colliders.is_empty(),
             has_contact: self.contact.is_some(),
@@ -413,6 +500,7 @@ impl SceneFile {
                 markers_rate: self.outputs.markers_rate,
             },
             handle_tf_frames: self.handles.iter().map(|h| h.tf_frame.clone()).collect(),
+            cameras: Vec::new(),
             source: self,
         }
     }
@@ -457,23 +545,27 @@ struct RibbonSetup {
     imperfection: Imperfection,
 }
 
-/// The handles with their initial targets: the pose given, or the grasp point where the
-/// initial shape puts it (a probe of each ribbon, built without handles).
-fn default_handle_targets(
-    specs: Vec<(HandleSpec, Option<Pose>)>,
-    setups: &[RibbonSetup],
-) -> Vec<HandleSpec> {
-    let probes: Vec<RibbonSim> = setups
-        .iter()
-        .map(|s| RibbonSim::new(s.params.clone(), &s.initial, s.imperfection, &[], 0, &[]))
-        .collect();
-    let mut handles = Vec::new();
-    for (mut spec, initial_pose) in specs {
-        spec.trajectory.initial =
-            initial_pose.unwrap_or_else(|| probes[spec.object].material_pose(&spec.material_point));
-        handles.push(spec);
+/// The handles on ribbon `index` without an initial pose get the grasp point where the
+/// initial shape puts it (a probe of the ribbon, built without handles).
+fn place_on_ribbon(setup: &RibbonSetup, index: usize, specs: &mut [ParsedHandle]) {
+    let needs_probe = specs.iter().any(|(s, p)| s.object == index && p.is_none());
+    let probe = needs_probe.then(|| {
+        RibbonSim::new(
+            setup.params.clone(),
+            &setup.initial,
+            setup.imperfection,
+            &[],
+            0,
+            &[],
+        )
+    });
+    for (spec, initial) in specs.iter_mut().filter(|(s, _)| s.object == index) {
+        spec.trajectory.initial = match (initial, &probe) {
+            (Some(pose), _) => *pose,
+            (None, Some(probe)) => probe.material_pose(&spec.material_point),
+            (None, None) => unreachable!("a probe is built when a handle needs one"),
+        };
     }
-    handles
 }
 
 /// Build ribbon `index` (keys under `rk`) with its forces and handles, and give it its
@@ -503,11 +595,4 @@ fn ribbon_sim(
         );
     }
     Ok(sim)
-}
-
-/// The handles of a ribbon scene as [`SceneFile`] validated them: each with its initial
-/// target pose, if the file gives one, and its topic (same order).
-struct RibbonHandles {
-    specs: Vec<(HandleSpec, Option<Pose>)>,
-    topics: Vec<String>,
 }

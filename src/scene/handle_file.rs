@@ -28,7 +28,8 @@ pub struct HandleFile {
     /// Normal-guiding stiffness K, J. 1.0.
     #[serde(default = "d_normal_k")]
     pub normal_stiffness: f64,
-    /// ROS topic. Default `/handles/<name>`.
+    /// ROS topic, absolute. Default `handles/<name>`, relative to the node's namespace
+    /// (`/handles/<name>` in the root namespace).
     #[serde(default)]
     pub topic: Option<String>,
     /// TF frame the handle follows instead of a pose topic: looked up from `/tf` and
@@ -194,26 +195,7 @@ pub(super) fn parse_handle(
         )),
         None => None,
     };
-    let topic = h
-        .topic
-        .clone()
-        .unwrap_or_else(|| format!("/handles/{}", h.name));
-    if !topic.starts_with('/') || topic.contains("//") || topic.ends_with('/') {
-        return Err(ck.fail(
-            &format!("{key}.topic"),
-            format!("`{topic}` is not an absolute ROS topic name"),
-        ));
-    }
-    if let Some(f) = &h.tf_frame {
-        let k = format!("{key}.tf_frame");
-        if h.topic.is_some() {
-            return Err(ck.fail(&k, "a handle follows either a `topic` or a `tf_frame`"));
-        }
-        let bare = f.strip_prefix('/').unwrap_or(f);
-        if bare.is_empty() || f.chars().any(char::is_whitespace) {
-            return Err(ck.fail(&k, format!("`{f}` is not a TF frame id")));
-        }
-    }
+    let topic = input_topic(ck, key, h)?;
     Ok((
         HandleSpec {
             name: h.name.clone(),
@@ -229,4 +211,32 @@ pub(super) fn parse_handle(
         initial,
         topic,
     ))
+}
+
+/// The handle's input topic before name resolution: the absolute `topic:` given, or
+/// `handles/<name>`, relative to the node's namespace so that `-r __ns:=/robot1` moves
+/// it (the node resolves both, `session::names`); a `tf_frame:` instead of a topic is
+/// checked too.
+fn input_topic(ck: &Check, key: &str, h: &HandleFile) -> Result<String, SceneError> {
+    let topic = match &h.topic {
+        Some(t) if !t.starts_with('/') || t.contains("//") || t.ends_with('/') => {
+            return Err(ck.fail(
+                &format!("{key}.topic"),
+                format!("`{t}` is not an absolute ROS topic name"),
+            ));
+        }
+        Some(t) => t.clone(),
+        None => format!("handles/{}", h.name),
+    };
+    if let Some(f) = &h.tf_frame {
+        let k = format!("{key}.tf_frame");
+        if h.topic.is_some() {
+            return Err(ck.fail(&k, "a handle follows either a `topic` or a `tf_frame`"));
+        }
+        let bare = f.strip_prefix('/').unwrap_or(f);
+        if bare.is_empty() || f.chars().any(char::is_whitespace) {
+            return Err(ck.fail(&k, format!("`{f}` is not a TF frame id")));
+        }
+    }
+    Ok(topic)
 }

@@ -4,6 +4,7 @@
 //!
 //! This is an edge module: it reads files; the core never sees serde.
 
+mod camera_file;
 mod check;
 mod contact;
 mod file;
@@ -15,6 +16,7 @@ mod ribbon_file;
 
 use std::path::{Path, PathBuf};
 
+pub use camera_file::{CameraFile, CameraMount, SceneCamera};
 pub use contact::{ColliderFile, ContactFile};
 pub use file::{OutputsFile, SceneFile};
 pub use mesh_file::load_mesh;
@@ -55,12 +57,17 @@ pub struct Scene {
     pub world: World,
     /// The fixed frame of every pose and marker (REP 103), e.g. `world`.
     pub frame_id: String,
-    /// ROS topic of each handle (same order as `world.handles()`).
+    /// Input topic of each handle before name resolution (same order as
+    /// `world.handles()`): the scene's absolute `topic:`, or `handles/<name>`, relative
+    /// to the node's namespace. The one source of handle topics (`session::names`
+    /// resolves them).
     pub handle_topics: Vec<String>,
     pub outputs: Outputs,
     /// TF frame each handle follows instead of its topic (same order as
     /// `world.handles()`; None: the topic).
     pub handle_tf_frames: Vec<Option<String>>,
+    /// The simulated RGB-D cameras (`cameras:`), in file order.
+    pub cameras: Vec<SceneCamera>,
     /// The scene as parsed after overrides, for provenance (stats, bags).
     pub source: SceneFile,
 }

@@ -4,11 +4,11 @@
 use serde::{Deserialize, Serialize};
 
 use super::check::{pose_from, Check};
-use super::handle_file::{parse_handle, HandleFile, PoseFile};
+use super::handle_file::{HandleFile, PoseFile};
 use super::SceneError;
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::paper::{Collider, LengthRestoration, PaperParams, PaperSim, PresetCrease};
-use crate::sim::{HandleSpec, World};
+use crate::sim::HandleSpec;
 
 /// A sheet of paper. Every key is optional; defaults in parentheses.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -211,9 +211,10 @@ fn d_radius() -> f64 {
     0.01
 }
 
-/// The scene-level keys a paper scene reads besides its `paper:` section.
+/// What a paper object reads besides its `paper:` section.
 pub(super) struct PaperScene<'a> {
-    pub(super) paper: Option<&'a PaperFile>,
+    pub(super) paper: &'a PaperFile,
+    /// The scene's handles as parsed (every one holds this sheet: it is the only object).
     pub(super) handles: &'a [HandleFile],
     /// Top-level `colliders:`, `contact:` and `forces:` are given (none applies to paper).
     pub(super) has_colliders: bool,
@@ -222,17 +223,33 @@ pub(super) struct PaperScene<'a> {
     pub(super) seed: u64,
 }
 
-/// Validate the `paper:` section and its handles and build the world; returns it with
-/// the handles' topics.
-pub(super) fn build_paper(
+/// A validated sheet, waiting for the scene's handle list to be built.
+pub(super) struct PreparedPaper {
+    params: PaperParams,
+}
+
+impl PreparedPaper {
+    /// The sheet as object `index` of a world whose handles are `handles`.
+    pub(super) fn build(
+        self,
+        ck: &Check,
+        index: usize,
+        handles: &[HandleSpec],
+    ) -> Result<PaperSim, SceneError> {
+        PaperSim::new(self.params, handles, index).map_err(|e| ck.fail(PK, e.to_string()))
+    }
+}
+
+/// Validate the `paper:` section and the handles on it: `specs[h]` (already parsed, as
+/// object 0) must hold a boundary point; one without an initial pose gets its point on
+/// the placed sheet.
+pub(super) fn prepare_paper(
     scene: PaperScene,
     ck: &Check,
-    dt: f64,
     gravity: Vector3,
-) -> Result<(World, Vec<String>), SceneError> {
-    let Some(paper) = scene.paper else {
-        return Err(ck.fail("paper", "missing"));
-    };
+    specs: &mut [(HandleSpec, Option<Pose>)],
+) -> Result<PreparedPaper, SceneError> {
+    let paper = scene.paper;
     // The contact stage (Pan et al. sec. 5) acts on ribbons; a sheet collides
     // through its own FEM collision energy (Schreck et al. step 1).
     if scene.has_colliders {
@@ -251,11 +268,7 @@ pub(super) fn build_paper(
     let thresholds = thresholds(ck, paper)?;
     let colliders = paper_colliders(ck, &paper.colliders)?;
     let preset_creases = preset_creases(ck, &sheet, &paper.creases)?;
-    let PaperHandles {
-        handles,
-        topics,
-        releases,
-    } = paper_handles(ck, &sheet, scene.handles)?;
+    let releases = paper_handles(ck, &sheet, scene.handles, specs)?;
     if scene.has_forces {
         return Err(ck.fail("forces", "point forces are not supported on paper objects"));
     }
@@ -297,9 +310,7 @@ pub(super) fn build_paper(
         handle_releases: releases,
         initial_shape: crate::paper::PaperInitialShape::Flat,
     };
-    let sim = PaperSim::new(params, &handles, 0).map_err(|e| ck.fail(PK, e.to_string()))?;
-    let world = World::new(vec![("paper".to_string(), Box::new(sim) as _)], handles, dt);
-    Ok((world, topics))
+    Ok(PreparedPaper { params })
 }
 
 /// The key prefix of the section.
@@ -496,37 +507,19 @@ fn preset_creases(
     Ok(preset_creases)
 }
 
-/// The sheet's handles with their topics and releases.
-struct PaperHandles {
-    handles: Vec<HandleSpec>,
-    topics: Vec<String>,
-    /// (handle index, release time s).
-    releases: Vec<(usize, f64)>,
-}
-
-/// Validate the handles (the only object is `paper`; each holds a boundary point) and
-/// place a handle without an initial pose at its point on the placed sheet.
+/// Check the handles on the sheet (each holds a boundary point, sec. 3.3) and place a
+/// handle without an initial pose at its point on the placed sheet; returns the release
+/// times, (handle index, s).
 fn paper_handles(
     ck: &Check,
     sheet: &Sheet,
     files: &[HandleFile],
-) -> Result<PaperHandles, SceneError> {
+    specs: &mut [(HandleSpec, Option<Pose>)],
+) -> Result<Vec<(usize, f64)>, SceneError> {
     let (width, height) = (sheet.width, sheet.height);
-    let mut names = std::collections::BTreeSet::new();
-    let mut handles = Vec::new();
-    let mut topics = Vec::new();
     let mut releases = Vec::new();
-    for (i, h) in files.iter().enumerate() {
+    for (i, (h, (spec, initial))) in files.iter().zip(specs.iter_mut()).enumerate() {
         let hkey = format!("handles.{i}");
-        if let Some(o) = &h.object {
-            if o != "paper" {
-                return Err(ck.fail(
-                    &format!("{hkey}.object"),
-                    format!("no object named `{o}` (objects: paper)"),
-                ));
-            }
-        }
-        let (mut spec, initial, topic) = parse_handle(ck, &hkey, h, 0, &mut names)?;
         let p = spec.material_point;
         if !sheet.on_boundary(&p) {
             return Err(ck.fail(
@@ -540,16 +533,10 @@ fn paper_handles(
         if let Some(t) = h.release_at {
             releases.push((i, ck.non_negative(&format!("{hkey}.release_at"), t)?));
         }
-        spec.trajectory.initial =
-            initial.unwrap_or_else(|| sheet.placement * Pose::translation(p.x, p.y, 0.0));
-        topics.push(topic);
-        handles.push(spec);
+        let at = sheet.placement * Pose::translation(p.x, p.y, 0.0);
+        spec.trajectory.initial = initial.unwrap_or(at);
     }
-    Ok(PaperHandles {
-        handles,
-        topics,
-        releases,
-    })
+    Ok(releases)
 }
 
 /// The keys validated after the handles: density, stiffnesses, damping, sampling,

@@ -306,3 +306,26 @@ def markers_finite(ma) -> bool:
         if not finite(m.scale.x, m.scale.y, m.scale.z, m.pose.position.x):
             return False
     return True
+
+
+def set_params(ros, node: str = "/developable_sim", **values):
+    """Call `<node>/set_parameters` as `ros2 param set` does (`a__b` names `a.b`);
+    returns the SetParametersResult of each, in order."""
+    bool_, double, string = 1, 3, 4
+    params = []
+    for name, v in values.items():
+        name = name.replace("__", ".")
+        if isinstance(v, bool):
+            pv = rt.ParameterValue(type=bool_, bool_value=v)
+        elif isinstance(v, float):
+            pv = rt.ParameterValue(type=double, double_value=v)
+        else:
+            pv = rt.ParameterValue(type=string, string_value=v)
+        params.append(rt.Parameter(name=name, value=pv))
+    r = ros.call(
+        f"{node}/set_parameters",
+        rt.SetParametersRequest,
+        rt.SetParametersResponse,
+        parameters=params,
+    )
+    return r.results

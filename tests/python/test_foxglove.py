@@ -107,7 +107,12 @@ def test_foxglove_client_decodes_the_live_mesh_and_sees_it_follow_a_handle(
     assert f"ws://127.0.0.1:{port}" in node.log()
     ws, info, channels = connect_and_advertise(port)
     # exactly the node's outputs (gripper: no colliders, no TF), under their ROS names
-    assert set(channels) == {"/ribbon/markers", "/ribbon/status", "/ribbon/singular_points"}
+    assert set(channels) == {
+        "/ribbon/markers",
+        "/ribbon/status",
+        "/ribbon/singular_points",
+        "/clock",
+    }
     markers_ch = channels["/ribbon/markers"]
     assert markers_ch["encoding"] == "cdr"
     assert markers_ch["schemaName"] == "visualization_msgs/msg/MarkerArray"

@@ -75,6 +75,7 @@ def test_every_recorded_message_round_trips_through_the_msg_definitions(recorded
         "developable_sim/msg/SingularPoints",
         "visualization_msgs/msg/MarkerArray",
         "rosgraph_msgs/msg/Clock",
+        "developable_sim/msg/SimCommand",
     }
     assert nonempty_points > 0
 

@@ -7,32 +7,17 @@ from __future__ import annotations
 
 import time
 
-from conftest import SCENES, SENSOR_QOS, pose_msg, reliable_qos
+from conftest import SCENES, SENSOR_QOS, pose_msg, reliable_qos, set_params
 
 import ros_types as rt
 
 GRIPPER = str(SCENES / "ribbon_gripper.yaml")
 NODE = "/developable_sim"
-BOOL, INTEGER, DOUBLE, STRING = 1, 2, 3, 4
+BOOL, INTEGER, DOUBLE, STRING = 1, 2, 3, 4  # rcl_interfaces/ParameterType
 
 
 def call(ros, service, req, resp, **fields):
     return ros.call(f"{NODE}/{service}", req, resp, **fields)
-
-
-def set_params(ros, **values):
-    params = []
-    for name, v in values.items():
-        name = name.replace("__", ".")
-        if isinstance(v, bool):
-            pv = rt.ParameterValue(type=BOOL, bool_value=v)
-        elif isinstance(v, float):
-            pv = rt.ParameterValue(type=DOUBLE, double_value=v)
-        else:
-            pv = rt.ParameterValue(type=STRING, string_value=v)
-        params.append(rt.Parameter(name=name, value=pv))
-    r = call(ros, "set_parameters", rt.SetParametersRequest, rt.SetParametersResponse, parameters=params)
-    return r.results
 
 
 def test_list_get_describe_and_types(ros, domain_id, start_node):

@@ -17,6 +17,7 @@
 
 pub mod compression;
 pub mod crumpling;
+mod diagnostics;
 pub mod fem;
 pub mod geometric;
 pub mod isometry;

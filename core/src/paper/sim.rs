@@ -11,9 +11,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::compression::flat_regions;
-use super::crumpling::{
-    crumple_flat_region, face_center, CrumpleContext, CrumpleEvent, FrameFlatRegions,
-};
+use super::crumpling::{crumple_flat_region, CrumpleContext, CrumpleEvent, FrameFlatRegions};
+use super::diagnostics::AttemptContext;
+pub use super::diagnostics::CrumpleAttempt;
 use super::fem::{implicit_step, Dirichlet, FemReport, FemSystem, Spring, StrainLimit};
 use super::geometric::{
     Crease, CreaseKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
@@ -64,15 +64,6 @@ pub struct PaperFrameStats {
     pub isometry: IsometryReport,
 }
 
-/// One remeshing attempt of step 2 (see [`PaperFrameStats::crumple_attempts`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct CrumpleAttempt {
-    pub compression: f64,
-    pub centroid: Point2,
-    pub ruling_direction: nalgebra::Vector2<f64>,
-    pub changed: bool,
-}
-
 /// One sheet of paper.
 #[derive(Clone, Debug)]
 pub struct PaperSim {
@@ -100,6 +91,8 @@ pub struct PaperSim {
     mesh: SurfaceMesh,
     singular: Vec<SingularPoint>,
     frame: PaperFrameStats,
+    /// S_P's positions at the start of the frame (before step 1), m.
+    frame_start: Vec<Point3>,
 }
 
 impl PaperSim {
@@ -200,6 +193,7 @@ impl PaperSim {
             mesh: SurfaceMesh::default(),
             singular: Vec::new(),
             frame: PaperFrameStats::default(),
+            frame_start: Vec::new(),
         };
         sim.rebuild_outputs();
         Ok(sim)
@@ -418,6 +412,7 @@ impl PaperSim {
         for (slot, t) in self.last_targets.iter_mut().zip(targets) {
             *slot = Some(*t);
         }
+        self.frame_start.clone_from(&self.sp.position);
         self.update_reach(time);
         let (dirichlet, springs, held) = self.handle_constraints(time);
         self.held = held;
@@ -456,6 +451,8 @@ impl PaperSim {
             frame,
             gmesh: kept,
             gmesh_fresh,
+            frame_start,
+            held,
             ..
         } = self;
         let (params, pattern, sp): (&PaperParams, &Pattern, &PhysicalMesh) = (params, pattern, sp);
@@ -484,12 +481,17 @@ impl PaperSim {
                 break;
             };
             let events = crumple_flat_region(&ctx, layer, &gmesh, &labels, &strain, rng);
-            frame.crumple_attempts.push(CrumpleAttempt {
-                compression: strain.compression,
-                centroid: face_center(&gmesh, strain.face),
-                ruling_direction: strain.ruling_direction,
-                changed: !events.is_empty(),
-            });
+            let seen = AttemptContext {
+                gmesh: &gmesh,
+                labels: &labels,
+                sp,
+                interp: &interp,
+                frame_start,
+                held,
+            };
+            frame
+                .crumple_attempts
+                .push(seen.attempt(&strain, !events.is_empty()));
             if events.is_empty() {
                 continue;
             }

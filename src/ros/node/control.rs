@@ -1,35 +1,34 @@
 //! The node's services: reset, step and set_paused (std_srvs), the rcl_interfaces
 //! parameter services with the run-time parameters taking effect, and the held replies.
 
+use crate::session::Command;
 use std::time::{Duration, Instant};
 
 use super::{Lockstep, Pacing, SimNode};
-use crate::ros::msgs::{SetBoolResponse, TriggerResponse};
-use crate::ros::param_msgs::{
+use crate::ros::reply::Flushed;
+use crate::session::params::ParamValue;
+use crate::wire::msgs::{SetBoolResponse, TriggerResponse};
+use crate::wire::param_msgs::{
     DescribeParametersResponse, GetParameterTypesResponse, GetParametersResponse,
     ListParametersResponse, SetParametersResponse, SetParametersResult,
 };
-use crate::ros::params::ParamValue;
-use crate::ros::reply::Flushed;
-use crate::ros::session::FrameContent;
 
 impl SimNode {
     pub(super) fn drain_services(&mut self, next_tick: &mut Instant) {
         while let Some((id, _req)) = self.io.services.reset.receive() {
-            self.session.reset();
             self.reach.clear();
             self.last_markers = None;
-            self.last_report = None;
-            self.last_step_duration = 0.0;
             for p in &mut self.pending_input {
                 *p = None;
             }
-            let frame = self.session.frame(None, 0.0, self.content());
-            self.emit(&frame, None);
+            self.command(Command::Reset, None);
             *next_tick = Instant::now() + self.period();
             let resp = TriggerResponse {
                 success: true,
-                message: format!("reset to t = 0 s (episode {})", self.session.episode),
+                message: format!(
+                    "reset to t = 0 s (episode {})",
+                    self.session.counters.episode
+                ),
             };
             self.io.services.reset.reply(id, resp);
         }
@@ -78,22 +77,11 @@ impl SimNode {
     /// Pause or resume; a change sends a fresh status so subscribers see `paused`.
     pub(super) fn set_paused(&mut self, paused: bool, next_tick: &mut Instant) {
         let was = self.session.paused;
-        self.session.paused = paused;
         self.params.store("paused", ParamValue::Bool(paused));
         if was && !paused {
             *next_tick = Instant::now() + self.period();
         }
-        if was != paused {
-            let content = FrameContent {
-                markers: false,
-                singular_points: false,
-                status: true,
-            };
-            let frame =
-                self.session
-                    .frame(self.last_report.as_ref(), self.last_step_duration, content);
-            self.emit(&frame, None);
-        }
+        self.command(Command::SetPaused(paused), None);
     }
 
     /// Answer the rcl_interfaces parameter services; apply what `set_parameters` changed.
@@ -144,18 +132,26 @@ impl SimNode {
         }
     }
 
-    /// Make a checked run-time parameter take effect (see `param_server::RUNTIME`).
+    /// Make a checked run-time parameter take effect (see `param_server::RUNTIME`):
+    /// `paused` as a pause command, every other one as a parameter command (the
+    /// session takes the ones that change the simulation's inputs or outputs), then
+    /// what concerns the node itself (its pacing, TF buffer, markers' rate).
     pub(super) fn apply_parameter(&mut self, name: &str, v: &ParamValue, next_tick: &mut Instant) {
-        let (b, x) = match v {
-            ParamValue::Bool(b) => (*b, 0.0),
-            ParamValue::Double(x) => (false, *x),
-            _ => (false, 0.0),
+        let x = match v {
+            ParamValue::Double(x) => *x,
+            _ => 0.0,
         };
+        if let ("paused", ParamValue::Bool(b)) = (name, v) {
+            self.set_paused(*b, next_tick);
+            return;
+        }
+        let command = Command::SetParameter {
+            name: name.to_string(),
+            value: v.clone(),
+        };
+        self.command(command, None);
         match name {
-            "paused" => self.set_paused(b, next_tick),
             "markers_rate" => self.markers_period = (x > 0.0).then(|| 1.0 / x),
-            "accept_empty_frame_id" => self.session.policy.accept_empty_frame_id = b,
-            "max_stamp_lead" => self.session.policy.max_stamp_lead = x,
             "tf_max_lag" => {
                 if let Some(tf) = &mut self.io.tf_in {
                     tf.max_lag = Duration::from_secs_f64(x);
@@ -167,8 +163,6 @@ impl SimNode {
                     *next_tick = Instant::now() + self.period();
                 }
             }
-            "marker.line_width" => self.session.style.line_width = x,
-            "marker.sphere_diameter" => self.session.style.sphere_diameter = x,
             _ => {}
         }
     }

@@ -7,46 +7,33 @@ use std::time::{Duration, Instant};
 
 use ros2_client::dds::rustdds::mio1::{Interest, Poll, Token, Waker};
 use ros2_client::Subscription;
-use ros2_client::{Context, ContextOptions, Name, Node, NodeName, NodeOptions, Publisher};
+use ros2_client::{Context, ContextOptions, Name, Node, NodeName, NodeOptions};
 
-use crate::record::metadata::Qos;
-use crate::ros::dds::{bounded_publisher, dds, qos, topic_type, NodeError};
-use crate::ros::graph::{ClockIn, TfIn, TF_QOS};
-use serde::Serialize;
-
-use crate::ros::msgs::{
-    Clock, MarkerArray, PoseStamped, RosMessage, SimStatus, SingularPoints, TFMessage,
-};
-use crate::ros::names::NodeNames;
+use crate::ros::dds::{dds, qos, raw_publisher, topic_type, NodeError, RawPublisher};
+use crate::ros::graph::{ClockIn, TfIn};
 use crate::ros::reply::Flushed;
 use crate::ros::services::Services;
-use crate::scene::Scene;
+use crate::session::names::NodeNames;
+use crate::session::OutputTable;
+use crate::wire::msgs::PoseStamped;
+use crate::wire::qos::Qos;
 
 /// Poll tokens: handle subscriptions use their handle index, then these.
 const WAKE: Token = Token(usize::MAX - 1);
 const SERVICE_TOKEN_BASE: usize = 1 << 20;
 const GRAPH_TOKEN_BASE: usize = 1 << 21;
 
-/// The publishers of one object's outputs (each present if the scene outputs it).
-pub(super) struct ObjectPubs {
-    pub(super) markers: Option<Publisher<MarkerArray>>,
-    pub(super) singular_points: Option<Publisher<SingularPoints>>,
-    pub(super) status: Option<Publisher<SimStatus>>,
-}
-
 /// Every DDS entity of the node.
 pub(super) struct Endpoints {
     // field order = drop order: DDS entities, then the node, then the context
     /// (handle index, its pose subscription); TF-driven handles have none.
     pub(super) subs: Vec<(usize, Subscription<PoseStamped>)>,
-    pub(super) pubs: Vec<ObjectPubs>,
-    pub(super) clock: Option<Publisher<Clock>>,
-    /// TF in (a scene with handles), TF out (`outputs.tf`), an external clock.
+    /// One writer per row of the session's outputs table (None: a row that is
+    /// recorded, not published).
+    pub(super) pubs: Vec<Option<RawPublisher>>,
+    /// TF in (a scene with handles), an external clock.
     pub(super) tf_in: Option<TfIn>,
-    pub(super) tf_out: Option<Publisher<TFMessage>>,
     pub(super) clock_in: Option<ClockIn>,
-    /// The colliders' markers (only for a scene with colliders and markers on).
-    pub(super) colliders: Option<Publisher<MarkerArray>>,
     pub(super) services: Services,
     node: Option<Node>,
     spinner: Option<std::thread::JoinHandle<()>>,
@@ -111,27 +98,6 @@ fn handle_subscriptions(
     Ok(subs)
 }
 
-/// Makes the node's publishers (see [`bounded_publisher`]).
-struct Publishers<'a> {
-    node: &'a mut Node,
-    context: &'a Context,
-    node_name: &'a NodeName,
-}
-
-impl Publishers<'_> {
-    /// A publisher on `topic` if `on`; `what` names it in errors.
-    fn publisher<M: RosMessage + Serialize>(
-        &mut self,
-        on: bool,
-        topic: &str,
-        q: Qos,
-        what: &str,
-    ) -> Result<Option<Publisher<M>>, NodeError> {
-        on.then(|| bounded_publisher(self.node, self.context, self.node_name, topic, q, what))
-            .transpose()
-    }
-}
-
 impl Endpoints {
     /// Send the held service replies whose clients can receive them (see `reply`).
     pub(super) fn flush_replies(&mut self, now: Instant) -> Flushed {
@@ -142,19 +108,17 @@ impl Endpoints {
         }
     }
 
-    /// Create every entity the node's scene and settings ask for (`use_sim_time`:
-    /// follow an external clock, publish none; `tf_max_lag`, s); `tf_handles`:
-    /// (handle, TF frame) of the handles that follow TF frames (they get no pose
-    /// subscription).
+    /// Create every entity the node's settings and outputs ask for (`use_sim_time`:
+    /// follow an external clock; `tf_max_lag`, s); `tf_handles`: (handle, TF frame) of
+    /// the handles that follow TF frames (they get no pose subscription); a writer for
+    /// each published row of `outputs`.
     pub(super) fn open(
         domain_id: u16,
         names: &NodeNames,
-        scene: &Scene,
-        use_sim_time: bool,
-        tf_max_lag: f64,
+        outputs: &OutputTable,
+        (use_sim_time, tf_max_lag): (bool, f64),
         tf_handles: &[(usize, String)],
     ) -> Result<Self, NodeError> {
-        let outputs = scene.outputs;
         let (context, node_name, mut node, spinner) = start_node(domain_id, names)?;
         let poll = Poll::new()?;
         let waker = Arc::new(Waker::new(poll.registry(), WAKE)?);
@@ -177,44 +141,31 @@ impl Endpoints {
         let clock_in = use_sim_time
             .then(|| ClockIn::new(&mut node, &names.clock, &poll, GRAPH_TOKEN_BASE + 2))
             .transpose()?;
-        let mut make = Publishers {
-            node: &mut node,
-            context: &context,
-            node_name: &node_name,
-        };
-        let tf_out = make.publisher(outputs.tf, &names.tf, TF_QOS, "tf")?;
-        let mut pubs = Vec::new();
-        for o in &names.objects {
-            pubs.push(ObjectPubs {
-                markers: make.publisher(outputs.markers, &o.markers, Qos::MARKERS, "markers")?,
-                singular_points: make.publisher(
-                    outputs.singular_points,
-                    &o.singular_points,
-                    Qos::DATA,
-                    "singular points",
-                )?,
-                status: make.publisher(outputs.status, &o.status, Qos::DATA, "status")?,
-            });
-        }
-        // under use_sim_time another node owns /clock
-        let own_clock = outputs.clock && !use_sim_time;
-        let clock = make.publisher(own_clock, &names.clock, Qos::CLOCK, "clock")?;
-        let has_colliders = !scene.world.colliders().is_empty();
-        let colliders = make.publisher(
-            outputs.markers && has_colliders,
-            &names.colliders,
-            Qos::MARKERS,
-            "colliders",
-        )?;
+        let pubs = outputs
+            .rows
+            .iter()
+            .map(|row| {
+                row.want
+                    .published
+                    .then(|| {
+                        raw_publisher(
+                            &mut node,
+                            &context,
+                            &node_name,
+                            (&row.topic, row.type_name()),
+                            row.kind.qos,
+                            row.kind.name,
+                        )
+                    })
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>, _>>()?;
         let services = Services::new(&mut node, &node_name, names, &poll, SERVICE_TOKEN_BASE)?;
         Ok(Endpoints {
             subs,
             pubs,
-            clock,
             tf_in,
-            tf_out,
             clock_in,
-            colliders,
             services,
             node: Some(node),
             spinner: Some(spinner),
@@ -231,9 +182,7 @@ impl Drop for Endpoints {
         // spinner thread, then the context (field order)
         self.subs.clear();
         self.pubs.clear();
-        self.clock = None;
         self.tf_in = None;
-        self.tf_out = None;
         self.clock_in = None;
         drop(self.node.take());
         if let Some(s) = self.spinner.take() {

@@ -6,7 +6,8 @@ use std::time::Instant;
 
 use super::{Lockstep, SimNode, CATCH_UP_BATCH};
 use crate::ros::graph::tf_pose;
-use crate::ros::msgs::{Header, Pose, PoseStamped, Time};
+use crate::session::{Applied, Command};
+use crate::wire::msgs::{Header, Pose, PoseStamped, Time};
 
 impl SimNode {
     /// TF and the external clock: take what arrived.
@@ -45,7 +46,7 @@ impl SimNode {
             let w = &self.session.scene.world;
             ((w.time() + w.dt()) * 1e9).round().max(0.0) as u64
         } else {
-            crate::record::bag::now_ns()
+            crate::wire::clock::now_ns()
         }
     }
 
@@ -77,9 +78,13 @@ impl SimNode {
                         );
                         self.tf_failing[k] = false;
                     }
-                    let arrival_ns = self.arrival_ns();
-                    self.record(|r| r.record_input(h, &msg, arrival_ns, None));
-                    if self.session.offer(h, &msg, arrival_ns).is_err() {
+                    let command = Command::Pose {
+                        handle: h,
+                        pose: msg,
+                        arrival_ns: self.arrival_ns(),
+                        publish_ns: None,
+                    };
+                    if let Applied::Input(Err(_)) = self.command(command, None) {
                         self.stats.inputs_rejected += 1;
                     }
                 }
@@ -98,9 +103,12 @@ impl SimNode {
                         },
                         pose: Pose::default(), // identity
                     };
-                    let arrival_ns = self.arrival_ns();
-                    self.record(|r| r.record_tf_failure(h, &what, arrival_ns));
-                    self.session.reject_tf(h);
+                    let command = Command::TfLookupFailed {
+                        handle: h,
+                        what,
+                        arrival_ns: self.arrival_ns(),
+                    };
+                    self.command(command, None);
                     self.stats.inputs_rejected += 1;
                 }
             }
@@ -139,9 +147,12 @@ impl SimNode {
                     )) => {
                         self.stats.inputs_received += 1;
                         self.stats.inputs_rejected += 1;
-                        let arrival_ns = self.arrival_ns();
-                        self.record(|r| r.record_tf_failure(h, &msg, arrival_ns));
-                        self.session.reject_tf(h);
+                        let command = Command::TfLookupFailed {
+                            handle: h,
+                            what: msg,
+                            arrival_ns: self.arrival_ns(),
+                        };
+                        self.command(command, None);
                         continue;
                     }
                     // unknown frames are the input filter's to reject
@@ -154,13 +165,14 @@ impl SimNode {
                     .map(|t| t.to_nanos())
                     .filter(|t| *t > 0)
                     .map(|t| t as u64);
-                let arrival_ns = self
-                    .recorder
-                    .as_mut()
-                    .map_or_else(crate::record::bag::now_ns, |r| r.arrival_ns());
-                self.record(|r| r.record_input(h, &msg, arrival_ns, publish_ns));
-                match self.session.offer(h, &msg, arrival_ns) {
-                    Ok(()) => {
+                let command = Command::Pose {
+                    handle: h,
+                    pose: msg,
+                    arrival_ns: self.arrival_ns(),
+                    publish_ns,
+                };
+                match self.command(command, Some(received)) {
+                    Applied::Input(Ok(())) => {
                         self.pending_input[h] = Some(received);
                         if self.lockstep == Lockstep::Handle(h) && !self.session.paused {
                             self.tick(received);
@@ -169,7 +181,7 @@ impl SimNode {
                             }
                         }
                     }
-                    Err(_) => self.stats.inputs_rejected += 1,
+                    _ => self.stats.inputs_rejected += 1,
                 }
             }
         }
@@ -180,6 +192,6 @@ impl SimNode {
     pub(super) fn arrival_ns(&mut self) -> u64 {
         self.recorder
             .as_mut()
-            .map_or_else(crate::record::bag::now_ns, |r| r.arrival_ns())
+            .map_or_else(crate::wire::clock::now_ns, |r| r.arrival_ns())
     }
 }

@@ -7,7 +7,7 @@
 use std::time::Duration;
 
 use super::*;
-use crate::ros::msgs::{Header, Time};
+use crate::wire::msgs::{Header, Quaternion, Time, Transform, Vector3};
 
 const S: u64 = 1_000_000_000;
 const LAG: Duration = Duration::from_millis(250);
@@ -19,7 +19,7 @@ fn tf(parent: &str, child: &str, ns: u64, xyz: [f64; 3], yaw: f64) -> TransformS
             frame_id: parent.into(),
         },
         child_frame_id: child.into(),
-        transform: super::super::msgs::Transform {
+        transform: Transform {
             translation: Vector3 {
                 x: xyz[0],
                 y: xyz[1],

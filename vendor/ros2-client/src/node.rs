@@ -1171,7 +1171,10 @@ impl Node {
     Ok(r)
   }
 
-  pub(crate) fn create_datawriter<D, SA>(
+  /// A DataWriter with a caller-chosen serializer adapter (e.g. one that writes
+  /// messages encoded once for several transports), registered with the node like
+  /// [`Self::create_publisher`]'s writers (it appears in the node's graph info).
+  pub fn create_datawriter<D, SA>(
     &mut self,
     topic: &Topic,
     qos: Option<QosProfile>,

@@ -46,7 +46,7 @@ pub fn decode<M: DeserializeOwned>(bytes: &[u8]) -> Result<M, CdrError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ros::msgs::{Header, Point, PoseStamped, Time};
+    use crate::wire::msgs::{Header, Point, PoseStamped, Time};
 
     #[test]
     fn pose_stamped_layout_is_ros_cdr() {

@@ -3,7 +3,7 @@
 //! follow ROS 2 Jazzy (`src/ros/interfaces/`), ours follow `msg/*.msg`;
 //! `tests/ros_interfaces.rs` and `tests/python/test_interfaces.py` keep them in step.
 //!
-//! These are plain data: conversions from the simulation live in [`super::convert`].
+//! These are plain data: conversions from the simulation live in [`crate::wire::convert`].
 
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -16,9 +16,9 @@ pub trait RosMessage: Serialize + DeserializeOwned + Clone + Default + Send + 's
     /// `topic_type_hash` / `type_description_hash`.
     const HASH: &'static str;
     /// The `ros2msg` schema: this type's definition followed by every dependency (see
-    /// [`super::schema`]).
+    /// [`crate::wire::schema`]).
     fn schema() -> String {
-        super::schema::ros2msg_schema(Self::TYPE)
+        crate::wire::schema::ros2msg_schema(Self::TYPE)
     }
 }
 
@@ -385,3 +385,42 @@ ros_message!(
     "developable_sim/msg/SimStatus",
     "RIHS01_1dc8726f278337a6a78742ed2c42980012ea59b9f37b8f624210ecb92b5bb453"
 );
+
+/// `developable_sim/msg/SimCommand`: one external action on the simulation as the node
+/// applied it (bags keep them on `~/commands`; see `msg/SimCommand.msg`).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct SimCommand {
+    pub stamp: Time,
+    pub kind: u8,
+    pub paused: bool,
+    pub parameter_name: String,
+    pub parameter_type: u8,
+    pub bool_value: bool,
+    pub integer_value: i64,
+    pub double_value: f64,
+    pub string_value: String,
+    pub string_array_value: Vec<String>,
+    pub handle: String,
+    pub object: String,
+    pub material_point: [f64; 2],
+    pub hold: String,
+}
+ros_message!(
+    SimCommand,
+    "developable_sim/msg/SimCommand",
+    "RIHS01_f96d3e592944db8d7ea6a83fbd99c2a17e14a92f0363a06439e4157771e7b26d"
+);
+
+impl SimCommand {
+    pub const STEP: u8 = 1;
+    pub const RESET: u8 = 2;
+    pub const SET_PAUSED: u8 = 3;
+    pub const SET_PARAMETER: u8 = 4;
+    pub const GRASP: u8 = 5;
+    pub const RELEASE: u8 = 6;
+    pub const PARAMETER_BOOL: u8 = 1;
+    pub const PARAMETER_INTEGER: u8 = 2;
+    pub const PARAMETER_DOUBLE: u8 = 3;
+    pub const PARAMETER_STRING: u8 = 4;
+    pub const PARAMETER_STRING_ARRAY: u8 = 9;
+}

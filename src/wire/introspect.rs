@@ -430,7 +430,7 @@ impl ser::SerializeStruct for StructBuilder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ros::msgs::{Point, SingularPoint, SingularPoints};
+    use crate::wire::msgs::{Point, SingularPoint, SingularPoints};
 
     #[test]
     fn compare_is_bit_exact() {

@@ -11,9 +11,10 @@
 
 use crate::geometry::{Point2, Point3, Pose, Rotation, SurfaceMesh};
 
-use super::msgs::{Header, TFMessage, Time, TransformStamped};
-use super::session::Session;
-use super::tf::to_transform;
+use crate::wire::convert::to_transform;
+use crate::wire::msgs::{TFMessage, TransformStamped};
+
+use super::produce::{Produce, Scope};
 
 /// Material points closer than this to a triangle (in barycentric units) count as inside
 /// it: grasp and end points lie on the pattern's boundary.
@@ -79,14 +80,11 @@ fn ends(mesh: &SurfaceMesh) -> Option<[Point2; 2]> {
     Some([Point2::new(lo.x, v), Point2::new(hi.x, v)])
 }
 
-/// Every object's grasp and end frames at `stamp`, parent the scene frame. A frame whose
-/// point cannot be found on a finite mesh is left out.
-pub fn tf_message(session: &Session, stamp: Time) -> TFMessage {
-    let world = &session.scene.world;
-    let header = Header {
-        stamp,
-        frame_id: session.scene.frame_id.clone(),
-    };
+/// Every object's grasp and end frames at the state's time, parent the scene frame. A
+/// frame whose point cannot be found on a finite mesh is left out.
+pub fn tf(p: &Produce, _: Scope) -> Option<TFMessage> {
+    let world = &p.scene.world;
+    let header = p.header();
     let mut transforms = Vec::new();
     let mut push = |child: String, pose: Option<Pose>| {
         if let Some(p) = pose {
@@ -113,7 +111,7 @@ pub fn tf_message(session: &Session, stamp: Time) -> TFMessage {
             push(format!("{name}/end"), frame_at(mesh, end));
         }
     }
-    TFMessage { transforms }
+    Some(TFMessage { transforms })
 }
 
 #[cfg(test)]

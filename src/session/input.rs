@@ -5,7 +5,7 @@
 
 use crate::geometry::{Pose, Rotation};
 
-use super::msgs::{HandleStatus, PoseStamped, Time};
+use crate::wire::msgs::{HandleStatus, PoseStamped, Time};
 
 /// Quaternions with a norm below this are rejected (no rotation can be recovered).
 pub const MIN_QUATERNION_NORM: f64 = 1e-6;
@@ -189,7 +189,7 @@ pub fn check(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ros::msgs::{Header, Point, Pose as PoseMsg, Quaternion};
+    use crate::wire::msgs::{Header, Point, Pose as PoseMsg, Quaternion};
 
     fn msg(frame: &str, sec: i32, p: [f64; 3], q: [f64; 4]) -> PoseStamped {
         PoseStamped {

@@ -19,32 +19,33 @@ pub struct NameError {
 }
 
 /// Every resolved name of a node.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct NodeNames {
     /// Node base name, e.g. `developable_sim`.
     pub node: String,
     /// Namespace, `/` or `/a/b`.
     pub namespace: String,
+    /// `-r from:=to` remaps, applied to every name resolved.
+    pub remaps: Vec<(String, String)>,
     /// Input topic of each handle (scene order).
     pub handles: Vec<String>,
-    /// Per object: (markers, singular_points, status).
-    pub objects: Vec<ObjectTopics>,
     pub clock: String,
-    /// `/tf` and `/tf_static` (TF in; `/tf` also TF out).
+    /// `/tf` and `/tf_static` (TF in; the outputs table resolves TF out itself).
     pub tf: String,
     pub tf_static: String,
-    /// The colliders' markers (published only when the scene has colliders).
-    pub colliders: String,
     pub reset: String,
     pub set_paused: String,
     pub step: String,
+    /// Where a recording keeps the commands the node applied
+    /// (developable_sim/msg/SimCommand; bags only, nothing is published there).
+    pub commands: String,
     /// The rcl_interfaces parameter services.
     pub parameters: ParameterServices,
 }
 
 /// `~/list_parameters`, `~/get_parameters`, `~/set_parameters`, `~/describe_parameters`,
 /// `~/get_parameter_types`.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct ParameterServices {
     pub list: String,
     pub get: String,
@@ -53,17 +54,24 @@ pub struct ParameterServices {
     pub get_types: String,
 }
 
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ObjectTopics {
-    pub markers: String,
-    pub singular_points: String,
-    pub status: String,
-}
-
 impl NodeNames {
     /// Fully qualified node name, e.g. `/robot1/developable_sim`.
     pub fn fqn(&self) -> String {
         join(&self.namespace, &self.node)
+    }
+
+    /// `name` (relative, private `~/` or absolute) as the node resolves it: expanded
+    /// in its namespace, then the remaps applied.
+    pub fn resolve_name(&self, name: &str) -> Result<String, NameError> {
+        let fqn = self.fqn();
+        let full = expand(name, &self.namespace, &fqn)?;
+        let mut out = full.clone();
+        for (from, to) in &self.remaps {
+            if expand(from, &self.namespace, &fqn)? == full {
+                out = expand(to, &self.namespace, &fqn)?;
+            }
+        }
+        Ok(out)
     }
 
     /// Resolve the names of `scene` for node `node` in `namespace`, then apply `remaps`
@@ -75,49 +83,26 @@ impl NodeNames {
         remaps: &[(String, String)],
     ) -> Result<NodeNames, NameError> {
         check_token(node, node)?;
-        let namespace = normalize_namespace(namespace)?;
-        let fqn = join(&namespace, node);
-        let resolve = |name: &str| -> Result<String, NameError> {
-            let full = expand(name, &namespace, &fqn)?;
-            let mut out = full.clone();
-            for (from, to) in remaps {
-                if expand(from, &namespace, &fqn)? == full {
-                    out = expand(to, &namespace, &fqn)?;
-                }
-            }
-            Ok(out)
-        };
-        let handles = scene
-            .world
-            .handles()
-            .iter()
-            .enumerate()
-            .map(|(i, h)| {
-                let explicit = scene.source.handles.get(i).and_then(|f| f.topic.clone());
-                resolve(&explicit.unwrap_or_else(|| format!("handles/{}", h.name)))
-            })
-            .collect::<Result<Vec<_>, _>>()?;
-        let objects = scene
-            .world
-            .object_names()
-            .iter()
-            .map(|o| {
-                Ok(ObjectTopics {
-                    markers: resolve(&format!("{o}/markers"))?,
-                    singular_points: resolve(&format!("{o}/singular_points"))?,
-                    status: resolve(&format!("{o}/status"))?,
-                })
-            })
-            .collect::<Result<Vec<_>, NameError>>()?;
-        Ok(NodeNames {
+        let names = NodeNames {
             node: node.to_string(),
+            namespace: normalize_namespace(namespace)?,
+            remaps: remaps.to_vec(),
+            ..NodeNames::default()
+        };
+        let resolve = |name: &str| names.resolve_name(name);
+        let handles = scene
+            .handle_topics
+            .iter()
+            .map(|t| resolve(t))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(NodeNames {
             clock: resolve("/clock")?,
             tf: resolve("/tf")?,
             tf_static: resolve("/tf_static")?,
-            colliders: resolve("colliders")?,
             reset: resolve("~/reset")?,
             set_paused: resolve("~/set_paused")?,
             step: resolve("~/step")?,
+            commands: resolve("~/commands")?,
             parameters: ParameterServices {
                 list: resolve("~/list_parameters")?,
                 get: resolve("~/get_parameters")?,
@@ -125,9 +110,8 @@ impl NodeNames {
                 describe: resolve("~/describe_parameters")?,
                 get_types: resolve("~/get_parameter_types")?,
             },
-            namespace,
             handles,
-            objects,
+            ..names.clone()
         })
     }
 }
@@ -225,7 +209,7 @@ mod tests {
         .unwrap();
         let n = NodeNames::resolve(&scene, "developable_sim", "/", &[]).unwrap();
         assert_eq!(n.handles, ["/handles/twist_end"]);
-        assert_eq!(n.objects[0].markers, "/ribbon/markers");
+        assert_eq!(n.resolve_name("ribbon/markers").unwrap(), "/ribbon/markers");
         assert_eq!(n.reset, "/developable_sim/reset");
         let n = NodeNames::resolve(
             &scene,
@@ -235,7 +219,10 @@ mod tests {
         )
         .unwrap();
         assert_eq!(n.handles, ["/gripper/pose"]);
-        assert_eq!(n.objects[0].status, "/robot1/ribbon/status");
+        assert_eq!(
+            n.resolve_name("ribbon/status").unwrap(),
+            "/robot1/ribbon/status"
+        );
         assert_eq!(n.clock, "/clock");
         assert_eq!(n.step, "/robot1/sim/step");
         assert_eq!(n.fqn(), "/robot1/sim");

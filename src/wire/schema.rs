@@ -4,11 +4,15 @@
 //! `MSG: pkg/Type`).
 
 /// `(package/msg/Type, definition)` of every message the node uses. Ours are the
-/// repository's `msg/*.msg` verbatim; the standard ones are in `src/ros/interfaces/`.
+/// repository's `msg/*.msg` verbatim; the standard ones are in `src/wire/interfaces/`.
 pub const DEFINITIONS: &[(&str, &str)] = &[
     (
         "developable_sim/msg/SimStatus",
         include_str!("../../msg/SimStatus.msg"),
+    ),
+    (
+        "developable_sim/msg/SimCommand",
+        include_str!("../../msg/SimCommand.msg"),
     ),
     (
         "developable_sim/msg/HandleStatus",

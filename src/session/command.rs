@@ -1,0 +1,187 @@
+//! Commands as data: every external action that changes the simulation is one value of
+//! [`Command`]. The node turns each DDS event into one (a pose taken from a handle's
+//! topic, a TF lookup's outcome, a service call, a parameter change), records it
+//! (`record::SessionRecorder::record_command`) and applies it with
+//! [`super::Session::apply`]; `replay` reads the same commands back from a bag and
+//! applies them with the same function, so a replay does what the node did.
+
+use crate::wire::msgs::{PoseStamped, SimCommand, Time};
+
+use super::params::ParamValue;
+
+/// One external action on the simulation.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    /// A pose for handle `handle` (index in the scene), taken from its topic or looked
+    /// up in TF, arriving at `arrival_ns` (wall clock, ns since the Unix epoch; the
+    /// input filter judges its stamp against it). `publish_ns`: its source timestamp,
+    /// if known (recorded, not judged).
+    Pose {
+        handle: usize,
+        pose: PoseStamped,
+        arrival_ns: u64,
+        publish_ns: Option<u64>,
+    },
+    /// A TF lookup for handle `handle` found no transform: `what` is the handle's TF
+    /// frame at the lookup time (identity pose), or the pose that could not be brought
+    /// into the scene frame. The handle keeps its target; the failure is counted. (The
+    /// TF tree is not recorded, so the lookup's outcome is.)
+    TfLookupFailed {
+        handle: usize,
+        what: PoseStamped,
+        arrival_ns: u64,
+    },
+    /// One simulation step with the newest targets (a tick, a lock-step input, `~/step`).
+    Step,
+    /// Back to t = 0 (`~/reset`).
+    Reset,
+    /// Pause or resume (`~/set_paused`, the `paused` parameter).
+    SetPaused(bool),
+    /// A run-time parameter took a new value (`~/set_parameters`, already checked).
+    SetParameter { name: String, value: ParamValue },
+}
+
+/// A [`SimCommand`] that is not a command of this build (a newer bag, or damage).
+#[derive(Debug, thiserror::Error, PartialEq)]
+#[error("not a command: {0}")]
+pub struct UnknownCommand(pub String);
+
+impl Command {
+    /// The message a bag keeps for this command on `~/commands`, stamped with the
+    /// simulated time `stamp` it was applied at. None for poses and failed TF lookups:
+    /// they are recorded on their handle's topics.
+    pub fn to_msg(&self, stamp: Time) -> Option<SimCommand> {
+        let mut m = SimCommand {
+            stamp,
+            ..SimCommand::default()
+        };
+        match self {
+            Command::Pose { .. } | Command::TfLookupFailed { .. } => return None,
+            Command::Step => m.kind = SimCommand::STEP,
+            Command::Reset => m.kind = SimCommand::RESET,
+            Command::SetPaused(p) => {
+                m.kind = SimCommand::SET_PAUSED;
+                m.paused = *p;
+            }
+            Command::SetParameter { name, value } => {
+                m.kind = SimCommand::SET_PARAMETER;
+                m.parameter_name = name.clone();
+                match value {
+                    ParamValue::Bool(b) => {
+                        (m.parameter_type, m.bool_value) = (SimCommand::PARAMETER_BOOL, *b)
+                    }
+                    ParamValue::Integer(i) => {
+                        (m.parameter_type, m.integer_value) = (SimCommand::PARAMETER_INTEGER, *i)
+                    }
+                    ParamValue::Double(x) => {
+                        (m.parameter_type, m.double_value) = (SimCommand::PARAMETER_DOUBLE, *x)
+                    }
+                    ParamValue::String(s) => {
+                        m.parameter_type = SimCommand::PARAMETER_STRING;
+                        m.string_value = s.clone();
+                    }
+                    ParamValue::StringArray(a) => {
+                        m.parameter_type = SimCommand::PARAMETER_STRING_ARRAY;
+                        m.string_array_value = a.clone();
+                    }
+                }
+            }
+        }
+        Some(m)
+    }
+
+    /// The command a recorded [`SimCommand`] holds.
+    pub fn from_msg(m: &SimCommand) -> Result<Command, UnknownCommand> {
+        Ok(match m.kind {
+            SimCommand::STEP => Command::Step,
+            SimCommand::RESET => Command::Reset,
+            SimCommand::SET_PAUSED => Command::SetPaused(m.paused),
+            SimCommand::SET_PARAMETER => Command::SetParameter {
+                name: m.parameter_name.clone(),
+                value: match m.parameter_type {
+                    SimCommand::PARAMETER_BOOL => ParamValue::Bool(m.bool_value),
+                    SimCommand::PARAMETER_INTEGER => ParamValue::Integer(m.integer_value),
+                    SimCommand::PARAMETER_DOUBLE => ParamValue::Double(m.double_value),
+                    SimCommand::PARAMETER_STRING => ParamValue::String(m.string_value.clone()),
+                    SimCommand::PARAMETER_STRING_ARRAY => {
+                        ParamValue::StringArray(m.string_array_value.clone())
+                    }
+                    t => {
+                        return Err(UnknownCommand(format!(
+                            "parameter `{}` of type {t}",
+                            m.parameter_name
+                        )))
+                    }
+                },
+            },
+            k => return Err(UnknownCommand(format!("kind {k}"))),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recorded_commands_read_back_as_themselves() {
+        let stamp = Time { sec: 3, nanosec: 5 };
+        let commands = [
+            Command::Step,
+            Command::Reset,
+            Command::SetPaused(true),
+            Command::SetPaused(false),
+            Command::SetParameter {
+                name: "max_stamp_lead".into(),
+                value: ParamValue::Double(1.5),
+            },
+            Command::SetParameter {
+                name: "accept_empty_frame_id".into(),
+                value: ParamValue::Bool(true),
+            },
+            Command::SetParameter {
+                name: "x".into(),
+                value: ParamValue::Integer(-7),
+            },
+            Command::SetParameter {
+                name: "y".into(),
+                value: ParamValue::String("s".into()),
+            },
+            Command::SetParameter {
+                name: "z".into(),
+                value: ParamValue::StringArray(vec!["a".into(), "b".into()]),
+            },
+        ];
+        for c in commands {
+            let m = c.to_msg(stamp).expect("a ~/commands command");
+            assert_eq!(m.stamp, stamp);
+            assert_eq!(Command::from_msg(&m), Ok(c));
+        }
+    }
+
+    #[test]
+    fn poses_are_not_commands_messages_and_unknown_kinds_are_refused() {
+        let pose = Command::Pose {
+            handle: 0,
+            pose: PoseStamped::default(),
+            arrival_ns: 1,
+            publish_ns: None,
+        };
+        assert_eq!(pose.to_msg(Time::default()), None);
+        let unknown = SimCommand {
+            kind: 200,
+            ..SimCommand::default()
+        };
+        assert_eq!(
+            Command::from_msg(&unknown),
+            Err(UnknownCommand("kind 200".into()))
+        );
+        let bad_type = SimCommand {
+            kind: SimCommand::SET_PARAMETER,
+            parameter_name: "p".into(),
+            parameter_type: 7,
+            ..SimCommand::default()
+        };
+        assert!(Command::from_msg(&bad_type).is_err());
+    }
+}

@@ -1,0 +1,300 @@
+//! Outputs as a table. Every message the simulation produces is described once, in
+//! [`OUTPUTS`]: its name, scope (global, per object or per handle), topic, message type
+//! and QoS, whether the markers' rate limit applies, when a scene and a run want it, and
+//! the producer that makes it from a state. A session's [`OutputTable`] is that list
+//! instantiated for its scene (a row per object or handle where the scope says so);
+//! a [`Frame`] holds one encoded message per row. DDS, the bag, Foxglove and replay
+//! iterate over the rows and never name an output.
+//!
+//! Adding an output is one producer (a function from [`Produce`] to a message) and one
+//! entry in [`OUTPUTS`].
+
+use bytes::Bytes;
+
+use crate::scene::Scene;
+use crate::wire::cdr::{self, CdrError};
+use crate::wire::introspect::{to_value, Value};
+use crate::wire::msgs::{
+    Clock, MarkerArray, RosMessage, SimStatus, SingularPoints, TFMessage, Time,
+};
+use crate::wire::qos::Qos;
+
+use super::names::{NameError, NodeNames};
+use super::produce::Produce;
+pub use super::produce::Scope;
+use super::{frames, markers, status};
+
+/// How many rows an output kind has.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ScopeKind {
+    /// One for the scene.
+    Global,
+    /// One per object (`{object}` in its topic).
+    PerObject,
+    /// One per handle (`{handle}` in its topic; `{object}` is the handle's object).
+    PerHandle,
+}
+
+/// Whether a row is published (DDS, Foxglove) and whether it is recorded in bags.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Want {
+    pub published: bool,
+    pub recorded: bool,
+}
+
+impl Want {
+    /// Published and recorded alike (most outputs).
+    const fn both(on: bool) -> Want {
+        Want {
+            published: on,
+            recorded: on,
+        }
+    }
+}
+
+/// What a run decides about outputs beyond the scene file.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RunOutputs {
+    /// The node owns time (publishes `/clock`); false under use_sim_time.
+    pub own_clock: bool,
+    /// The run records a bag: rows recorded but not published are made only then.
+    pub recording: bool,
+}
+
+/// The message type of an output and how a producer's message becomes CDR bytes.
+pub trait Producer: Sync + std::fmt::Debug {
+    /// `package/msg/Type`.
+    fn type_name(&self) -> &'static str;
+    /// REP-2011 type hash, as rosbag2 records it.
+    fn type_hash(&self) -> &'static str;
+    /// The `ros2msg` schema (the bags' and Foxglove's).
+    fn schema(&self) -> String;
+    /// The row's message for this state, CDR-encoded (None: nothing this state, e.g. a
+    /// mesh that is not finite).
+    fn produce(&self, p: &Produce, scope: Scope) -> Option<Result<Bytes, CdrError>>;
+    /// A message of this type, decoded into a field-by-field value (replay compares
+    /// recorded and recomputed messages this way).
+    fn value(&self, cdr: &[u8]) -> Result<Value, String>;
+}
+
+/// A producer function of messages `M`.
+pub struct Typed<M: 'static>(pub fn(&Produce, Scope) -> Option<M>);
+
+impl<M> std::fmt::Debug for Typed<M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Typed<{}>", std::any::type_name::<M>())
+    }
+}
+
+impl<M: RosMessage> Producer for Typed<M> {
+    fn type_name(&self) -> &'static str {
+        M::TYPE
+    }
+    fn type_hash(&self) -> &'static str {
+        M::HASH
+    }
+    fn schema(&self) -> String {
+        M::schema()
+    }
+    fn produce(&self, p: &Produce, scope: Scope) -> Option<Result<Bytes, CdrError>> {
+        (self.0)(p, scope).map(|m| cdr::encode(&m).map(Bytes::from))
+    }
+    fn value(&self, bytes: &[u8]) -> Result<Value, String> {
+        let m: M = cdr::decode(bytes).map_err(|e| format!("{}: {e}", M::TYPE))?;
+        to_value(&m).map_err(|e| format!("{}: {e}", M::TYPE))
+    }
+}
+
+/// One kind of output: an entry of [`OUTPUTS`].
+#[derive(Debug)]
+pub struct OutputKind {
+    /// Stable name, recorded in bags to route a topic back to its row.
+    pub name: &'static str,
+    pub scope: ScopeKind,
+    /// The topic before resolution: relative names live in the node's namespace,
+    /// `{object}` and `{handle}` are the row's object and handle names.
+    pub topic: &'static str,
+    pub qos: Qos,
+    /// Published at most `markers_rate` times a second (recorded every state).
+    pub throttled: bool,
+    /// Whether the scene and the run want the row.
+    pub want: fn(&Scene, RunOutputs, Scope) -> Want,
+    pub producer: &'static dyn Producer,
+}
+
+/// Every output the simulation can produce, in publication and recording order within a
+/// frame (the statuses first: they name the state the other messages belong to).
+pub const OUTPUTS: &[OutputKind] = &[
+    OutputKind {
+        name: "status",
+        scope: ScopeKind::PerObject,
+        topic: "{object}/status",
+        qos: Qos::DATA,
+        throttled: false,
+        // always recorded: the statuses are the ledger of steps a replay follows
+        want: |s, _, _| Want {
+            published: s.outputs.status,
+            recorded: true,
+        },
+        producer: &Typed::<SimStatus>(status::status),
+    },
+    OutputKind {
+        name: "clock",
+        scope: ScopeKind::Global,
+        topic: "/clock",
+        qos: Qos::CLOCK,
+        throttled: false,
+        want: |s, run, _| Want::both(s.outputs.clock && run.own_clock),
+        producer: &Typed::<Clock>(status::clock),
+    },
+    OutputKind {
+        name: "markers",
+        scope: ScopeKind::PerObject,
+        topic: "{object}/markers",
+        qos: Qos::MARKERS,
+        throttled: true,
+        want: |s, _, _| Want::both(s.outputs.markers),
+        producer: &Typed::<MarkerArray>(markers::object_markers),
+    },
+    OutputKind {
+        name: "singular_points",
+        scope: ScopeKind::PerObject,
+        topic: "{object}/singular_points",
+        qos: Qos::DATA,
+        throttled: false,
+        want: |s, _, _| Want::both(s.outputs.singular_points),
+        producer: &Typed::<SingularPoints>(status::singular_points),
+    },
+    OutputKind {
+        name: "colliders",
+        scope: ScopeKind::Global,
+        topic: "colliders",
+        qos: Qos::MARKERS,
+        throttled: false,
+        want: |s, _, _| {
+            let has = !s.world.colliders().is_empty();
+            Want::both(s.outputs.markers && has)
+        },
+        producer: &Typed::<MarkerArray>(markers::colliders),
+    },
+    OutputKind {
+        name: "tf",
+        scope: ScopeKind::Global,
+        topic: "/tf",
+        qos: Qos::TF,
+        throttled: false,
+        want: |s, _, _| Want::both(s.outputs.tf),
+        producer: &Typed::<TFMessage>(frames::tf),
+    },
+];
+
+/// The kind named `name` (as bags record it).
+pub fn kind_named(name: &str) -> Option<&'static OutputKind> {
+    OUTPUTS.iter().find(|k| k.name == name)
+}
+
+/// One output of a session: a kind at a scope, on a resolved topic.
+#[derive(Clone, Debug)]
+pub struct OutputRow {
+    pub kind: &'static OutputKind,
+    pub scope: Scope,
+    pub topic: String,
+    pub want: Want,
+}
+
+impl OutputRow {
+    pub fn type_name(&self) -> &'static str {
+        self.kind.producer.type_name()
+    }
+}
+
+/// The outputs of one session, in [`OUTPUTS`] order, each scope in index order. Rows
+/// neither published nor recorded are not in it (nothing is built that nobody wants).
+#[derive(Clone, Debug, Default)]
+pub struct OutputTable {
+    pub rows: Vec<OutputRow>,
+}
+
+impl OutputTable {
+    /// The rows `scene` and `run` want, with topics resolved by `names`.
+    pub fn for_scene(
+        scene: &Scene,
+        names: &NodeNames,
+        run: RunOutputs,
+    ) -> Result<OutputTable, NameError> {
+        let mut rows = Vec::new();
+        for kind in OUTPUTS {
+            for scope in scopes(scene, kind.scope) {
+                let mut want = (kind.want)(scene, run, scope);
+                want.recorded &= run.recording;
+                if !(want.published || want.recorded) {
+                    continue;
+                }
+                let topic = names.resolve_name(&topic_of(scene, kind, scope))?;
+                rows.push(OutputRow {
+                    kind,
+                    scope,
+                    topic,
+                    want,
+                });
+            }
+        }
+        Ok(OutputTable { rows })
+    }
+
+    /// The row of `kind` at `scope`, if the table has it.
+    pub fn find(&self, kind: &str, scope: Scope) -> Option<usize> {
+        self.rows
+            .iter()
+            .position(|r| r.kind.name == kind && r.scope == scope)
+    }
+}
+
+/// Every scope of `kind` in `scene`.
+fn scopes(scene: &Scene, kind: ScopeKind) -> Vec<Scope> {
+    match kind {
+        ScopeKind::Global => vec![Scope::Global],
+        ScopeKind::PerObject => (0..scene.world.object_names().len())
+            .map(Scope::Object)
+            .collect(),
+        ScopeKind::PerHandle => (0..scene.world.handles().len())
+            .map(Scope::Handle)
+            .collect(),
+    }
+}
+
+/// The unresolved topic of `kind` at `scope`: `{object}` and `{handle}` replaced.
+fn topic_of(scene: &Scene, kind: &OutputKind, scope: Scope) -> String {
+    let world = &scene.world;
+    let (object, handle) = match scope {
+        Scope::Global => (None, None),
+        Scope::Object(o) => (Some(o), None),
+        Scope::Handle(h) => (world.handles().get(h).map(|s| s.object), Some(h)),
+    };
+    let mut topic = kind.topic.to_string();
+    if let Some(o) = object.and_then(|o| world.object_names().get(o)) {
+        topic = topic.replace("{object}", o);
+    }
+    if let Some(h) = handle.and_then(|h| world.handles().get(h)) {
+        topic = topic.replace("{handle}", &h.name);
+    }
+    topic
+}
+
+/// Every message produced by one state of the world (after a step, or step 0): one
+/// entry per row of the session's [`OutputTable`] (None: not made for this state).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Simulation time of the state.
+    pub stamp: Time,
+    /// CDR bytes (with the encapsulation header), as DDS sends them and bags hold them.
+    pub messages: Vec<Option<Bytes>>,
+}
+
+impl Frame {
+    /// The message of row `row`, decoded as `M`.
+    pub fn decode<M: RosMessage>(&self, row: usize) -> Option<Result<M, CdrError>> {
+        let bytes = self.messages.get(row)?.as_ref()?;
+        Some(cdr::decode(bytes))
+    }
+}

@@ -1,0 +1,64 @@
+//! What an output's producer reads: one state of the session, borrowed. The session
+//! builds it for each frame ([`super::Session::frame`]); producers
+//! ([`super::outputs::OUTPUTS`]) turn it into messages.
+
+use crate::scene::Scene;
+use crate::sim::StepReport;
+use crate::wire::msgs::{Header, Time};
+
+use super::input::HandleInput;
+use super::style::MarkerStyle;
+
+/// Which object or handle a row is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Scope {
+    Global,
+    Object(usize),
+    Handle(usize),
+}
+
+/// The session's counters that statuses report (all since start-up unless said).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Counters {
+    /// Resets since start-up.
+    pub episode: u32,
+    /// Real-time ticks skipped because the simulation could not keep up.
+    pub overrun_ticks: u64,
+    /// Publications the node failed to send (all topics; the node counts them).
+    pub dropped_publications: u64,
+    /// Per object: steps whose solver stopped on an iteration limit.
+    pub unconverged_steps: Vec<u64>,
+    /// Per object: steps whose result was not finite (rejected, previous state kept).
+    pub rejected_steps: Vec<u64>,
+}
+
+/// One state of the session, as the producers see it.
+pub struct Produce<'a> {
+    pub scene: &'a Scene,
+    pub style: &'a MarkerStyle,
+    /// Per handle: its input filter's state (target, counters).
+    pub inputs: &'a [HandleInput],
+    /// Per handle: the input topic its status reports (`/tf` for a TF-driven handle).
+    pub handle_topics: &'a [String],
+    pub counters: &'a Counters,
+    pub paused: bool,
+    /// The step that made this state (None: the initial state, step 0).
+    pub report: Option<&'a StepReport>,
+    /// Wall time of that step, s (0 for step 0).
+    pub step_duration: f64,
+}
+
+impl Produce<'_> {
+    /// Simulation time of the state.
+    pub fn stamp(&self) -> Time {
+        Time::from_secs(self.scene.world.time())
+    }
+
+    /// The header of every message of this state: its time, the scene frame.
+    pub fn header(&self) -> Header {
+        Header {
+            stamp: self.stamp(),
+            frame_id: self.scene.frame_id.clone(),
+        }
+    }
+}

@@ -1,0 +1,245 @@
+//! The session: a scene, its handle inputs and counters, and the outputs it produces.
+//! Commands change it ([`Session::apply`], the one way in); each new state is turned
+//! into a [`Frame`] of encoded messages ([`Session::frame`]).
+
+use std::time::Instant;
+
+use crate::geometry::Pose;
+use crate::scene::Scene;
+use crate::sim::StepReport;
+use crate::wire::cdr::CdrError;
+use crate::wire::msgs::{PoseStamped, Time};
+
+use super::command::Command;
+use super::input::{HandleInput, InputPolicy, Rejection};
+use super::outputs::{Frame, OutputTable};
+use super::params::ParamValue;
+use super::produce::{Counters, Produce};
+use super::style::MarkerStyle;
+
+/// What applying a command did.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Applied {
+    /// A pose became its handle's target, or the input filter rejected it.
+    Input(Result<(), Rejection>),
+    /// A failed TF lookup was counted (the handle keeps its target).
+    TfLookupFailed,
+    /// A new state: after a step, or the initial state after a reset.
+    NewState,
+    /// Paused or resumed; `changed`: the flag differs from before.
+    Paused { changed: bool },
+    /// A parameter took effect in the session, or concerns only the node (its pacing,
+    /// its TF buffer, the markers' rate): `in_session` says which.
+    Parameter { in_session: bool },
+}
+
+/// Which rows a frame makes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Content {
+    /// Every row of the table.
+    All,
+    /// The statuses only (the same state published again, e.g. when paused).
+    Statuses,
+}
+
+/// A scene with its handle inputs, counters and outputs.
+pub struct Session {
+    pub scene: Scene,
+    pub policy: InputPolicy,
+    pub style: MarkerStyle,
+    /// The input topic each handle's status reports (`/tf` for a TF-driven handle).
+    pub handle_topics: Vec<String>,
+    /// The outputs this session produces.
+    pub table: OutputTable,
+    pub counters: Counters,
+    pub paused: bool,
+    inputs: Vec<HandleInput>,
+    /// The step that made the current state and its wall time, s (None: step 0).
+    last_step: Option<(StepReport, f64)>,
+    targets: Vec<Option<Pose>>,
+}
+
+impl Session {
+    pub fn new(
+        scene: Scene,
+        policy: InputPolicy,
+        handle_topics: Vec<String>,
+        table: OutputTable,
+    ) -> Session {
+        let handles = scene.world.handles().len();
+        let objects = scene.world.objects().len();
+        Session {
+            scene,
+            policy,
+            style: MarkerStyle::default(),
+            handle_topics,
+            table,
+            counters: Counters {
+                unconverged_steps: vec![0; objects],
+                rejected_steps: vec![0; objects],
+                ..Counters::default()
+            },
+            paused: false,
+            inputs: vec![HandleInput::default(); handles],
+            last_step: None,
+            targets: vec![None; handles],
+        }
+    }
+
+    /// Apply one command (see [`Command`]).
+    pub fn apply(&mut self, command: &Command) -> Applied {
+        match command {
+            Command::Pose {
+                handle,
+                pose,
+                arrival_ns,
+                ..
+            } => Applied::Input(self.offer(*handle, pose, *arrival_ns)),
+            Command::TfLookupFailed { handle, .. } => {
+                if let Some(input) = self.inputs.get_mut(*handle) {
+                    input.rejected_tf_lookup += 1;
+                }
+                Applied::TfLookupFailed
+            }
+            Command::Step => {
+                self.step();
+                Applied::NewState
+            }
+            Command::Reset => {
+                self.reset();
+                Applied::NewState
+            }
+            Command::SetPaused(p) => {
+                let changed = self.paused != *p;
+                self.paused = *p;
+                Applied::Paused { changed }
+            }
+            Command::SetParameter { name, value } => self.set_parameter(name, value),
+        }
+    }
+
+    /// The messages a command's outcome publishes: a new state's whole frame; a pause
+    /// toggled: the statuses again (subscribers see `paused`); otherwise none.
+    pub fn frame_after(&self, applied: &Applied) -> Option<Result<Frame, CdrError>> {
+        match applied {
+            Applied::NewState => Some(self.frame(Content::All)),
+            Applied::Paused { changed: true } => Some(self.frame(Content::Statuses)),
+            _ => None,
+        }
+    }
+
+    /// The parameters that change the session; the others concern the node only.
+    fn set_parameter(&mut self, name: &str, value: &ParamValue) -> Applied {
+        let (b, x) = match value {
+            ParamValue::Bool(b) => (*b, 0.0),
+            ParamValue::Double(x) => (false, *x),
+            _ => (false, 0.0),
+        };
+        match name {
+            "accept_empty_frame_id" => self.policy.accept_empty_frame_id = b,
+            "max_stamp_lead" => self.policy.max_stamp_lead = x,
+            "marker.line_width" => self.style.line_width = x,
+            "marker.sphere_diameter" => self.style.sphere_diameter = x,
+            _ => return Applied::Parameter { in_session: false },
+        }
+        Applied::Parameter { in_session: true }
+    }
+
+    /// Offer a pose received for handle `handle` at `received_ns` (wall clock, ns since
+    /// the Unix epoch) to its input filter.
+    fn offer(
+        &mut self,
+        handle: usize,
+        msg: &PoseStamped,
+        received_ns: u64,
+    ) -> Result<(), Rejection> {
+        self.inputs[handle].offer(&self.policy, msg, received_ns)
+    }
+
+    /// Advance the world one step with the newest targets. Returns the report and the
+    /// wall time of the step, s (also kept for the frame).
+    pub fn step(&mut self) -> (StepReport, f64) {
+        for (t, input) in self.targets.iter_mut().zip(&self.inputs) {
+            *t = input.target;
+        }
+        let start = Instant::now();
+        let report = self.scene.world.step(&self.targets);
+        let elapsed = start.elapsed().as_secs_f64();
+        for (i, o) in report.objects.iter().enumerate() {
+            self.counters.unconverged_steps[i] += u64::from(!o.converged);
+            self.counters.rejected_steps[i] += u64::from(o.kept_previous_state);
+        }
+        self.last_step = Some((report.clone(), elapsed));
+        (report, elapsed)
+    }
+
+    /// Back to t = 0: the world's initial state; handles follow the script until a new
+    /// pose arrives (stamps are accepted afresh); counters are kept.
+    fn reset(&mut self) {
+        self.scene.world.reset();
+        for i in &mut self.inputs {
+            i.clear_target();
+        }
+        self.counters.episode += 1;
+        self.last_step = None;
+    }
+
+    /// The step that made the current state and its wall time, s (None: step 0).
+    pub fn last_step(&self) -> Option<&(StepReport, f64)> {
+        self.last_step.as_ref()
+    }
+
+    /// Simulation time of the current state.
+    pub fn stamp(&self) -> Time {
+        Time::from_secs(self.scene.world.time())
+    }
+
+    /// The messages of the current state.
+    pub fn frame(&self, content: Content) -> Result<Frame, CdrError> {
+        let (report, duration) = match &self.last_step {
+            Some((r, d)) => (Some(r), *d),
+            None => (None, 0.0),
+        };
+        self.frame_of(&self.scene, report, duration, content)
+    }
+
+    /// [`Session::frame`] of another copy of this session's scene (`run --record`
+    /// reads the runner's scene instead of cloning its world into the session each
+    /// step): the world's state from `scene` and `report` (None: step 0) with its wall
+    /// time `step_duration` (s), the inputs and counters from `self`.
+    pub fn frame_of(
+        &self,
+        scene: &Scene,
+        report: Option<&StepReport>,
+        step_duration: f64,
+        content: Content,
+    ) -> Result<Frame, CdrError> {
+        let p = Produce {
+            scene,
+            style: &self.style,
+            inputs: &self.inputs,
+            handle_topics: &self.handle_topics,
+            counters: &self.counters,
+            paused: self.paused,
+            report,
+            step_duration,
+        };
+        let mut messages = Vec::with_capacity(self.table.rows.len());
+        for row in &self.table.rows {
+            let wanted = match content {
+                Content::All => true,
+                Content::Statuses => row.kind.name == "status",
+            };
+            let m = if wanted {
+                row.kind.producer.produce(&p, row.scope).transpose()?
+            } else {
+                None
+            };
+            messages.push(m);
+        }
+        Ok(Frame {
+            stamp: p.stamp(),
+            messages,
+        })
+    }
+}
