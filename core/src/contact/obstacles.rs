@@ -321,6 +321,13 @@ pub fn boxes_near(a: &(Vector3, Vector3), b: &(Vector3, Vector3), margin: f64) -
     (0..3).all(|d| a.0[d] - b.1[d] <= margin && b.0[d] - a.1[d] <= margin)
 }
 
+/// Whether the points `a` and `b` are more than `reach` apart along some axis: then
+/// so are their convex hulls (a pair's exact distance is not needed to know it is
+/// beyond the barrier).
+pub fn apart(a: &[Vector3], b: &[Vector3], reach: f64) -> bool {
+    !boxes_near(&bounds(a), &bounds(b), reach)
+}
+
 /// Indices of `boxes` sorted by their minimum along `axis` (ties by index:
 /// deterministic).
 pub fn sort_boxes(boxes: &[(Vector3, Vector3)], axis: usize, order: &mut Vec<u32>) {

@@ -19,7 +19,9 @@ use crate::contact::barrier::{
     barrier, edge_edge, edge_mollifier, friction_mollifier, mollifier_threshold, point_triangle,
     Closest, PairSource,
 };
-use crate::contact::obstacles::{bounds, boxes_near, sort_boxes, window, CellMesh, Obstacles};
+use crate::contact::obstacles::{
+    apart, bounds, boxes_near, sort_boxes, window, CellMesh, Obstacles,
+};
 use crate::geometry::{Point3, Vector3};
 
 /// Lagged friction of one ribbon vertex against one collider (IPC): fixed at the start
@@ -340,6 +342,9 @@ impl Objective<'_> {
             for t in cells_near(geo, &(f.lo, f.hi), obs.axis, f.offset + ct.activation) {
                 for e in cells.owned_edges(t) {
                     let (a, b) = (vertex_position(acc, e[0]), vertex_position(acc, e[1]));
+                    if apart(&f.x, &[a, b], f.offset + ct.activation) {
+                        continue;
+                    }
                     let pair = edge_edge(&f.x[0], &f.x[1], &a, &b);
                     let eps = mollifier_threshold(&f.x[0], &f.x[1], &a, &b);
                     let (m, gm) = edge_mollifier(&f.x[0], &f.x[1], &a, &b, eps);
@@ -360,6 +365,9 @@ impl Objective<'_> {
             for t in cells_near(geo, &(f.lo, f.hi), obs.axis, f.offset + ct.activation) {
                 for &v in cells.owned_vertices(t) {
                     let x = vertex_position(acc, v);
+                    if apart(&[x], &f.x, f.offset + ct.activation) {
+                        continue;
+                    }
                     let pair = point_triangle(&x, &f.x[0], &f.x[1], &f.x[2]);
                     let side = Side::vertex(v, t / 2);
                     self.static_pair(
@@ -412,7 +420,11 @@ impl Objective<'_> {
                 let other = |v: u32| body.vertices[v as usize];
                 let ox = body.cells.triangles[o].map(other);
                 for &v in own.owned_vertices(t) {
-                    let pair = point_triangle(&vertex_position(acc, v), &ox[0], &ox[1], &ox[2]);
+                    let p = vertex_position(acc, v);
+                    if !boxes_near(&(p, p), &body.boxes[o], margin) {
+                        continue;
+                    }
+                    let pair = point_triangle(&p, &ox[0], &ox[1], &ox[2]);
                     let side = Side::vertex(v, e);
                     self.static_pair(
                         acc,
@@ -424,7 +436,11 @@ impl Objective<'_> {
                     );
                 }
                 for &ov in body.cells.owned_vertices(o) {
-                    let pair = point_triangle(&other(ov), &x[0], &x[1], &x[2]);
+                    let p = other(ov);
+                    if !boxes_near(&(p, p), &bt, margin) {
+                        continue;
+                    }
+                    let pair = point_triangle(&p, &x[0], &x[1], &x[2]);
                     let w = [pair.weights[1], pair.weights[2], pair.weights[3]];
                     let side = Side::triangle(tri, w, e);
                     self.static_pair(
@@ -440,6 +456,9 @@ impl Objective<'_> {
                     let (a, bb) = (vertex_position(acc, edge[0]), vertex_position(acc, edge[1]));
                     for oe in body.cells.owned_edges(o) {
                         let (oa, ob) = (other(oe[0]), other(oe[1]));
+                        if apart(&[a, bb], &[oa, ob], margin) {
+                            continue;
+                        }
                         let pair = edge_edge(&a, &bb, &oa, &ob);
                         let eps = mollifier_threshold(&a, &bb, &oa, &ob);
                         let (m, gm) = edge_mollifier(&a, &bb, &oa, &ob, eps);
@@ -738,7 +757,11 @@ impl Objective<'_> {
             if station_gap((vu, vu), tri_u, ct.period) <= ct.skip {
                 continue;
             }
-            let pair = point_triangle(&vertex_position(acc, v), &x[0], &x[1], &x[2]);
+            let p = vertex_position(acc, v);
+            if !boxes_near(&(p, p), &geo.boxes[b], ct.thickness + ct.activation) {
+                continue;
+            }
+            let pair = point_triangle(&p, &x[0], &x[1], &x[2]);
             let w = [pair.weights[1], pair.weights[2], pair.weights[3]];
             let (first, second) = (Side::vertex(v, a / 2), Side::triangle(tri, w, b / 2));
             self.self_pair(acc, ct, &pair, &first, &second, found);
@@ -763,6 +786,9 @@ impl Objective<'_> {
         }
         let p = |v: u32| vertex_position(acc, v);
         let x = [p(e1[0]), p(e1[1]), p(e2[0]), p(e2[1])];
+        if apart(&x[..2], &x[2..], ct.thickness + ct.activation) {
+            return;
+        }
         let pair = edge_edge(&x[0], &x[1], &x[2], &x[3]);
         let eps = mollifier_threshold(&x[0], &x[1], &x[2], &x[3]);
         let (m, gm) = edge_mollifier(&x[0], &x[1], &x[2], &x[3], eps);
