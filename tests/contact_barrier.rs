@@ -464,9 +464,9 @@ fn friction_follows_coulombs_law_on_a_tilted_plane() {
     }
 }
 
-/// (No energy check on the chains: the settled rings of both chain scenes gain energy
-/// in their first step whatever the contact method, e.g. 3.527 -> 3.675 J on the double
-/// chain with the projection as with the barrier, before anything touches.)
+/// (No energy check on the double chain: its settled rings gain energy in their first
+/// step whatever the contact method, 3.527 -> 3.675 J with the projection as with the
+/// barrier, before anything touches.)
 #[test]
 fn double_chain_impact_never_crosses_and_stays_isometric() {
     let c = run_checked(load("ribbon_double_chain", &[]));
@@ -485,6 +485,8 @@ fn mobius_chain_landing_never_crosses_and_stays_isometric() {
         c.other_margin.is_finite(),
         "the loops never came near each other"
     );
+    // measured -2.8e-4 J: the landing only dissipates
+    assert!(c.energy_excess <= 0.0, "{c:?}");
 }
 
 #[test]
