@@ -56,6 +56,27 @@ pub struct FinalState {
     /// Simulation time of the final state, s.
     pub time: f64,
     pub objects: Vec<ObjectFinal>,
+    /// Every handle: what it holds and what it feels.
+    pub handles: Vec<HandleFinal>,
+}
+
+/// A handle at the end of a run.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct HandleFinal {
+    pub name: String,
+    /// Whether it holds `object` at `material_point`.
+    pub attached: bool,
+    /// The object it holds (or held last).
+    pub object: String,
+    /// m, in the object's flat pattern.
+    pub material_point: [f64; 2],
+    /// What the object exerts on the gripper in the last step, in the scene frame: the
+    /// force, N, and the torque about the grasp point, N m (absent while open, and
+    /// before a step).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub force: Option<[f64; 3]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub torque: Option<[f64; 3]>,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -497,8 +518,25 @@ pub fn final_state(world: &World) -> FinalState {
             }
         })
         .collect();
+    let handles = world
+        .handles()
+        .iter()
+        .enumerate()
+        .map(|(h, spec)| {
+            let wrench = world.handle_wrench(h);
+            HandleFinal {
+                name: spec.name.clone(),
+                attached: spec.attached,
+                object: world.object_names()[spec.object].clone(),
+                material_point: [spec.material_point.x, spec.material_point.y],
+                force: wrench.map(|w| [w.force.x, w.force.y, w.force.z]),
+                torque: wrench.map(|w| [w.torque.x, w.torque.y, w.torque.z]),
+            }
+        })
+        .collect();
     FinalState {
         time: world.time(),
         objects,
+        handles,
     }
 }

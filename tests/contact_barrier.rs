@@ -490,6 +490,18 @@ fn mobius_chain_landing_never_crosses_and_stays_isometric() {
 }
 
 #[test]
+fn the_picked_and_placed_ribbon_never_crosses_and_stays_isometric() {
+    // grasped off the table, carried over the box and released to drape on it: the
+    // barrier keeps every frame exact and apart through the grasp and the release
+    let c = run_checked(load("ribbon_pick_and_place", &[]));
+    assert_exact_and_apart("pick and place", &c);
+    assert!(
+        c.collider_margin.is_finite(),
+        "it never came near the table"
+    );
+}
+
+#[test]
 fn a_ribbon_dropped_on_a_box_edge_never_crosses_and_stays_isometric() {
     let c = run_checked(load("ribbon_box_edge", &[]));
     assert_exact_and_apart("box edge", &c);

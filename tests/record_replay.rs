@@ -11,9 +11,7 @@ use developable_sim::record::read::{mcap_files, reindex, scan, BagEvent, BagMess
 use developable_sim::record::recorder::RunRecorder;
 use developable_sim::record::replay::{replay, ReplayOptions, ReplayReport, TopicReport};
 use developable_sim::wire::cdr;
-use developable_sim::wire::msgs::{
-    Clock, MarkerArray, PoseStamped, SimCommand, SimStatus, SingularPoints, Time,
-};
+use developable_sim::wire::msgs::{Clock, SimStatus, Time};
 use developable_sim::wire::qos::Qos;
 use developable_sim::{runner, scene};
 
@@ -52,13 +50,21 @@ fn a_recorded_run_replays_bit_for_bit() {
     let bag = record(&dir, 0.3, BagOptions::default());
     let meta = metadata(&bag);
     let info = &meta.rosbag2_bagfile_information;
-    // 31 states (step 0..30) x (status, clock, markers, singular points), and the 30
-    // step commands
-    assert_eq!(info.message_count, 31 * 4 + 30);
+    // 31 states (step 0..30) x (status, clock, markers, singular points), the 30 step
+    // commands, the twisting handle's grasp state (at step 0, nothing changes after)
+    // and its wrench (each step)
+    assert_eq!(info.message_count, 31 * 4 + 30 + 1 + 30);
     let r = replay(&bag, &ReplayOptions::default()).unwrap();
     assert_eq!(r.steps, 30);
-    assert_eq!(r.topics.len(), 4);
-    assert!(r.topics.iter().all(|t| t.compared == 31), "{r:?}");
+    assert_eq!(r.topics.len(), 6);
+    for t in &r.topics {
+        let want = match t.topic.as_str() {
+            "/handles/twist_end/state" => 1,
+            "/ribbon/twist_end/wrench" => 30,
+            _ => 31,
+        };
+        assert_eq!(t.compared, want, "{t:?}");
+    }
     assert!(r.identical, "{r:?}");
     assert_eq!(r.max_abs_difference, 0.0);
     assert!(r.truncated.is_none());
@@ -246,32 +252,24 @@ fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&BagMessage) -> Option<V
     let mut ids = std::collections::BTreeMap::new();
     for file in mcap_files(src).unwrap() {
         let mut stream = McapStream::open(&file).unwrap();
-        for event in stream.by_ref() {
+        while let Some(event) = stream.next() {
             match event.unwrap() {
                 BagEvent::Metadata { name, values } => out.write_metadata(&name, values).unwrap(),
                 BagEvent::Message(m) => {
+                    // the same type, hash and schema as the source's channel
+                    let ch = stream.channel(m.channel).unwrap().clone();
                     let id = *ids.entry(m.topic.clone()).or_insert_with(|| {
-                        match m.type_name.as_str() {
-                            "rosgraph_msgs/msg/Clock" => {
-                                out.add_topic::<Clock>(&m.topic, Qos::CLOCK)
-                            }
-                            "visualization_msgs/msg/MarkerArray" => {
-                                out.add_topic::<MarkerArray>(&m.topic, Qos::MARKERS)
-                            }
-                            "developable_sim/msg/SingularPoints" => {
-                                out.add_topic::<SingularPoints>(&m.topic, Qos::DATA)
-                            }
-                            "developable_sim/msg/SimStatus" => {
-                                out.add_topic::<SimStatus>(&m.topic, Qos::DATA)
-                            }
-                            "geometry_msgs/msg/PoseStamped" => {
-                                out.add_topic::<PoseStamped>(&m.topic, Qos::SENSOR_DATA)
-                            }
-                            "developable_sim/msg/SimCommand" => {
-                                out.add_topic::<SimCommand>(&m.topic, Qos::DATA)
-                            }
-                            other => panic!("unexpected type {other}"),
-                        }
+                        let hash = ch
+                            .metadata
+                            .get("topic_type_hash")
+                            .cloned()
+                            .unwrap_or_default();
+                        let schema = String::from_utf8(ch.schema.clone()).unwrap();
+                        out.add_topic_of(
+                            &m.topic,
+                            (&ch.type_name, &hash, &|| schema.clone()),
+                            Qos::DATA,
+                        )
                         .unwrap()
                     });
                     if let Some(data) = edit(&m) {

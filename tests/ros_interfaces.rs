@@ -146,6 +146,16 @@ fn every_message_struct_matches_its_msg_definition() {
     );
     root(to_value(&Clock::default()).unwrap(), Clock::TYPE, &mut seen);
     root(
+        to_value(&GraspState::default()).unwrap(),
+        GraspState::TYPE,
+        &mut seen,
+    );
+    root(
+        to_value(&WrenchStamped::default()).unwrap(),
+        WrenchStamped::TYPE,
+        &mut seen,
+    );
+    root(
         to_value(&SimCommand {
             string_array_value: vec!["a".into()],
             ..Default::default()
@@ -169,9 +179,10 @@ fn every_message_struct_matches_its_msg_definition() {
 fn service_parts(name: &str) -> (Vec<FieldDef>, Vec<FieldDef>) {
     let text = SERVICES.iter().find(|(n, _)| *n == name).unwrap().1;
     let (req, resp) = text.split_once("---").unwrap();
+    let package = name.split('/').next().unwrap();
     (
-        parse_msg("std_srvs", req).unwrap(),
-        parse_msg("std_srvs", resp).unwrap(),
+        parse_msg(package, req).unwrap(),
+        parse_msg(package, resp).unwrap(),
     )
 }
 
@@ -236,6 +247,38 @@ fn service_structs_match_std_srvs() {
         "Empty_Response",
         &fields_of(to_value(&EmptyMessage::default()).unwrap()),
         &or_placeholder(resp),
+        &mut seen,
+    );
+}
+
+/// Our services (srv/) against their definitions, field for field.
+#[test]
+fn service_structs_match_our_srv_files() {
+    let mut seen = BTreeSet::new();
+    let (req, resp) = service_parts("developable_sim/srv/Grasp");
+    check_fields(
+        "Grasp_Request",
+        &fields_of(to_value(&GraspRequest::default()).unwrap()),
+        &req,
+        &mut seen,
+    );
+    check_fields(
+        "Grasp_Response",
+        &fields_of(to_value(&GraspResponse::default()).unwrap()),
+        &resp,
+        &mut seen,
+    );
+    let (req, resp) = service_parts("developable_sim/srv/Release");
+    check_fields(
+        "Release_Request",
+        &fields_of(to_value(&ReleaseRequest::default()).unwrap()),
+        &req,
+        &mut seen,
+    );
+    check_fields(
+        "Release_Response",
+        &fields_of(to_value(&ReleaseResponse::default()).unwrap()),
+        &resp,
         &mut seen,
     );
 }

@@ -311,6 +311,12 @@ impl ObjectSim for Frozen {
     fn material_pose(&self, m: &Point2) -> Pose {
         self.0.material_pose(m)
     }
+    fn handles_changed(&mut self, index: usize, handles: &[developable_sim::sim::HandleSpec]) {
+        self.0.handles_changed(index, handles)
+    }
+    fn graspable(&self, m: &Point2) -> Result<Point2, String> {
+        self.0.graspable(m)
+    }
     fn clone_box(&self) -> Box<dyn ObjectSim> {
         Box::new(Frozen(self.0.clone_box(), self.1))
     }

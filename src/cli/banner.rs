@@ -46,6 +46,17 @@ pub fn banner(config: &NodeConfig) -> Vec<String> {
         "[developable_sim]   services: {} {} (std_srvs/srv/Trigger), {} (std_srvs/srv/SetBool)",
         names.reset, names.step, names.set_paused
     ));
+    lines.push(format!(
+        "[developable_sim]   services: {} (developable_sim/srv/Grasp), {} \
+         (developable_sim/srv/Release)",
+        names.grasp, names.release
+    ));
+    if !names.handle_grasp.is_empty() {
+        lines.push(format!(
+            "[developable_sim]   services: {} (std_srvs/srv/SetBool: true closes, false opens)",
+            names.handle_grasp.join(" ")
+        ));
+    }
     if let Some((r, _)) = &config.record {
         lines.push(format!(
             "[developable_sim]   recording into {}",

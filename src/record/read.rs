@@ -103,6 +103,11 @@ impl McapStream {
         &self.channels
     }
 
+    /// The channel `id`, once its record was read.
+    pub fn channel(&self, id: u16) -> Option<&ChannelInfo> {
+        self.channels.get(&id)
+    }
+
     fn stop(&mut self, why: String) -> Option<Result<BagEvent, RecordError>> {
         self.done = true;
         self.truncated = Some(why);

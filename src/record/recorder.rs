@@ -20,6 +20,7 @@ use super::metadata::Qos;
 use super::RecordError;
 use crate::runner::StepObserver;
 use crate::scene::Scene;
+use crate::session::command::Names;
 use crate::session::input::InputPolicy;
 use crate::session::names::NodeNames;
 use crate::session::outputs::{kind_named, OutputRow, Want};
@@ -35,9 +36,8 @@ fn default_max_stamp_lead() -> f64 {
 /// Name of the MCAP metadata record describing the session.
 pub const SESSION_RECORD: &str = "developable_sim";
 
-/// The recording format this build writes: 2 records the commands (`~/commands`) and
-/// the outputs table; 1 (before 2026-12-07) had neither, and replay follows its
-/// statuses instead.
+/// The recording format this build writes and reads: 2 records the commands
+/// (`~/commands`) and the outputs table; 1 (before 2026-12-07) had neither.
 pub const FORMAT: u32 = 2;
 
 /// One recorded output: its kind (`session::outputs::OUTPUTS` names), scope and topic.
@@ -46,23 +46,28 @@ pub struct RecordedOutput {
     pub kind: String,
     /// `global`, `object` or `handle`.
     pub scope: String,
-    /// The object's or handle's index (0 for global).
+    /// The object's or handle's index (0 for global; the object's for object_handle).
     #[serde(default)]
     pub index: usize,
+    /// The handle's index of an `object_handle` output.
+    #[serde(default)]
+    pub handle: usize,
     pub topic: String,
 }
 
 impl RecordedOutput {
     fn of(row: &OutputRow) -> RecordedOutput {
-        let (scope, index) = match row.scope {
-            Scope::Global => ("global", 0),
-            Scope::Object(o) => ("object", o),
-            Scope::Handle(h) => ("handle", h),
+        let (scope, index, handle) = match row.scope {
+            Scope::Global => ("global", 0, 0),
+            Scope::Object(o) => ("object", o, 0),
+            Scope::Handle(h) => ("handle", h, 0),
+            Scope::ObjectHandle(o, h) => ("object_handle", o, h),
         };
         RecordedOutput {
             kind: row.kind.name.to_string(),
             scope: scope.to_string(),
             index,
+            handle,
             topic: row.topic.clone(),
         }
     }
@@ -75,6 +80,7 @@ impl RecordedOutput {
             "global" => Scope::Global,
             "object" => Scope::Object(self.index),
             "handle" => Scope::Handle(self.index),
+            "object_handle" => Scope::ObjectHandle(self.index, self.handle),
             s => return Err(format!("unknown scope `{s}` of output `{}`", self.kind)),
         };
         Ok(OutputRow {
@@ -112,24 +118,12 @@ pub struct SessionInfo {
     /// [`SessionRecorder::record_command`]); bags from before it existed have none.
     #[serde(default)]
     pub tf_failure_topics: Vec<String>,
-    /// Format 2: the commands' topic.
-    #[serde(default)]
-    pub commands_topic: Option<String>,
-    /// Format 2: whether the session started paused.
-    #[serde(default)]
+    /// The commands' topic.
+    pub commands_topic: String,
+    /// Whether the session started paused.
     pub start_paused: bool,
-    /// Format 2: the recorded rows of the outputs table, in the session's order.
-    #[serde(default)]
+    /// The recorded rows of the outputs table, in the session's order.
     pub outputs: Vec<RecordedOutput>,
-    /// Format 1: the clock's topic when recorded.
-    #[serde(default)]
-    pub clock_topic: Option<String>,
-    /// Format 1: the colliders' markers, when recorded.
-    #[serde(default)]
-    pub colliders_topic: Option<String>,
-    /// Format 1: per object (markers, singular points, status); None when not recorded.
-    #[serde(default)]
-    pub object_topics: Vec<(Option<String>, Option<String>, String)>,
 }
 
 /// The bag topic of a handle's failed TF lookups: beside its input topic, so it reads as
@@ -151,8 +145,8 @@ impl SessionInfo {
         m
     }
 
-    /// The description and the recording's format (1 when the record predates it).
-    pub fn from_record(values: &BTreeMap<String, String>) -> Result<(SessionInfo, u32), String> {
+    /// The description, from a recording of this build's format.
+    pub fn from_record(values: &BTreeMap<String, String>) -> Result<SessionInfo, String> {
         let json = values
             .get("session")
             .ok_or("the developable_sim record has no `session` entry")?;
@@ -162,15 +156,14 @@ impl SessionInfo {
                 .map_err(|_| format!("unreadable recording format `{f}`"))?,
             None => 1,
         };
-        if format > FORMAT {
+        if format != FORMAT {
             return Err(format!(
-                "recording format {format} is newer than this build's ({FORMAT}): replay it \
-                 with the developable_sim that recorded it"
+                "recording format {format}, this build reads format {FORMAT} (format 1, before \
+                 2026-12-07, recorded no commands): replay it with the developable_sim that \
+                 recorded it"
             ));
         }
-        let info = serde_json::from_str(json)
-            .map_err(|e| format!("unreadable session description: {e}"))?;
-        Ok((info, format))
+        serde_json::from_str(json).map_err(|e| format!("unreadable session description: {e}"))
     }
 
     /// The session `session` (its scene, policy, style and recorded outputs) as a bag
@@ -192,7 +185,7 @@ impl SessionInfo {
             handle_topics: names.handles.clone(),
             status_handle_topics: session.handle_topics.clone(),
             tf_failure_topics: names.handles.iter().map(|t| tf_failure_topic(t)).collect(),
-            commands_topic: Some(names.commands.clone()),
+            commands_topic: names.commands.clone(),
             start_paused: session.paused,
             outputs: session
                 .table
@@ -201,9 +194,6 @@ impl SessionInfo {
                 .filter(|r| r.want.recorded)
                 .map(RecordedOutput::of)
                 .collect(),
-            clock_topic: None,
-            colliders_topic: None,
-            object_topics: Vec::new(),
         })
     }
 }
@@ -216,6 +206,9 @@ pub struct SessionRecorder {
     tf_failure_topics: Vec<String>,
     tf_failures: Vec<Option<TopicId>>,
     commands: TopicId,
+    /// The scene's handle and object names (commands name them).
+    handle_names: Vec<String>,
+    object_names: Vec<String>,
     /// Per row of the session's outputs table: its bag topic (None: not recorded).
     outputs: Vec<Option<TopicId>>,
     last_ns: u64,
@@ -260,6 +253,14 @@ impl SessionRecorder {
             tf_failures: vec![None; info.tf_failure_topics.len()],
             tf_failure_topics: info.tf_failure_topics,
             commands,
+            handle_names: session
+                .scene
+                .world
+                .handles()
+                .iter()
+                .map(|h| h.name.clone())
+                .collect(),
+            object_names: session.scene.world.object_names().to_vec(),
             outputs,
             last_ns: 0,
         })
@@ -303,13 +304,20 @@ impl SessionRecorder {
                 what,
                 arrival_ns,
             } => self.record_tf_failure(*handle, what, *arrival_ns),
-            other => match other.to_msg(stamp) {
+            other => match other.to_msg(stamp, &self.names()) {
                 Some(m) => {
                     let t = self.stamp();
                     self.bag.write(self.commands, t, &m)
                 }
                 None => Ok(()),
             },
+        }
+    }
+
+    fn names(&self) -> Names<'_> {
+        Names {
+            handles: &self.handle_names,
+            objects: &self.object_names,
         }
     }
 
@@ -397,7 +405,7 @@ impl RunRecorder {
         };
         let table =
             OutputTable::for_scene(scene, &names, run).map_err(|e| bag_error(e.to_string()))?;
-        let session = Session::new(scene.clone(), policy, names.handles.clone(), table);
+        let mut session = Session::new(scene.clone(), policy, names.handles.clone(), table);
         let mut recorder = SessionRecorder::create(dir, options, &session, &names)?;
         recorder.record_frame(&session.frame(Content::All)?)?;
         Ok(RunRecorder {

@@ -3,10 +3,10 @@
 //! (`Session::apply`: poses through the same input filter, steps, resets, pauses,
 //! parameter changes), and compare every recorded output with the recomputed one bit
 //! for bit (`f64::to_bits`: -0.0 and +0.0 differ, and so do NaNs with different bits).
-//! Bags of format 1 (recorded before commands were) carry no commands: their statuses
-//! are the ledger (`step` counts steps since the last reset, `episode` resets), and
-//! the steps and resets they imply are applied. An output the replay produces for a
-//! state that the bag lacks is a difference too (except in the last state of a bag cut
+//! A bag recorded by a build whose messages differ (another type hash on a recorded
+//! topic, or a recording format before commands were recorded) is refused with the
+//! reason. An output the replay produces for a state that the bag lacks is a
+//! difference too (except in the last state of a bag cut
 //! short, or repaired by `bag reindex` after it was). The same build gives zero
 //! difference; otherwise the report names the largest difference per topic and the
 //! first differing field, and `developable_sim replay` exits with code 1.
@@ -19,12 +19,13 @@ use serde::Serialize;
 use super::read::{mcap_files, BagEvent, BagMessage, McapStream, REINDEX_LIBRARY_SUFFIX};
 use super::recorder::{RecordedOutput, SessionInfo, SESSION_RECORD};
 use super::RecordError;
+use crate::session::command::Names;
 use crate::session::input::InputPolicy;
 use crate::session::outputs::OutputRow;
 use crate::session::{Command, Content, Frame, OutputTable, Scope, Session};
 use crate::wire::cdr;
 use crate::wire::introspect::{compare, Value};
-use crate::wire::msgs::{PoseStamped, SimCommand, SimStatus};
+use crate::wire::msgs::{PoseStamped, RosMessage, SimCommand};
 
 /// Replay settings.
 #[derive(Clone, Debug, Default)]
@@ -104,7 +105,7 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
     let mut truncated = false;
     for file in &files {
         let mut stream = McapStream::open(file)?;
-        for event in stream.by_ref() {
+        while let Some(event) = stream.next() {
             match event? {
                 BagEvent::Metadata { name, values } if name == SESSION_RECORD => {
                     if replayed.is_some() {
@@ -124,7 +125,11 @@ pub fn replay(dir: &Path, options: &ReplayOptions) -> Result<ReplayReport, Recor
                             ),
                         ));
                     };
-                    r.message(dir, &m, &mut report)?;
+                    let hash = stream
+                        .channel(m.channel)
+                        .and_then(|c| c.metadata.get("topic_type_hash"))
+                        .map(String::as_str);
+                    r.message(dir, &m, hash, &mut report)?;
                 }
             }
         }
@@ -177,16 +182,12 @@ enum Route {
 /// The re-simulated session and its comparison with the bag so far.
 struct Replayed {
     session: Session,
-    /// The recording's format (see `recorder::FORMAT`).
-    format: u32,
     routes: BTreeMap<String, Route>,
+    /// The topics whose recorded type was checked against this build's.
+    checked: std::collections::BTreeSet<String>,
     /// The replay's messages for the recorded state being compared, and its step.
     frame: Frame,
     frame_step: u64,
-    /// Format 1: (episode, step) of that state, from the statuses.
-    current: (u32, u64),
-    /// Format 1: inputs were applied since `frame` was made.
-    inputs_since_frame: bool,
     per_topic: BTreeMap<String, TopicReport>,
     /// The rows the bag recorded for the current state.
     seen: std::collections::BTreeSet<usize>,
@@ -200,21 +201,19 @@ impl Replayed {
         options: &ReplayOptions,
         report: &mut ReplayReport,
     ) -> Result<Self, RecordError> {
-        let (info, format) = SessionInfo::from_record(values)
+        let info = SessionInfo::from_record(values)
             .map_err(|m| bag_error(dir, format!("{}: {m}", file.display())))?;
-        let (session, routes) = start_session(&info, options, report)
+        let (mut session, routes) = start_session(&info, options, report)
             .map_err(|m| bag_error(dir, format!("{}: {m}", file.display())))?;
         let frame = session
             .frame(Content::All)
             .map_err(|e| bag_error(dir, e.to_string()))?;
         Ok(Replayed {
             session,
-            format,
             routes,
+            checked: std::collections::BTreeSet::new(),
             frame,
             frame_step: 0,
-            current: (0, 0),
-            inputs_since_frame: false,
             per_topic: BTreeMap::new(),
             seen: std::collections::BTreeSet::new(),
         })
@@ -226,11 +225,13 @@ impl Replayed {
         &mut self,
         dir: &Path,
         m: &BagMessage,
+        type_hash: Option<&str>,
         report: &mut ReplayReport,
     ) -> Result<(), RecordError> {
         let Some(route) = self.routes.get(&m.topic).copied() else {
             return Ok(());
         };
+        self.check_type(dir, m, route, type_hash)?;
         let command = match route {
             Route::Input(handle) => Command::Pose {
                 handle,
@@ -247,13 +248,19 @@ impl Replayed {
             },
             Route::Commands => {
                 let msg: SimCommand = decode(dir, m)?;
-                Command::from_msg(&msg).map_err(|e| bag_error(dir, format!("{}: {e}", m.topic)))?
+                let world = &self.session.scene.world;
+                let handles: Vec<String> = world.handles().iter().map(|h| h.name.clone()).collect();
+                let names = Names {
+                    handles: &handles,
+                    objects: world.object_names(),
+                };
+                Command::from_msg(&msg, &names)
+                    .map_err(|e| bag_error(dir, format!("{}: {e}", m.topic)))?
             }
             Route::Output(row) => return self.output(dir, m, row, report),
         };
         if matches!(route, Route::Input(_) | Route::TfFailure(_)) {
             report.inputs += 1;
-            self.inputs_since_frame = true;
         }
         self.apply(dir, &command, report)
     }
@@ -286,7 +293,6 @@ impl Replayed {
         self.seen.clear();
         self.frame = frame;
         self.frame_step = self.session.scene.world.steps_taken();
-        self.inputs_since_frame = false;
     }
 
     /// Count, per topic, the outputs the current frame holds that the bag did not record
@@ -306,20 +312,52 @@ impl Replayed {
         }
     }
 
+    /// The recorded type of `m`'s topic is this build's (checked once per topic): a
+    /// bag of another build's messages cannot be compared field by field.
+    fn check_type(
+        &mut self,
+        dir: &Path,
+        m: &BagMessage,
+        route: Route,
+        type_hash: Option<&str>,
+    ) -> Result<(), RecordError> {
+        if self.checked.contains(&m.topic) {
+            return Ok(());
+        }
+        let (want_type, want_hash) = match route {
+            Route::Input(_) | Route::TfFailure(_) => (PoseStamped::TYPE, PoseStamped::HASH),
+            Route::Commands => (SimCommand::TYPE, SimCommand::HASH),
+            Route::Output(row) => {
+                let p = self.session.table.rows[row].kind.producer;
+                (p.type_name(), p.type_hash())
+            }
+        };
+        let hash = type_hash.unwrap_or("");
+        if m.type_name != want_type || (!hash.is_empty() && hash != want_hash) {
+            return Err(bag_error(
+                dir,
+                format!(
+                    "{}: recorded as {} ({hash}), this build's is {want_type} ({want_hash}): the \
+                     bag was recorded by another version of developable_sim; replay it with \
+                     that version",
+                    m.topic, m.type_name
+                ),
+            ));
+        }
+        self.checked.insert(m.topic.clone());
+        Ok(())
+    }
+
     /// Compare the recorded output `m` (row `row`) with the replay's for the current
-    /// state; in a format-1 bag a status first brings the session to its state.
+    /// state.
     fn output(
         &mut self,
         dir: &Path,
         m: &BagMessage,
         row: usize,
-        report: &mut ReplayReport,
+        _report: &mut ReplayReport,
     ) -> Result<(), RecordError> {
         let kind = self.session.table.rows[row].kind;
-        if self.format == 1 && kind.name == "status" {
-            let st: SimStatus = decode(dir, m)?;
-            self.follow_ledger(dir, &m.topic, &st, report)?;
-        }
         let step = self.frame_step;
         let computed = self.frame.messages.get(row).cloned().flatten();
         let entry = topic_entry(&mut self.per_topic, &m.topic, &m.type_name);
@@ -342,56 +380,12 @@ impl Replayed {
         let value = |bytes: &[u8]| kind.producer.value(bytes).map_err(|e| bag_error(dir, e));
         let (mut r, mut c) = (value(&m.data)?, value(&computed)?);
         if kind.name == "status" {
-            let skipped = if self.format == 1 {
-                WALL_CLOCK_STATUS_FIELDS_FORMAT_1
-            } else {
-                WALL_CLOCK_STATUS_FIELDS
-            };
-            for f in skipped {
+            for f in WALL_CLOCK_STATUS_FIELDS {
                 r.zero_field(f);
                 c.zero_field(f);
             }
         }
         tally(entry, step, &r, &c);
-        Ok(())
-    }
-
-    /// Format 1: a status names the recorded state it belongs to; a new state brings
-    /// the session to it (the step or reset it implies); the same state published
-    /// again (pause toggled) carries the inputs taken since its frame.
-    fn follow_ledger(
-        &mut self,
-        dir: &Path,
-        topic: &str,
-        st: &SimStatus,
-        report: &mut ReplayReport,
-    ) -> Result<(), RecordError> {
-        let (episode, step) = (st.episode, st.step);
-        let (cur_episode, cur_step) = self.current;
-        if (episode, step) == self.current {
-            if self.inputs_since_frame {
-                let frame = self.session.frame(Content::Statuses);
-                self.frame = frame.map_err(|e| bag_error(dir, e.to_string()))?;
-                self.inputs_since_frame = false;
-            }
-            return Ok(());
-        }
-        if step == 0 && episode > cur_episode {
-            // the reset counts one episode: land on the recorded one
-            self.session.counters.episode = episode - 1;
-            self.apply(dir, &Command::Reset, report)?;
-        } else if episode == cur_episode && step == cur_step + 1 {
-            self.apply(dir, &Command::Step, report)?;
-        } else {
-            return Err(bag_error(
-                dir,
-                format!(
-                    "{topic}: status (episode {episode}, step {step}) follows (episode \
-                     {cur_episode}, step {cur_step}): messages are missing from the bag"
-                ),
-            ));
-        }
-        self.current = (episode, step);
         Ok(())
     }
 
@@ -418,37 +412,6 @@ fn bag_error(dir: &Path, message: String) -> RecordError {
     }
 }
 
-/// The rows a format-1 bag recorded (it named its topics, not its outputs): statuses,
-/// the clock, markers, singular points, colliders.
-fn format_1_rows(info: &SessionInfo) -> Vec<RecordedOutput> {
-    let out = |kind: &str, scope: &str, index: usize, topic: &String| RecordedOutput {
-        kind: kind.into(),
-        scope: scope.into(),
-        index,
-        topic: topic.clone(),
-    };
-    let objects = info.object_topics.iter().enumerate();
-    let mut rows: Vec<RecordedOutput> = objects
-        .clone()
-        .map(|(o, (_, _, st))| out("status", "object", o, st))
-        .collect();
-    rows.extend(
-        info.clock_topic
-            .iter()
-            .map(|t| out("clock", "global", 0, t)),
-    );
-    for (o, (m, sp, _)) in objects {
-        rows.extend(m.iter().map(|t| out("markers", "object", o, t)));
-        rows.extend(sp.iter().map(|t| out("singular_points", "object", o, t)));
-    }
-    rows.extend(
-        info.colliders_topic
-            .iter()
-            .map(|t| out("colliders", "global", 0, t)),
-    );
-    rows
-}
-
 /// The session a bag's description rebuilds (its scene, or the one given in
 /// `options`), with the recorded outputs as its table, and where each recorded topic
 /// goes.
@@ -463,12 +426,8 @@ fn start_session(
     }
     .map_err(|e| format!("cannot rebuild the scene: {e}"))?;
     report.scene = scene.name.clone();
-    let recorded = if info.outputs.is_empty() {
-        format_1_rows(info)
-    } else {
-        info.outputs.clone()
-    };
-    let rows = recorded
+    let rows = info
+        .outputs
         .iter()
         .map(RecordedOutput::row)
         .collect::<Result<Vec<_>, _>>()?;
@@ -490,9 +449,7 @@ fn start_session(
     for (h, t) in info.tf_failure_topics.iter().enumerate() {
         routes.insert(t.clone(), Route::TfFailure(h));
     }
-    if let Some(t) = &info.commands_topic {
-        routes.insert(t.clone(), Route::Commands);
-    }
+    routes.insert(info.commands_topic.clone(), Route::Commands);
     for (k, r) in rows.iter().enumerate() {
         routes.insert(r.topic.clone(), Route::Output(k));
     }
@@ -517,6 +474,7 @@ fn check_scopes(
         Scope::Global => false,
         Scope::Object(o) => o >= objects,
         Scope::Handle(h) => h >= handles,
+        Scope::ObjectHandle(o, h) => o >= objects || h >= handles,
     });
     let recorded_objects = rows.iter().filter(|r| r.kind.name == "status").count();
     if handles != info.handle_topics.len() || out_of_range || recorded_objects != objects {
@@ -554,11 +512,3 @@ fn tally(entry: &mut TopicReport, step: u64, r: &Value, c: &Value) {
 /// simulation: not compared.
 const WALL_CLOCK_STATUS_FIELDS: &[&str] =
     &["step_duration", "overrun_ticks", "dropped_publications"];
-
-/// Format 1 also: `paused` (its pause commands were not recorded).
-const WALL_CLOCK_STATUS_FIELDS_FORMAT_1: &[&str] = &[
-    "step_duration",
-    "overrun_ticks",
-    "dropped_publications",
-    "paused",
-];

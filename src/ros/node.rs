@@ -37,6 +37,7 @@ use crate::sim::ReachWatch;
 
 mod control;
 mod endpoints;
+mod grasp;
 mod inputs;
 mod latency;
 

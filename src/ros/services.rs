@@ -20,7 +20,10 @@ use ros2_client::{
 use crate::ros::dds::{dds, NodeError};
 use crate::ros::reply::{ClientWriters, Flushed, HeldReplies};
 use crate::session::names::NodeNames;
-use crate::wire::msgs::{SetBoolRequest, SetBoolResponse, TriggerRequest, TriggerResponse};
+use crate::wire::msgs::{
+    GraspRequest, GraspResponse, ReleaseRequest, ReleaseResponse, SetBoolRequest, SetBoolResponse,
+    TriggerRequest, TriggerResponse,
+};
 use crate::wire::param_msgs::*;
 
 /// One server and the replies it holds.
@@ -125,6 +128,10 @@ pub struct Services {
     pub set_parameters: Service<SetParametersRequest, SetParametersResponse>,
     pub describe_parameters: Service<NamesRequest, DescribeParametersResponse>,
     pub get_parameter_types: Service<NamesRequest, GetParameterTypesResponse>,
+    pub grasp: Service<GraspRequest, GraspResponse>,
+    pub release: Service<ReleaseRequest, ReleaseResponse>,
+    /// Per handle: its open / close shortcut.
+    pub handle_grasp: Vec<Service<SetBoolRequest, SetBoolResponse>>,
     client_writers: ClientWriters,
 }
 
@@ -175,6 +182,18 @@ impl Services {
                 rcl("GetParameterTypes"),
                 "get_parameter_types",
             )?,
+            grasp: Service::new(&mut c, &names.grasp, ("developable_sim", "Grasp"), "grasp")?,
+            release: Service::new(
+                &mut c,
+                &names.release,
+                ("developable_sim", "Release"),
+                "release",
+            )?,
+            handle_grasp: names
+                .handle_grasp
+                .iter()
+                .map(|n| Service::new(&mut c, n, ("std_srvs", "SetBool"), "handle grasp"))
+                .collect::<Result<Vec<_>, _>>()?,
             client_writers: ClientWriters::default(),
         })
     }
@@ -188,7 +207,10 @@ impl Services {
             && self.get_parameters.replies.is_empty()
             && self.set_parameters.replies.is_empty()
             && self.describe_parameters.replies.is_empty()
-            && self.get_parameter_types.replies.is_empty())
+            && self.get_parameter_types.replies.is_empty()
+            && self.grasp.replies.is_empty()
+            && self.release.replies.is_empty()
+            && self.handle_grasp.iter().all(|s| s.replies.is_empty()))
     }
 
     /// Send the held replies whose clients can receive them; what was sent, summed.
@@ -203,7 +225,14 @@ impl Services {
         }
         self.client_writers.refresh(participant);
         let w = &self.client_writers;
+        let shortcuts: Vec<Flushed> = self
+            .handle_grasp
+            .iter_mut()
+            .map(|s| s.flush(node, w, now))
+            .collect();
         let all = [
+            self.grasp.flush(node, w, now),
+            self.release.flush(node, w, now),
             self.reset.flush(node, w, now),
             self.set_paused.flush(node, w, now),
             self.step.flush(node, w, now),
@@ -213,10 +242,12 @@ impl Services {
             self.describe_parameters.flush(node, w, now),
             self.get_parameter_types.flush(node, w, now),
         ];
-        all.iter().fold(Flushed::default(), |a, d| Flushed {
-            sent: a.sent + d.sent,
-            sent_unseen: a.sent_unseen + d.sent_unseen,
-            failed: a.failed + d.failed,
-        })
+        all.iter()
+            .chain(&shortcuts)
+            .fold(Flushed::default(), |a, d| Flushed {
+                sent: a.sent + d.sent,
+                sent_unseen: a.sent_unseen + d.sent_unseen,
+                failed: a.failed + d.failed,
+            })
     }
 }

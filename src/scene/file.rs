@@ -88,8 +88,10 @@ pub struct SceneFile {
 #[serde(deny_unknown_fields)]
 pub struct SolverFile {
     /// `chain` (ours, default: projected Newton with the Newton system solved along the
-    /// chain in O(n)), `gauss_newton` (the same method on a dense matrix, O(n^3) per
-    /// iteration: a baseline) or `lbfgsb` (the paper's).
+    /// chain in O(n)), `trust_region` (ours: a trust-region projected Newton method on
+    /// the same O(n) chain model, the end crease held exactly), `gauss_newton` (the
+    /// damped method on a dense matrix, O(n^3) per iteration: a baseline) or `lbfgsb`
+    /// (the paper's).
     #[serde(default = "d_solver_kind")]
     pub kind: String,
     /// Inner stop: projected gradient reduced by this factor (dimensionless). 1e-6.
@@ -168,6 +170,15 @@ pub struct OutputsFile {
     /// `<object>/start`, `<object>/end`, parent `frame_id`. Default false.
     #[serde(default)]
     pub tf: bool,
+    /// `/handles/<handle>/state` (developable_sim/msg/GraspState, latched): whether each
+    /// handle holds an object, which and where. Default true.
+    #[serde(default = "d_true")]
+    pub grasp_state: bool,
+    /// `/<object>/<handle>/wrench` (geometry_msgs/msg/WrenchStamped, every step while
+    /// the handle holds the object): the force and torque the object exerts on the
+    /// gripper. Default true.
+    #[serde(default = "d_true")]
+    pub wrench: bool,
     /// Hz, at most this many markers messages per second per object (the mesh is the
     /// largest output). Default: every tick.
     #[serde(default)]
@@ -181,6 +192,8 @@ impl Default for OutputsFile {
             status: true,
             clock: true,
             tf: false,
+            grasp_state: true,
+            wrench: true,
             markers_rate: None,
         }
     }
@@ -338,12 +351,6 @@ impl SceneFile {
                     ),
                 ));
             }
-            if self.handles[i].release_at.is_some() {
-                return Err(ck.fail(
-                    &format!("{key}.release_at"),
-                    "only paper objects support releasing a handle",
-                ));
-            }
         }
         let (params, initial) = ribbon_params(ck, rk, ribbon, gravity, solver, specs)?;
         let imperfection = Imperfection {
@@ -422,9 +429,14 @@ impl SceneFile {
 
     fn solver_settings(&self, ck: &Check) -> Result<SolverSettings, SceneError> {
         let s = &self.solver;
-        let kind = match ck.choice("solver.kind", &s.kind, &["gauss_newton", "lbfgsb", "chain"])? {
+        let kind = match ck.choice(
+            "solver.kind",
+            &s.kind,
+            &["gauss_newton", "lbfgsb", "chain", "trust_region"],
+        )? {
             "lbfgsb" => SolverKind::Lbfgsb,
             "chain" => SolverKind::Chain,
+            "trust_region" => SolverKind::TrustRegion,
             _ => SolverKind::GaussNewton,
         };
         let tolerance = ck.positive("solver.tolerance", s.tolerance)?;
@@ -435,7 +447,7 @@ impl SceneFile {
             ));
         }
         let max_iterations = s.max_iterations.unwrap_or(match kind {
-            SolverKind::GaussNewton | SolverKind::Chain => 200,
+            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => 200,
             SolverKind::Lbfgsb => 5000,
         });
         if max_iterations == 0 {
@@ -463,7 +475,6 @@ impl SceneFile {
     fn paper_scene<'a>(&'a self, paper: &'a PaperFile) -> PaperScene<'a> {
         PaperScene {
             paper,
-            handles: &self.handles,
             has_colliders: !self.colliders.is_empty(),
             has_contact: self.contact.is_some(),
             has_forces: !self.forces.is_empty(),
@@ -497,6 +508,8 @@ impl SceneFile {
                 status: self.outputs.status,
                 clock: self.outputs.clock,
                 tf: self.outputs.tf,
+                grasp_state: self.outputs.grasp_state,
+                wrench: self.outputs.wrench,
                 markers_rate: self.outputs.markers_rate,
             },
             handle_tf_frames: self.handles.iter().map(|h| h.tf_frame.clone()).collect(),

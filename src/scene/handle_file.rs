@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 use super::check::{pose_from, Check};
 use super::SceneError;
 use crate::geometry::{Point2, Pose};
-use crate::sim::{HandleSpec, Motion, OrientationMode, Trajectory};
+use crate::sim::{GraspEvent, HandleSpec, Motion, OrientationMode, Trajectory};
 
 /// A gripper.
 #[derive(Clone, Debug, Deserialize, Serialize)]
@@ -39,10 +39,28 @@ pub struct HandleFile {
     /// Scripted target when nobody publishes.
     #[serde(default)]
     pub trajectory: TrajectoryFile,
-    /// Time from which the handle lets go, s (paper objects only: unloading, fig. 18).
-    /// Default: never.
+    /// Whether the handle holds its object from t = 0. Default true; false: it grasps
+    /// later (`grasp_at`, the grasp services).
+    #[serde(default = "d_true")]
+    pub attached: bool,
+    /// Reach of a closing gripper, m: it grasps the surface point nearest its target
+    /// within this distance (`grasp_at`, `/handles/<name>/grasp`). Default 0.02.
+    #[serde(default = "d_grasp_radius")]
+    pub grasp_radius: f64,
+    /// Time at which the gripper closes, s (while it follows its script). Default:
+    /// never.
+    #[serde(default)]
+    pub grasp_at: Option<f64>,
+    /// Time from which the handle lets go, s (while it follows its script; unloading,
+    /// fig. 18). Default: never.
     #[serde(default)]
     pub release_at: Option<f64>,
+}
+fn d_true() -> bool {
+    true
+}
+fn d_grasp_radius() -> f64 {
+    crate::sim::handle::DEFAULT_GRASP_RADIUS
 }
 fn d_axes() -> Vec<String> {
     vec!["x".into(), "y".into(), "z".into()]
@@ -196,17 +214,18 @@ pub(super) fn parse_handle(
         None => None,
     };
     let topic = input_topic(ck, key, h)?;
+    let trajectory = Trajectory {
+        initial: Pose::identity(),
+        motions,
+    };
     Ok((
         HandleSpec {
-            name: h.name.clone(),
-            object,
-            material_point: point,
             position_axes: axes,
             orientation,
-            trajectory: Trajectory {
-                initial: Pose::identity(),
-                motions,
-            },
+            attached: h.attached,
+            grasp_radius: ck.non_negative(&format!("{key}.grasp_radius"), h.grasp_radius)?,
+            script: grasp_script(ck, key, h)?,
+            ..HandleSpec::new(&h.name, object, point, trajectory)
         },
         initial,
         topic,
@@ -239,4 +258,19 @@ fn input_topic(ck: &Check, key: &str, h: &HandleFile) -> Result<String, SceneErr
         }
     }
     Ok(topic)
+}
+
+/// The handle's scripted grasp and release (`grasp_at`, `release_at`, s), in time order.
+fn grasp_script(ck: &Check, key: &str, h: &HandleFile) -> Result<Vec<GraspEvent>, SceneError> {
+    let mut script = Vec::new();
+    if let Some(t) = h.grasp_at {
+        let time = ck.non_negative(&format!("{key}.grasp_at"), t)?;
+        script.push(GraspEvent { time, grasp: true });
+    }
+    if let Some(t) = h.release_at {
+        let time = ck.non_negative(&format!("{key}.release_at"), t)?;
+        script.push(GraspEvent { time, grasp: false });
+    }
+    script.sort_by(|a, b| a.time.total_cmp(&b.time));
+    Ok(script)
 }

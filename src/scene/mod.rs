@@ -81,6 +81,10 @@ pub struct Outputs {
     pub clock: bool,
     /// Grasp and end frames on `/tf`.
     pub tf: bool,
+    /// Each handle's grasp state on `/handles/<handle>/state`.
+    pub grasp_state: bool,
+    /// What each handle feels on `/<object>/<handle>/wrench`.
+    pub wrench: bool,
     /// Hz, the most markers messages per second per object (None: every tick).
     pub markers_rate: Option<f64>,
 }

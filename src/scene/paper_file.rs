@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::check::{pose_from, Check};
-use super::handle_file::{HandleFile, PoseFile};
+use super::handle_file::PoseFile;
 use super::SceneError;
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::paper::{Collider, LengthRestoration, PaperParams, PaperSim, PresetCrease};
@@ -214,8 +214,6 @@ fn d_radius() -> f64 {
 /// What a paper object reads besides its `paper:` section.
 pub(super) struct PaperScene<'a> {
     pub(super) paper: &'a PaperFile,
-    /// The scene's handles as parsed (every one holds this sheet: it is the only object).
-    pub(super) handles: &'a [HandleFile],
     /// Top-level `colliders:`, `contact:` and `forces:` are given (none applies to paper).
     pub(super) has_colliders: bool,
     pub(super) has_contact: bool,
@@ -268,7 +266,7 @@ pub(super) fn prepare_paper(
     let thresholds = thresholds(ck, paper)?;
     let colliders = paper_colliders(ck, &paper.colliders)?;
     let preset_creases = preset_creases(ck, &sheet, &paper.creases)?;
-    let releases = paper_handles(ck, &sheet, scene.handles, specs)?;
+    paper_handles(ck, &sheet, specs)?;
     if scene.has_forces {
         return Err(ck.fail("forces", "point forces are not supported on paper objects"));
     }
@@ -307,7 +305,6 @@ pub(super) fn prepare_paper(
         preset_creases,
         imperfection: m.imperfection,
         seed: scene.seed,
-        handle_releases: releases,
         initial_shape: crate::paper::PaperInitialShape::Flat,
     };
     Ok(PreparedPaper { params })
@@ -508,17 +505,14 @@ fn preset_creases(
 }
 
 /// Check the handles on the sheet (each holds a boundary point, sec. 3.3) and place a
-/// handle without an initial pose at its point on the placed sheet; returns the release
-/// times, (handle index, s).
+/// handle without an initial pose at its point on the placed sheet.
 fn paper_handles(
     ck: &Check,
     sheet: &Sheet,
-    files: &[HandleFile],
     specs: &mut [(HandleSpec, Option<Pose>)],
-) -> Result<Vec<(usize, f64)>, SceneError> {
+) -> Result<(), SceneError> {
     let (width, height) = (sheet.width, sheet.height);
-    let mut releases = Vec::new();
-    for (i, (h, (spec, initial))) in files.iter().zip(specs.iter_mut()).enumerate() {
+    for (i, (spec, initial)) in specs.iter_mut().enumerate() {
         let hkey = format!("handles.{i}");
         let p = spec.material_point;
         if !sheet.on_boundary(&p) {
@@ -530,13 +524,10 @@ fn paper_handles(
                     ),
                 ));
         }
-        if let Some(t) = h.release_at {
-            releases.push((i, ck.non_negative(&format!("{hkey}.release_at"), t)?));
-        }
         let at = sheet.placement * Pose::translation(p.x, p.y, 0.0);
         spec.trajectory.initial = initial.unwrap_or(at);
     }
-    Ok(releases)
+    Ok(())
 }
 
 /// The keys validated after the handles: density, stiffnesses, damping, sampling,

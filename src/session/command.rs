@@ -5,6 +5,8 @@
 //! [`super::Session::apply`]; `replay` reads the same commands back from a bag and
 //! applies them with the same function, so a replay does what the node did.
 
+use crate::geometry::Point2;
+use crate::sim::Hold;
 use crate::wire::msgs::{PoseStamped, SimCommand, Time};
 
 use super::params::ParamValue;
@@ -39,6 +41,23 @@ pub enum Command {
     SetPaused(bool),
     /// A run-time parameter took a new value (`~/set_parameters`, already checked).
     SetParameter { name: String, value: ParamValue },
+    /// Handle `handle` grasps object `object` at `material_point` (m, flat pattern,
+    /// already resolved: the grasp services' nearest-point search happened before), held
+    /// as `hold` (None: as the scene declared the handle).
+    Grasp {
+        handle: usize,
+        object: usize,
+        material_point: Point2,
+        hold: Option<Hold>,
+    },
+    /// Handle `handle` lets go.
+    Release { handle: usize },
+}
+
+/// The names a recorded grasp or release refers to by index.
+pub struct Names<'a> {
+    pub handles: &'a [String],
+    pub objects: &'a [String],
 }
 
 /// A [`SimCommand`] that is not a command of this build (a newer bag, or damage).
@@ -50,7 +69,7 @@ impl Command {
     /// The message a bag keeps for this command on `~/commands`, stamped with the
     /// simulated time `stamp` it was applied at. None for poses and failed TF lookups:
     /// they are recorded on their handle's topics.
-    pub fn to_msg(&self, stamp: Time) -> Option<SimCommand> {
+    pub fn to_msg(&self, stamp: Time, names: &Names) -> Option<SimCommand> {
         let mut m = SimCommand {
             stamp,
             ..SimCommand::default()
@@ -86,12 +105,38 @@ impl Command {
                     }
                 }
             }
+            Command::Grasp {
+                handle,
+                object,
+                material_point,
+                hold,
+            } => {
+                m.kind = SimCommand::GRASP;
+                m.handle = names.handles.get(*handle)?.clone();
+                m.object = names.objects.get(*object)?.clone();
+                m.material_point = [material_point.x, material_point.y];
+                (m.hold, m.double_value) = match hold {
+                    None => (String::new(), 0.0),
+                    Some(Hold::Position) => ("position".into(), 0.0),
+                    Some(Hold::Normal { stiffness }) => ("normal".into(), *stiffness),
+                    Some(Hold::Full) => ("full".into(), 0.0),
+                };
+            }
+            Command::Release { handle } => {
+                m.kind = SimCommand::RELEASE;
+                m.handle = names.handles.get(*handle)?.clone();
+            }
         }
         Some(m)
     }
 
     /// The command a recorded [`SimCommand`] holds.
-    pub fn from_msg(m: &SimCommand) -> Result<Command, UnknownCommand> {
+    pub fn from_msg(m: &SimCommand, names: &Names) -> Result<Command, UnknownCommand> {
+        let index = |list: &[String], name: &str, what: &str| {
+            list.iter()
+                .position(|n| n == name)
+                .ok_or_else(|| UnknownCommand(format!("{what} `{name}` is not in the scene")))
+        };
         Ok(match m.kind {
             SimCommand::STEP => Command::Step,
             SimCommand::RESET => Command::Reset,
@@ -113,6 +158,23 @@ impl Command {
                         )))
                     }
                 },
+            },
+            SimCommand::GRASP => Command::Grasp {
+                handle: index(names.handles, &m.handle, "handle")?,
+                object: index(names.objects, &m.object, "object")?,
+                material_point: Point2::new(m.material_point[0], m.material_point[1]),
+                hold: match m.hold.as_str() {
+                    "" => None,
+                    "position" => Some(Hold::Position),
+                    "normal" => Some(Hold::Normal {
+                        stiffness: m.double_value,
+                    }),
+                    "full" => Some(Hold::Full),
+                    h => return Err(UnknownCommand(format!("hold `{h}`"))),
+                },
+            },
+            SimCommand::RELEASE => Command::Release {
+                handle: index(names.handles, &m.handle, "handle")?,
             },
             k => return Err(UnknownCommand(format!("kind {k}"))),
         })
@@ -152,11 +214,49 @@ mod tests {
                 value: ParamValue::StringArray(vec!["a".into(), "b".into()]),
             },
         ];
-        for c in commands {
-            let m = c.to_msg(stamp).expect("a ~/commands command");
+        let (handles, objects) = (
+            ["left".to_string(), "right".to_string()],
+            ["ribbon".to_string()],
+        );
+        let names = Names {
+            handles: &handles,
+            objects: &objects,
+        };
+        let grasps = [
+            Command::Grasp {
+                handle: 1,
+                object: 0,
+                material_point: Point2::new(0.25, -0.01),
+                hold: None,
+            },
+            Command::Grasp {
+                handle: 0,
+                object: 0,
+                material_point: Point2::new(1.0, 0.0),
+                hold: Some(Hold::Normal { stiffness: 2.5 }),
+            },
+            Command::Grasp {
+                handle: 0,
+                object: 0,
+                material_point: Point2::new(0.5, 0.0),
+                hold: Some(Hold::Full),
+            },
+            Command::Release { handle: 1 },
+        ];
+        for c in commands.into_iter().chain(grasps) {
+            let m = c.to_msg(stamp, &names).expect("a ~/commands command");
             assert_eq!(m.stamp, stamp);
-            assert_eq!(Command::from_msg(&m), Ok(c));
+            assert_eq!(Command::from_msg(&m, &names), Ok(c));
         }
+        // a handle the scene does not have is refused on reading
+        let m = Command::Release { handle: 1 }
+            .to_msg(stamp, &names)
+            .unwrap();
+        let fewer = Names {
+            handles: &handles[..1],
+            objects: &objects,
+        };
+        assert!(Command::from_msg(&m, &fewer).is_err());
     }
 
     #[test]
@@ -167,13 +267,17 @@ mod tests {
             arrival_ns: 1,
             publish_ns: None,
         };
-        assert_eq!(pose.to_msg(Time::default()), None);
+        let names = Names {
+            handles: &[],
+            objects: &[],
+        };
+        assert_eq!(pose.to_msg(Time::default(), &names), None);
         let unknown = SimCommand {
             kind: 200,
             ..SimCommand::default()
         };
         assert_eq!(
-            Command::from_msg(&unknown),
+            Command::from_msg(&unknown, &names),
             Err(UnknownCommand("kind 200".into()))
         );
         let bad_type = SimCommand {
@@ -182,6 +286,6 @@ mod tests {
             parameter_type: 7,
             ..SimCommand::default()
         };
-        assert!(Command::from_msg(&bad_type).is_err());
+        assert!(Command::from_msg(&bad_type, &names).is_err());
     }
 }

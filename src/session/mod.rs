@@ -10,6 +10,7 @@
 
 pub mod command;
 pub mod frames;
+pub mod grasping;
 pub mod input;
 mod markers;
 pub mod names;

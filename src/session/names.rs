@@ -36,6 +36,12 @@ pub struct NodeNames {
     pub reset: String,
     pub set_paused: String,
     pub step: String,
+    /// `~/grasp` (developable_sim/srv/Grasp) and `~/release` (developable_sim/srv/Release).
+    pub grasp: String,
+    pub release: String,
+    /// Per handle: `handles/<handle>/grasp` (std_srvs/srv/SetBool: true closes the
+    /// gripper on the nearest point, false opens it).
+    pub handle_grasp: Vec<String>,
     /// Where a recording keeps the commands the node applied
     /// (developable_sim/msg/SimCommand; bags only, nothing is published there).
     pub commands: String,
@@ -103,6 +109,14 @@ impl NodeNames {
             set_paused: resolve("~/set_paused")?,
             step: resolve("~/step")?,
             commands: resolve("~/commands")?,
+            grasp: resolve("~/grasp")?,
+            release: resolve("~/release")?,
+            handle_grasp: scene
+                .world
+                .handles()
+                .iter()
+                .map(|h| resolve(&format!("handles/{}/grasp", h.name)))
+                .collect::<Result<Vec<_>, _>>()?,
             parameters: ParameterServices {
                 list: resolve("~/list_parameters")?,
                 get: resolve("~/get_parameters")?,

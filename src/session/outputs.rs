@@ -15,7 +15,8 @@ use crate::scene::Scene;
 use crate::wire::cdr::{self, CdrError};
 use crate::wire::introspect::{to_value, Value};
 use crate::wire::msgs::{
-    Clock, MarkerArray, RosMessage, SimStatus, SingularPoints, TFMessage, Time,
+    Clock, GraspState, MarkerArray, RosMessage, SimStatus, SingularPoints, TFMessage, Time,
+    WrenchStamped,
 };
 use crate::wire::qos::Qos;
 
@@ -33,6 +34,8 @@ pub enum ScopeKind {
     PerObject,
     /// One per handle (`{handle}` in its topic; `{object}` is the handle's object).
     PerHandle,
+    /// One per object and handle (`{object}` and `{handle}` in its topic).
+    PerObjectHandle,
 }
 
 /// Whether a row is published (DDS, Foxglove) and whether it is recorded in bags.
@@ -117,6 +120,9 @@ pub struct OutputKind {
     pub qos: Qos,
     /// Published at most `markers_rate` times a second (recorded every state).
     pub throttled: bool,
+    /// Made only when what it says changed (and for an initial state): a latched
+    /// state such as a handle's grasp.
+    pub on_change: bool,
     /// Whether the scene and the run want the row.
     pub want: fn(&Scene, RunOutputs, Scope) -> Want,
     pub producer: &'static dyn Producer,
@@ -131,6 +137,7 @@ pub const OUTPUTS: &[OutputKind] = &[
         topic: "{object}/status",
         qos: Qos::DATA,
         throttled: false,
+        on_change: false,
         // always recorded: the statuses are the ledger of steps a replay follows
         want: |s, _, _| Want {
             published: s.outputs.status,
@@ -144,6 +151,7 @@ pub const OUTPUTS: &[OutputKind] = &[
         topic: "/clock",
         qos: Qos::CLOCK,
         throttled: false,
+        on_change: false,
         want: |s, run, _| Want::both(s.outputs.clock && run.own_clock),
         producer: &Typed::<Clock>(status::clock),
     },
@@ -153,6 +161,7 @@ pub const OUTPUTS: &[OutputKind] = &[
         topic: "{object}/markers",
         qos: Qos::MARKERS,
         throttled: true,
+        on_change: false,
         want: |s, _, _| Want::both(s.outputs.markers),
         producer: &Typed::<MarkerArray>(markers::object_markers),
     },
@@ -162,6 +171,7 @@ pub const OUTPUTS: &[OutputKind] = &[
         topic: "{object}/singular_points",
         qos: Qos::DATA,
         throttled: false,
+        on_change: false,
         want: |s, _, _| Want::both(s.outputs.singular_points),
         producer: &Typed::<SingularPoints>(status::singular_points),
     },
@@ -171,6 +181,7 @@ pub const OUTPUTS: &[OutputKind] = &[
         topic: "colliders",
         qos: Qos::MARKERS,
         throttled: false,
+        on_change: false,
         want: |s, _, _| {
             let has = !s.world.colliders().is_empty();
             Want::both(s.outputs.markers && has)
@@ -183,8 +194,29 @@ pub const OUTPUTS: &[OutputKind] = &[
         topic: "/tf",
         qos: Qos::TF,
         throttled: false,
+        on_change: false,
         want: |s, _, _| Want::both(s.outputs.tf),
         producer: &Typed::<TFMessage>(frames::tf),
+    },
+    OutputKind {
+        name: "grasp_state",
+        scope: ScopeKind::PerHandle,
+        topic: "handles/{handle}/state",
+        qos: Qos::LATCHED,
+        throttled: false,
+        on_change: true,
+        want: |s, _, _| Want::both(s.outputs.grasp_state),
+        producer: &Typed::<GraspState>(status::grasp_state),
+    },
+    OutputKind {
+        name: "wrench",
+        scope: ScopeKind::PerObjectHandle,
+        topic: "{object}/{handle}/wrench",
+        qos: Qos::DATA,
+        throttled: false,
+        on_change: false,
+        want: |s, _, _| Want::both(s.outputs.wrench),
+        producer: &Typed::<WrenchStamped>(status::wrench),
     },
 ];
 
@@ -260,6 +292,13 @@ fn scopes(scene: &Scene, kind: ScopeKind) -> Vec<Scope> {
         ScopeKind::PerHandle => (0..scene.world.handles().len())
             .map(Scope::Handle)
             .collect(),
+        ScopeKind::PerObjectHandle => {
+            let objects = scene.world.object_names().len();
+            let handles = scene.world.handles().len();
+            (0..objects)
+                .flat_map(|o| (0..handles).map(move |h| Scope::ObjectHandle(o, h)))
+                .collect()
+        }
     }
 }
 
@@ -270,6 +309,7 @@ fn topic_of(scene: &Scene, kind: &OutputKind, scope: Scope) -> String {
         Scope::Global => (None, None),
         Scope::Object(o) => (Some(o), None),
         Scope::Handle(h) => (world.handles().get(h).map(|s| s.object), Some(h)),
+        Scope::ObjectHandle(o, h) => (Some(o), Some(h)),
     };
     let mut topic = kind.topic.to_string();
     if let Some(o) = object.and_then(|o| world.object_names().get(o)) {

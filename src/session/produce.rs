@@ -15,6 +15,8 @@ pub enum Scope {
     Global,
     Object(usize),
     Handle(usize),
+    /// A handle on an object (what handle `.1` feels from object `.0`).
+    ObjectHandle(usize, usize),
 }
 
 /// The session's counters that statuses report (all since start-up unless said).
@@ -44,6 +46,10 @@ pub struct Produce<'a> {
     pub paused: bool,
     /// The step that made this state (None: the initial state, step 0).
     pub report: Option<&'a StepReport>,
+    /// Per handle: the simulated time of its last grasp or release (zero: the scene's
+    /// own hold), and whether it changed since the last frame was made.
+    pub grasp_changed: &'a [Time],
+    pub grasp_dirty: &'a [bool],
     /// Wall time of that step, s (0 for step 0).
     pub step_duration: f64,
 }

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use crate::geometry::Pose;
 use crate::scene::Scene;
-use crate::sim::StepReport;
+use crate::sim::{GraspAt, GraspError, Grasped, StepReport};
 use crate::wire::cdr::CdrError;
 use crate::wire::msgs::{PoseStamped, Time};
 
@@ -31,6 +31,11 @@ pub enum Applied {
     /// A parameter took effect in the session, or concerns only the node (its pacing,
     /// its TF buffer, the markers' rate): `in_session` says which.
     Parameter { in_session: bool },
+    /// A grasp happened (`changed` false: the handle already held exactly that), or was
+    /// refused.
+    Grasp(Result<Grasped, GraspError>),
+    /// A release happened (true), found the handle open (false), or was refused.
+    Release(Result<bool, GraspError>),
 }
 
 /// Which rows a frame makes.
@@ -38,7 +43,8 @@ pub enum Applied {
 pub enum Content {
     /// Every row of the table.
     All,
-    /// The statuses only (the same state published again, e.g. when paused).
+    /// The statuses and the rows that changed (the same state published again: paused,
+    /// a handle grasped or released).
     Statuses,
 }
 
@@ -54,6 +60,10 @@ pub struct Session {
     pub counters: Counters,
     pub paused: bool,
     inputs: Vec<HandleInput>,
+    /// Per handle: when it last grasped or released (simulated time; zero: the scene's
+    /// own hold) and whether that is not in a frame yet.
+    grasp_changed: Vec<Time>,
+    grasp_dirty: Vec<bool>,
     /// The step that made the current state and its wall time, s (None: step 0).
     last_step: Option<(StepReport, f64)>,
     targets: Vec<Option<Pose>>,
@@ -81,6 +91,8 @@ impl Session {
             },
             paused: false,
             inputs: vec![HandleInput::default(); handles],
+            grasp_changed: vec![Time::default(); handles],
+            grasp_dirty: vec![false; handles],
             last_step: None,
             targets: vec![None; handles],
         }
@@ -115,15 +127,44 @@ impl Session {
                 Applied::Paused { changed }
             }
             Command::SetParameter { name, value } => self.set_parameter(name, value),
+            Command::Grasp {
+                handle,
+                object,
+                material_point,
+                hold,
+            } => {
+                let at = GraspAt::Material(*material_point);
+                let r = self.scene.world.grasp(*handle, *object, at, *hold);
+                if matches!(r, Ok(Grasped { changed: true, .. })) {
+                    self.note_grasp_change(*handle);
+                }
+                Applied::Grasp(r)
+            }
+            Command::Release { handle } => {
+                let r = self.scene.world.release(*handle);
+                if r == Ok(true) {
+                    self.note_grasp_change(*handle);
+                }
+                Applied::Release(r)
+            }
         }
     }
 
+    /// Handle `h` grasped or released now: its state goes out with the next frame.
+    fn note_grasp_change(&mut self, h: usize) {
+        self.grasp_changed[h] = self.stamp();
+        self.grasp_dirty[h] = true;
+    }
+
     /// The messages a command's outcome publishes: a new state's whole frame; a pause
-    /// toggled: the statuses again (subscribers see `paused`); otherwise none.
-    pub fn frame_after(&self, applied: &Applied) -> Option<Result<Frame, CdrError>> {
+    /// toggled, a grasp or a release: the statuses again (subscribers see `paused`,
+    /// the handles' hold) and what changed; otherwise none.
+    pub fn frame_after(&mut self, applied: &Applied) -> Option<Result<Frame, CdrError>> {
         match applied {
             Applied::NewState => Some(self.frame(Content::All)),
-            Applied::Paused { changed: true } => Some(self.frame(Content::Statuses)),
+            Applied::Paused { changed: true }
+            | Applied::Grasp(Ok(Grasped { changed: true, .. }))
+            | Applied::Release(Ok(true)) => Some(self.frame(Content::Statuses)),
             _ => None,
         }
     }
@@ -163,8 +204,14 @@ impl Session {
             *t = input.target;
         }
         let start = Instant::now();
+        let from = self.stamp();
         let report = self.scene.world.step(&self.targets);
         let elapsed = start.elapsed().as_secs_f64();
+        // the script's grasps and releases happened at the start of the step
+        for change in report.scripted.iter().filter(|c| c.result == Ok(true)) {
+            self.grasp_changed[change.handle] = from;
+            self.grasp_dirty[change.handle] = true;
+        }
         for (i, o) in report.objects.iter().enumerate() {
             self.counters.unconverged_steps[i] += u64::from(!o.converged);
             self.counters.rejected_steps[i] += u64::from(o.kept_previous_state);
@@ -182,6 +229,9 @@ impl Session {
         }
         self.counters.episode += 1;
         self.last_step = None;
+        self.grasp_changed
+            .iter_mut()
+            .for_each(|t| *t = Time::default());
     }
 
     /// The step that made the current state and its wall time, s (None: step 0).
@@ -195,12 +245,14 @@ impl Session {
     }
 
     /// The messages of the current state.
-    pub fn frame(&self, content: Content) -> Result<Frame, CdrError> {
+    pub fn frame(&mut self, content: Content) -> Result<Frame, CdrError> {
         let (report, duration) = match &self.last_step {
             Some((r, d)) => (Some(r), *d),
             None => (None, 0.0),
         };
-        self.frame_of(&self.scene, report, duration, content)
+        let frame = self.make_frame(&self.scene, report, duration, content)?;
+        self.grasp_dirty.iter_mut().for_each(|d| *d = false);
+        Ok(frame)
     }
 
     /// [`Session::frame`] of another copy of this session's scene (`run --record`
@@ -208,6 +260,19 @@ impl Session {
     /// step): the world's state from `scene` and `report` (None: step 0) with its wall
     /// time `step_duration` (s), the inputs and counters from `self`.
     pub fn frame_of(
+        &mut self,
+        scene: &Scene,
+        report: Option<&StepReport>,
+        step_duration: f64,
+        content: Content,
+    ) -> Result<Frame, CdrError> {
+        let frame = self.make_frame(scene, report, step_duration, content)?;
+        self.grasp_dirty.iter_mut().for_each(|d| *d = false);
+        Ok(frame)
+    }
+
+    /// The frame of the state of `scene` (see [`Session::frame_of`]).
+    fn make_frame(
         &self,
         scene: &Scene,
         report: Option<&StepReport>,
@@ -223,12 +288,14 @@ impl Session {
             paused: self.paused,
             report,
             step_duration,
+            grasp_changed: &self.grasp_changed,
+            grasp_dirty: &self.grasp_dirty,
         };
         let mut messages = Vec::with_capacity(self.table.rows.len());
         for row in &self.table.rows {
             let wanted = match content {
                 Content::All => true,
-                Content::Statuses => row.kind.name == "status",
+                Content::Statuses => row.kind.name == "status" || row.kind.on_change,
             };
             let m = if wanted {
                 row.kind.producer.produce(&p, row.scope).transpose()?

@@ -2,7 +2,10 @@
 //! small global ones: the clock and each object's singular points as data.
 
 use crate::wire::convert::pose;
-use crate::wire::msgs::{Clock, HandleStatus, SimStatus, SingularPoint, SingularPoints};
+use crate::wire::msgs::{
+    Clock, GraspState, HandleStatus, Header, SimStatus, SingularPoint, SingularPoints, Vector3,
+    Wrench, WrenchStamped,
+};
 
 use super::produce::{Produce, Scope};
 
@@ -102,7 +105,7 @@ pub fn status(p: &Produce, scope: Scope) -> Option<SimStatus> {
     s.strained_edges_pct = strain.strained_edges_pct;
     for (h, spec) in world.handles().iter().enumerate() {
         if spec.object != object {
-            continue;
+            continue; // (the object it holds, or held last)
         }
         let input = &p.inputs[h];
         let target = input
@@ -121,8 +124,68 @@ pub fn status(p: &Produce, scope: Scope) -> Option<SimStatus> {
             ..HandleStatus::default()
         };
         input.fill_status(&mut hs);
+        hs.attached = spec.attached;
+        hs.object = world.object_names()[spec.object].clone();
+        hs.material_point = [spec.material_point.x, spec.material_point.y];
+        hs.grasp_changed = p.grasp_changed[h];
         s.rejected_inputs += input.rejected();
         s.handles.push(hs);
     }
     Some(s)
+}
+
+/// `/handles/<handle>/state`: what the handle holds, made when it changed since the
+/// last frame and for every initial state.
+pub fn grasp_state(p: &Produce, scope: Scope) -> Option<GraspState> {
+    let Scope::Handle(h) = scope else {
+        return None;
+    };
+    if !(p.report.is_none() || p.grasp_dirty.get(h).copied().unwrap_or(false)) {
+        return None;
+    }
+    let world = &p.scene.world;
+    let spec = world.handles().get(h)?;
+    Some(GraspState {
+        header: p.header(),
+        handle: spec.name.clone(),
+        attached: spec.attached,
+        object: world.object_names()[spec.object].clone(),
+        material_point: [spec.material_point.x, spec.material_point.y],
+        changed: p.grasp_changed[h],
+    })
+}
+
+/// `/<object>/<handle>/wrench`: the force (N) and torque (N m) the object exerts on the
+/// gripper, about the grasp point, in the handle's frame `<object>/<handle>` (the frame
+/// at the grasp point on `/tf`), while the handle holds the object.
+pub fn wrench(p: &Produce, scope: Scope) -> Option<WrenchStamped> {
+    let Scope::ObjectHandle(o, h) = scope else {
+        return None;
+    };
+    let world = &p.scene.world;
+    let spec = world.handles().get(h)?;
+    if !spec.holds(o) {
+        return None;
+    }
+    let w = world.handle_wrench(h)?;
+    let world_from_handle = world.mesh(o).frame_at(spec.material_point)?;
+    let into = world_from_handle.rotation.inverse();
+    let vector = |v: crate::geometry::Vector3| {
+        let v = into * v;
+        Vector3 {
+            x: v.x,
+            y: v.y,
+            z: v.z,
+        }
+    };
+    Some(WrenchStamped {
+        header: Header {
+            stamp: p.stamp(),
+            frame_id: format!("{}/{}", world.object_names()[o], spec.name),
+        },
+        wrench: Wrench {
+            force: vector(w.force),
+            torque: vector(w.torque),
+        },
+    })
 }

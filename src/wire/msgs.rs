@@ -302,6 +302,41 @@ impl ros2_client::Message for SetBoolRequest {}
 /// `std_srvs/srv/SetBool` response.
 pub type SetBoolResponse = TriggerResponse;
 
+// ---------------------------------------------------------------- developable_sim (srv/)
+
+/// `developable_sim/srv/Grasp` request (srv/Grasp.srv).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct GraspRequest {
+    pub handle: String,
+    pub object: String,
+    pub by_material_point: bool,
+    pub material_point: [f64; 2],
+    pub world_point: Point,
+    pub max_distance: f64,
+    pub hold: String,
+}
+impl ros2_client::Message for GraspRequest {}
+
+/// `developable_sim/srv/Grasp` response.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct GraspResponse {
+    pub success: bool,
+    pub message: String,
+    pub material_point: [f64; 2],
+    pub distance: f64,
+}
+impl ros2_client::Message for GraspResponse {}
+
+/// `developable_sim/srv/Release` request (srv/Release.srv).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ReleaseRequest {
+    pub handle: String,
+}
+impl ros2_client::Message for ReleaseRequest {}
+
+/// `developable_sim/srv/Release` response.
+pub type ReleaseResponse = TriggerResponse;
+
 // ---------------------------------------------------------------- developable_sim (msg/)
 
 /// `developable_sim/msg/SingularPoint` (msg/SingularPoint.msg).
@@ -342,6 +377,10 @@ pub struct HandleStatus {
     pub rejected_future_stamp: u64,
     pub tf_frame: String,
     pub rejected_tf_lookup: u64,
+    pub attached: bool,
+    pub object: String,
+    pub material_point: [f64; 2],
+    pub grasp_changed: Time,
 }
 
 /// `developable_sim/msg/SimStatus` (msg/SimStatus.msg).
@@ -383,7 +422,7 @@ pub struct SimStatus {
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_1dc8726f278337a6a78742ed2c42980012ea59b9f37b8f624210ecb92b5bb453"
+    "RIHS01_2f6e8cd48d94d2cd1db9744bc6580096a2315cc845a5e8fa31cefb4f1c9e53d3"
 );
 
 /// `developable_sim/msg/SimCommand`: one external action on the simulation as the node
@@ -424,3 +463,38 @@ impl SimCommand {
     pub const PARAMETER_STRING: u8 = 4;
     pub const PARAMETER_STRING_ARRAY: u8 = 9;
 }
+
+/// `developable_sim/msg/GraspState`: what a handle holds (msg/GraspState.msg).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct GraspState {
+    pub header: Header,
+    pub handle: String,
+    pub attached: bool,
+    pub object: String,
+    pub material_point: [f64; 2],
+    pub changed: Time,
+}
+ros_message!(
+    GraspState,
+    "developable_sim/msg/GraspState",
+    "RIHS01_4cbd927ed15c6b9d8dad32a81d358796c9ac942d72b7426372e01311ece24984"
+);
+
+/// `geometry_msgs/msg/Wrench`: force (N) and torque (N m).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Wrench {
+    pub force: Vector3,
+    pub torque: Vector3,
+}
+
+/// `geometry_msgs/msg/WrenchStamped`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct WrenchStamped {
+    pub header: Header,
+    pub wrench: Wrench,
+}
+ros_message!(
+    WrenchStamped,
+    "geometry_msgs/msg/WrenchStamped",
+    "RIHS01_8dc3deaf06b2ab281f9f9a742a8961c328ca7cec16e3fd6586d3a5c83fa78f77"
+);

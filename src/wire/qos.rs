@@ -38,6 +38,13 @@ impl Qos {
         reliable: true,
         transient_local: false,
     };
+    /// A latched state (a handle's grasp): reliable, keep last 1, transient local (a
+    /// late joiner gets the current state).
+    pub const LATCHED: Qos = Qos {
+        depth: 1,
+        reliable: true,
+        transient_local: true,
+    };
     /// `/tf` as tf2's listener reads it: reliable, volatile, keep last 100.
     pub const TF: Qos = Qos {
         depth: 100,

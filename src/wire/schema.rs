@@ -15,6 +15,18 @@ pub const DEFINITIONS: &[(&str, &str)] = &[
         include_str!("../../msg/SimCommand.msg"),
     ),
     (
+        "developable_sim/msg/GraspState",
+        include_str!("../../msg/GraspState.msg"),
+    ),
+    (
+        "geometry_msgs/msg/Wrench",
+        include_str!("interfaces/geometry_msgs/Wrench.msg"),
+    ),
+    (
+        "geometry_msgs/msg/WrenchStamped",
+        include_str!("interfaces/geometry_msgs/WrenchStamped.msg"),
+    ),
+    (
         "developable_sim/msg/HandleStatus",
         include_str!("../../msg/HandleStatus.msg"),
     ),
@@ -102,6 +114,14 @@ pub const DEFINITIONS: &[(&str, &str)] = &[
 
 /// `(package/srv/Type, definition)` of the services the node serves.
 pub const SERVICES: &[(&str, &str)] = &[
+    (
+        "developable_sim/srv/Grasp",
+        include_str!("../../srv/Grasp.srv"),
+    ),
+    (
+        "developable_sim/srv/Release",
+        include_str!("../../srv/Release.srv"),
+    ),
     (
         "std_srvs/srv/Trigger",
         include_str!("interfaces/std_srvs/Trigger.srv"),

@@ -151,6 +151,20 @@ class HandleStatus(IdlStruct, typename="developable_sim::msg::dds_::HandleStatus
     rejected_future_stamp: t.uint64 = 0
     tf_frame: str = ""
     rejected_tf_lookup: t.uint64 = 0
+    attached: bool = False
+    object: str = ""
+    material_point: t.array[t.float64, 2] = field(default_factory=lambda: [0.0, 0.0])
+    grasp_changed: Time = field(default_factory=Time)
+
+
+@dataclass
+class GraspState(IdlStruct, typename="developable_sim::msg::dds_::GraspState_"):
+    header: Header = field(default_factory=Header)
+    handle: str = ""
+    attached: bool = False
+    object: str = ""
+    material_point: t.array[t.float64, 2] = field(default_factory=lambda: [0.0, 0.0])
+    changed: Time = field(default_factory=Time)
 
 
 @dataclass
@@ -232,6 +246,56 @@ class SetBoolResponse(IdlStruct, typename="std_srvs::srv::dds_::SetBool_Response
     sequence_number: t.int64 = 0
     success: bool = False
     message: str = ""
+
+
+@dataclass
+class GraspRequest(IdlStruct, typename="developable_sim::srv::dds_::Grasp_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    handle: str = ""
+    object: str = ""
+    by_material_point: bool = False
+    material_point: t.array[t.float64, 2] = field(default_factory=lambda: [0.0, 0.0])
+    world_point: Point = field(default_factory=Point)
+    max_distance: t.float64 = 0.0
+    hold: str = ""
+
+
+@dataclass
+class GraspResponse(IdlStruct, typename="developable_sim::srv::dds_::Grasp_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    success: bool = False
+    message: str = ""
+    material_point: t.array[t.float64, 2] = field(default_factory=lambda: [0.0, 0.0])
+    distance: t.float64 = 0.0
+
+
+@dataclass
+class ReleaseRequest(IdlStruct, typename="developable_sim::srv::dds_::Release_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    handle: str = ""
+
+
+@dataclass
+class ReleaseResponse(IdlStruct, typename="developable_sim::srv::dds_::Release_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    success: bool = False
+    message: str = ""
+
+
+@dataclass
+class Wrench(IdlStruct, typename="geometry_msgs::msg::dds_::Wrench_"):
+    force: Vector3 = field(default_factory=Vector3)
+    torque: Vector3 = field(default_factory=Vector3)
+
+
+@dataclass
+class WrenchStamped(IdlStruct, typename="geometry_msgs::msg::dds_::WrenchStamped_"):
+    header: Header = field(default_factory=Header)
+    wrench: Wrench = field(default_factory=Wrench)
 
 
 @dataclass

@@ -153,3 +153,72 @@ def test_runtime_changes_pauses_steps_and_resets_replay_identical(
     assert code == 1 and not rep["identical"], rep
     differing = {t["topic"] for t in rep["topics"] if t["differing"] > 0}
     assert "/ribbon/status" in differing and "/ribbon/markers" in differing, rep
+
+
+GRASP, RELEASE = 5, 6
+
+
+def test_grasps_and_releases_with_every_runtime_change_replay_identical(
+    start_node, ros, domain_id, tmp_path
+):
+    """A session that releases, grasps (by [u, v], by the nearest point, by the
+    open / close shortcut), pauses, steps, resets and changes every run-time parameter
+    replays IDENTICAL; without one recorded grasp, DIFFERENT."""
+    bag = tmp_path / "bag"
+    node = start_node(domain_id, GRIPPER, "--record", str(bag))
+    grasp = lambda **f: ros.call(  # noqa: E731
+        "/developable_sim/grasp", rt.GraspRequest, rt.GraspResponse, handle="gripper", **f
+    )
+    close = lambda data: ros.call(  # noqa: E731
+        "/handles/gripper/grasp", rt.SetBoolRequest, rt.SetBoolResponse, data=data
+    )
+    time.sleep(0.5)
+    assert ros.call(
+        "/developable_sim/release", rt.ReleaseRequest, rt.ReleaseResponse, handle="gripper"
+    ).success
+    time.sleep(0.4)
+    assert grasp(by_material_point=True, material_point=[0.8, 0.01], hold="full").success
+    assert all(r.successful for r in set_params(ros, max_stamp_lead=5.0, tf_max_lag=0.5))
+    time.sleep(0.3)
+    assert close(False).success
+    assert all(r.successful for r in set_params(ros, paused=True))
+    assert grasp(world_point=rt.Point(x=0.5, y=0.0, z=0.0), max_distance=2.0).success
+    for _ in range(3):
+        assert ros.call("/developable_sim/step", rt.TriggerRequest, rt.TriggerResponse).success
+    results = set_params(
+        ros,
+        paused=False,
+        marker__line_width=0.004,
+        marker__sphere_diameter=0.02,
+        accept_empty_frame_id=True,
+        markers_rate=20.0,
+        real_time_factor=2.0,
+    )
+    assert all(r.successful for r in results)
+    time.sleep(0.4)
+    assert close(False).success
+    assert ros.call("/developable_sim/reset", rt.TriggerRequest, rt.TriggerResponse).success
+    time.sleep(0.3)
+    # paused, the released end is still within the grasp radius when it closes again
+    assert all(r.successful for r in set_params(ros, paused=True))
+    assert close(False).success and close(True).success
+    assert all(r.successful for r in set_params(ros, paused=False))
+    time.sleep(0.3)
+    assert node.stop() == 0, node.log()
+
+    kinds = [k for k, _ in commands(bag)]
+    assert kinds.count(GRASP) == 3 and kinds.count(RELEASE) == 4, kinds
+    assert kinds.count(SET_PAUSED) == 4, kinds
+    code, rep = replay(bag, tmp_path / "replay.json")
+    assert code == 0 and rep["identical"], rep
+    assert rep["resets"] == 1, rep
+    states = next(t for t in rep["topics"] if t["topic"] == "/handles/gripper/state")
+    assert states["compared"] >= 8, states  # the start, 7 changes, the reset's
+
+    # the negative: without the grasp at [0.8, 0.01] the end stays open, and replay says so
+    tampered = tmp_path / "tampered"
+    without_one_command(bag, tampered, lambda m: m.kind == GRASP)
+    code, rep = replay(tampered, tmp_path / "tampered.json")
+    assert code == 1 and not rep["identical"], rep
+    differing = {t["topic"] for t in rep["topics"] if t["differing"] > 0}
+    assert {"/ribbon/status", "/ribbon/markers", "/handles/gripper/state"} <= differing, rep

@@ -106,13 +106,17 @@ def test_foxglove_client_decodes_the_live_mesh_and_sees_it_follow_a_handle(
     node = start_node(domain_id, GRIPPER, "--foxglove", str(port), "--record", str(bag))
     assert f"ws://127.0.0.1:{port}" in node.log()
     ws, info, channels = connect_and_advertise(port)
-    # exactly the node's outputs (gripper: no colliders, no TF), under their ROS names
+    # exactly the node's outputs (gripper: no colliders, no TF; its handle's grasp
+    # state and wrench), under their ROS names
     assert set(channels) == {
         "/ribbon/markers",
         "/ribbon/status",
         "/ribbon/singular_points",
         "/clock",
+        "/handles/gripper/state",
+        "/ribbon/gripper/wrench",
     }
+    assert channels["/ribbon/gripper/wrench"]["schemaName"] == "geometry_msgs/msg/WrenchStamped"
     markers_ch = channels["/ribbon/markers"]
     assert markers_ch["encoding"] == "cdr"
     assert markers_ch["schemaName"] == "visualization_msgs/msg/MarkerArray"

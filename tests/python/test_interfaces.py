@@ -76,6 +76,8 @@ def test_every_recorded_message_round_trips_through_the_msg_definitions(recorded
         "visualization_msgs/msg/MarkerArray",
         "rosgraph_msgs/msg/Clock",
         "developable_sim/msg/SimCommand",
+        "developable_sim/msg/GraspState",
+        "geometry_msgs/msg/WrenchStamped",
     }
     assert nonempty_points > 0
 

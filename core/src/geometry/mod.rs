@@ -8,7 +8,7 @@ mod mesh;
 mod rotation;
 mod twist;
 
-pub use mesh::{EdgeStrain, SurfaceMesh, VertexRegion, STRAIN_THRESHOLD};
+pub use mesh::{EdgeStrain, SurfaceMesh, SurfacePoint, VertexRegion, STRAIN_THRESHOLD};
 pub use rotation::{exp_so3, left_jacobian_so3, log_so3, skew};
 pub use twist::Twist;
 

@@ -81,6 +81,10 @@ pub struct FemSystem {
     rest: Vec<TriangleRest>,
     matrix: BlockSpd,
     topology: (usize, Vec<[u32; 3]>),
+    /// Per vertex of the last step: the force its Dirichlet constraints exerted on the
+    /// sheet, N (the incremental potential's gradient on the held coordinates at the
+    /// last Newton iterate; zero on free coordinates).
+    pub reactions: Vec<Vector3>,
 }
 
 impl FemSystem {
@@ -111,6 +115,7 @@ impl FemSystem {
             rest,
             matrix,
             topology: (mesh.material.len(), mesh.triangles.clone()),
+            reactions: Vec::new(),
         }
     }
 
@@ -506,6 +511,7 @@ pub fn implicit_step(
     strain_limit: Option<StrainLimit>,
 ) -> FemReport {
     let n = mesh.material.len();
+    system.reactions.clear();
     let x_prev: Vec<Vector3> = mesh.position.iter().map(|p| p.coords).collect();
     let x_tilde: Vec<Vector3> = x_prev
         .iter()
@@ -589,6 +595,10 @@ pub fn implicit_step(
     }
     parts.kinetic = kinetic;
     report.energies = parts;
+    system.reactions.clear();
+    system.reactions.extend(
+        (0..n).map(|i| Vector3::from_fn(|a, _| if fixed[3 * i + a] { grad[i][a] } else { 0.0 })),
+    );
     report.handle_work = (0..n)
         .flat_map(|i| (0..3).map(move |a| (i, a)))
         .filter(|&(i, a)| fixed[3 * i + a])

@@ -20,6 +20,8 @@ pub mod crumpling;
 mod diagnostics;
 pub mod fem;
 pub mod geometric;
+mod handle_set;
+mod handles;
 pub mod isometry;
 pub mod params;
 pub mod pattern;

@@ -163,9 +163,6 @@ pub struct PaperParams {
     pub imperfection: f64,
     /// Seed of every random choice (singular vertex placement, imperfection).
     pub seed: u64,
-    /// (handle index, time in s): from that time on the handle no longer holds the
-    /// sheet (unloading, fig. 18).
-    pub handle_releases: Vec<(usize, f64)>,
     pub initial_shape: PaperInitialShape,
 }
 
@@ -205,7 +202,6 @@ impl Default for PaperParams {
             preset_creases: Vec::new(),
             imperfection: 0.0,
             seed: 0,
-            handle_releases: Vec::new(),
             initial_shape: PaperInitialShape::Flat,
         }
     }

@@ -18,30 +18,20 @@ use super::fem::{implicit_step, Dirichlet, FemReport, FemSystem, Spring, StrainL
 use super::geometric::{
     Crease, CreaseKind, Endpoint, FaceKind, GVertexKind, GeometricLayer, GeometricMesh,
 };
+use super::handle_set::{own_handles, PaperHandle};
 use super::isometry::{limit_strains, mean_length_error, restore_lengths, IsometryReport};
 use super::params::{LengthRestoration, PaperError, PaperParams};
 use super::pattern::Pattern;
 use super::physical::{build_physical, Interpolator, PhysicalMesh, Placement};
 use super::reach::{reachable, HeldTarget};
 use super::tracking::{fit_cones, update_junctions, ConeReport, JunctionReport};
-use crate::geometry::{EdgeStrain, Point2, Point3, Pose, SurfaceMesh, Vector3};
+use crate::geometry::{EdgeStrain, Point2, Point3, Pose, SurfaceMesh, SurfacePoint, Vector3};
 use crate::sim::handle::{HandleSpec, OrientationMode};
 use crate::sim::object::{
     CompressionStats, Energies, NoClock, ObjectSim, ObjectStepReport, Phase, PhaseClock,
-    SingularPoint, StepContext,
+    SingularPoint, StepContext, Wrench,
 };
 use nalgebra::Translation3;
-
-/// A handle holding this sheet.
-#[derive(Clone, Debug, PartialEq)]
-struct PaperHandle {
-    /// Index in the world's handle list.
-    world: usize,
-    material: Point2,
-    axes: [bool; 3],
-    orientation: OrientationMode,
-    release_at: Option<f64>,
-}
 
 /// Per-frame measurements (table IV, V of the paper).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -68,14 +58,16 @@ pub struct PaperFrameStats {
 #[derive(Clone, Debug)]
 pub struct PaperSim {
     pub params: PaperParams,
-    pattern: Pattern,
-    layer: GeometricLayer,
-    gmesh: GeometricMesh,
-    sp: PhysicalMesh,
-    fem: FemSystem,
+    pub(super) pattern: Pattern,
+    pub(super) layer: GeometricLayer,
+    pub(super) gmesh: GeometricMesh,
+    pub(super) sp: PhysicalMesh,
+    pub(super) fem: FemSystem,
     rng: ChaCha8Rng,
-    handles: Vec<PaperHandle>,
+    pub(super) handles: Vec<PaperHandle>,
     last_targets: Vec<Option<Pose>>,
+    /// Per entry of `handles`: what it felt in the last step 1 (None before one).
+    pub(super) wrenches: Vec<Option<Wrench>>,
     /// Hard constraints of the current frame: vertex material point -> world target.
     held: Vec<(Point2, Point3)>,
     /// Per entry of `handles`: how far its target is moved to be reachable by an
@@ -87,8 +79,8 @@ pub struct PaperSim {
     /// The time step of the last step 1, s (the inertia of step 3's relaxation).
     dt: f64,
     /// `gmesh` was built by step 2 from the current structure and S_P positions.
-    gmesh_fresh: bool,
-    mesh: SurfaceMesh,
+    pub(super) gmesh_fresh: bool,
+    pub(super) mesh: SurfaceMesh,
     singular: Vec<SingularPoint>,
     frame: PaperFrameStats,
     /// S_P's positions at the start of the frame (before step 1), m.
@@ -109,31 +101,8 @@ impl PaperSim {
             min_boundary_spacing: params.min_boundary_spacing(),
             ..Default::default()
         };
-        let mut own = Vec::new();
-        for (h, spec) in handles.iter().enumerate() {
-            if spec.object != index {
-                continue;
-            }
-            let s = pattern.arc_of(&spec.material_point, 1e-9).ok_or_else(|| PaperError::Invalid {
-                key: "handles.point",
-                message: format!(
-                    "handle `{}` grasps [{}, {}], which is not on the sheet's boundary (the paper's handles are on ∂S, sec. 3.3)",
-                    spec.name, spec.material_point.x, spec.material_point.y
-                ),
-            })?;
-            layer.anchors.push(s);
-            own.push(PaperHandle {
-                world: h,
-                material: pattern.point_at(s),
-                axes: spec.position_axes,
-                orientation: spec.orientation,
-                release_at: params
-                    .handle_releases
-                    .iter()
-                    .find(|(i, _)| *i == h)
-                    .map(|(_, t)| *t),
-            });
-        }
+        let own = own_handles(&pattern, index, handles)?;
+        layer.anchors.extend(own.iter().map(|h| h.arc));
         for c in &params.preset_creases {
             let (Some(a), Some(b)) = (pattern.arc_of(&c.from, 1e-9), pattern.arc_of(&c.to, 1e-9))
             else {
@@ -185,6 +154,7 @@ impl PaperSim {
             sp,
             fem,
             rng,
+            wrenches: vec![None; own.len()],
             handles: own,
             held: Vec::new(),
             time: 0.0,
@@ -292,7 +262,7 @@ impl PaperSim {
         }
     }
 
-    fn vertex_at(&self, m: &Point2) -> Option<usize> {
+    pub(super) fn vertex_at(&self, m: &Point2) -> Option<usize> {
         self.sp.material.iter().position(|x| (x - m).norm() < 1e-9)
     }
 
@@ -300,18 +270,12 @@ impl PaperSim {
     /// grasp vertex (the axes it holds) and, unless its orientation is free, the tangent
     /// plane through two neighbouring vertices placed rigidly in the gripper frame
     /// (sec. 4). Returns (dirichlet, springs, held points for the isometry step).
-    fn handle_constraints(
-        &self,
-        time: f64,
-    ) -> (Vec<Dirichlet>, Vec<Spring>, Vec<(Point2, Point3)>) {
+    fn handle_constraints(&self) -> (Vec<Dirichlet>, Vec<Spring>, Vec<(Point2, Point3)>) {
         let mut dirichlet = Vec::new();
         let mut springs = Vec::new();
         let mut held = Vec::new();
         for (k, h) in self.handles.iter().enumerate() {
-            if h.release_at.is_some_and(|t| time >= t) {
-                continue;
-            }
-            let Some(target) = self.last_targets.get(h.world).copied().flatten() else {
+            let Some(target) = self.grasp_frame(h) else {
                 continue;
             };
             let Some(v) = self
@@ -371,14 +335,14 @@ impl PaperSim {
     /// The corrections that make this frame's targets reachable by an isometric sheet
     /// ([`super::reach`]): among the active handles that hold all three axes of their
     /// grasp point (one that holds fewer leaves the sheet a way out).
-    fn update_reach(&mut self, time: f64) {
+    fn update_reach(&mut self) {
         let mut index = Vec::new();
         let mut points = Vec::new();
         for (k, h) in self.handles.iter().enumerate() {
-            if h.release_at.is_some_and(|t| time >= t) || !h.axes.iter().all(|&a| a) {
+            if !h.axes.iter().all(|&a| a) {
                 continue;
             }
-            if let Some(target) = self.last_targets.get(h.world).copied().flatten() {
+            if let Some(target) = self.grasp_frame(h) {
                 index.push(k);
                 points.push(HeldTarget {
                     material: h.material,
@@ -413,8 +377,8 @@ impl PaperSim {
             *slot = Some(*t);
         }
         self.frame_start.clone_from(&self.sp.position);
-        self.update_reach(time);
-        let (dirichlet, springs, held) = self.handle_constraints(time);
+        self.update_reach();
+        let (dirichlet, springs, held) = self.handle_constraints();
         self.held = held;
         if !self.fem.matches(&self.sp) {
             self.fem = FemSystem::new(&self.sp);
@@ -434,6 +398,7 @@ impl PaperSim {
             fem: report,
             ..Default::default()
         };
+        self.measure_wrenches(&springs);
         report
     }
 
@@ -517,7 +482,7 @@ impl PaperSim {
         // the new S_P) sit at their targets and stay fixed
         let mut fixed = vec![false; sp.material.len()];
         self.sp = sp;
-        let (_, _, held) = self.handle_constraints(self.time);
+        let (_, _, held) = self.handle_constraints();
         for (m, p) in &held {
             if let Some(v) = self.vertex_at(m) {
                 self.sp.position[v] = *p;
@@ -555,7 +520,7 @@ impl PaperSim {
         if self.dt > 0.0 {
             let velocity = vec![Vector3::zeros(); self.sp.material.len()];
             let velocity = std::mem::replace(&mut self.sp.velocity, velocity);
-            let (dirichlet, springs, _) = self.handle_constraints(self.time);
+            let (dirichlet, springs, _) = self.handle_constraints();
             if !self.fem.matches(&self.sp) {
                 self.fem = FemSystem::new(&self.sp);
             }
@@ -646,6 +611,16 @@ impl PaperSim {
         Some((gmesh, sp))
     }
 
+    /// The target of world handle `h` this frame (None before its first).
+    pub(super) fn last_target(&self, h: usize) -> Option<Pose> {
+        self.last_targets.get(h).copied().flatten()
+    }
+
+    /// The display mesh and singular points after S_P changed outside a frame.
+    pub(super) fn rebuild_display(&mut self) {
+        self.rebuild_outputs();
+    }
+
     /// Display mesh, singular points, frame statistics from S_P and S_G.
     fn rebuild_outputs(&mut self) {
         let sp = &self.sp;
@@ -687,7 +662,7 @@ impl PaperSim {
 
 /// Two neighbours of vertex `v` spanning the tangent plane best (most orthogonal
 /// pattern offsets).
-fn tangent_neighbours(sp: &PhysicalMesh, v: usize) -> Vec<usize> {
+pub(super) fn tangent_neighbours(sp: &PhysicalMesh, v: usize) -> Vec<usize> {
     let mut nbrs: Vec<usize> = sp
         .edges
         .iter()
@@ -747,6 +722,18 @@ impl ObjectSim for PaperSim {
     fn material_pose(&self, m: &Point2) -> Pose {
         self.params.placement * Pose::translation(m.x, m.y, 0.0)
     }
+    fn handles_changed(&mut self, index: usize, handles: &[HandleSpec]) {
+        self.rebuild_handles(index, handles);
+    }
+    fn graspable(&self, m: &Point2) -> Result<Point2, String> {
+        self.graspable_point(m)
+    }
+    fn nearest_graspable(&self, p: &Point3) -> Option<SurfacePoint> {
+        self.nearest_boundary_point(p)
+    }
+    fn handle_wrench(&self, handle: usize) -> Option<Wrench> {
+        self.wrench_on(handle)
+    }
     fn compression_stats(&self) -> Option<CompressionStats> {
         let f = &self.frame;
         Some(CompressionStats {
@@ -769,21 +756,22 @@ mod tests {
     /// (rad) about the y axis over 1 s.
     pub(crate) fn two_handles(squeeze: f64, tilt: f64) -> Vec<HandleSpec> {
         let mk = |name: &str, u: f64, sign: f64| HandleSpec {
-            name: name.into(),
-            object: 0,
-            material_point: Point2::new(u, 0.05),
-            position_axes: [true; 3],
             orientation: OrientationMode::Full,
-            trajectory: Trajectory {
-                initial: Pose::translation(u, 0.05, 0.0),
-                motions: vec![Motion {
-                    start: 0.0,
-                    end: 1.0,
-                    translation: Vector3::new(sign * squeeze / 2.0, 0.0, 0.0),
-                    axis: Vector3::y(),
-                    angle: -sign * tilt,
-                }],
-            },
+            ..HandleSpec::new(
+                name,
+                0,
+                Point2::new(u, 0.05),
+                Trajectory {
+                    initial: Pose::translation(u, 0.05, 0.0),
+                    motions: vec![Motion {
+                        start: 0.0,
+                        end: 1.0,
+                        translation: Vector3::new(sign * squeeze / 2.0, 0.0, 0.0),
+                        axis: Vector3::y(),
+                        angle: -sign * tilt,
+                    }],
+                },
+            )
         };
         vec![mk("left", 0.0, 1.0), mk("right", 0.1, -1.0)]
     }

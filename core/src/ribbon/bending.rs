@@ -132,7 +132,7 @@ pub fn clamp_stations(base: &BaseMode, handles: &[HandleSpec], index: usize) -> 
         BaseMode::Floating { .. } => None,
     };
     for (h, spec) in handles.iter().enumerate() {
-        if spec.object == index
+        if spec.holds(index)
             && Some(h) != driven_by
             && matches!(spec.orientation, OrientationMode::Full)
         {

@@ -12,6 +12,8 @@
 
 pub mod bending;
 pub mod contact;
+mod handle_terms;
+mod handles;
 pub mod mass;
 pub mod objective;
 pub mod params;
@@ -19,6 +21,7 @@ pub mod reconstruct;
 mod sim;
 pub mod step;
 
+pub use handle_terms::HandleRef;
 pub use params::{
     BaseMode, ClampRule, KineticModel, LoopKind, RibbonParams, SolverKind, SolverSettings,
 };

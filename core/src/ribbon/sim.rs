@@ -2,6 +2,7 @@
 
 use super::bending::{clamp_stations, crease_bending_weights};
 use super::contact::{ContactStep, RibbonContact};
+use super::handle_terms::{HandleConstraints, HandleRef};
 use super::mass::element_mass;
 use super::objective::{Equality, Layout, NormalGuide, PointForce, RimHistory, StepTerms};
 use super::params::{BaseMode, KineticModel, RibbonParams};
@@ -10,9 +11,9 @@ use super::step::StepSolver;
 use crate::contact::barrier::PairSource;
 use crate::contact::{BodyTopology, ContactEnv};
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3, VertexRegion};
-use crate::sim::handle::{HandleSpec, OrientationMode};
+use crate::sim::handle::HandleSpec;
 use crate::sim::object::{
-    ContactBody, Energies, ObjectSim, ObjectStepReport, Phase, SingularPoint, StepContext,
+    ContactBody, Energies, ObjectSim, ObjectStepReport, Phase, SingularPoint, StepContext, Wrench,
 };
 
 /// A seeded random perturbation of every crease: c_k and psi_k (rad) each get a
@@ -56,18 +57,22 @@ pub struct RibbonForce {
 #[derive(Clone, Debug)]
 pub struct RibbonSim {
     pub params: RibbonParams,
-    strip: Strip,
+    pub(super) strip: Strip,
     layout: Layout,
-    coords: Coordinates,
-    frames: Frames,
+    pub(super) coords: Coordinates,
+    pub(super) frames: Frames,
     history: RimHistory,
     /// The history before the last step (X^n, V^n): the contact stage moves from it,
     /// and velocities are recomputed from it after a contact correction.
     previous_history: RimHistory,
-    terms: StepTerms,
-    /// Which world handle drives each equality / normal guide (same order as built).
-    equality_handles: Vec<Option<usize>>,
-    guide_handles: Vec<usize>,
+    pub(super) terms: StepTerms,
+    /// Which world handle (and which of its attachments) drives each equality / normal
+    /// guide (same order as built).
+    pub(super) equality_handles: Vec<Option<HandleRef>>,
+    pub(super) guide_handles: Vec<HandleRef>,
+    /// Whether a step was taken since the handles last changed (the multipliers are
+    /// then the constraint forces of that step's final state).
+    pub(super) stepped: bool,
     solver: StepSolver,
     q: Vec<f64>,
     mesh: SurfaceMesh,
@@ -79,71 +84,6 @@ pub struct RibbonSim {
     /// Contact inside the step (`contact.method: barrier`), used when the world hands
     /// the step a [`ContactEnv`].
     contact: RibbonContact,
-}
-
-/// The constraints the world's handles put on one ribbon: equalities (position,
-/// orientation, loop closure) and normal guides, each with the handle that drives it.
-struct HandleConstraints {
-    equalities: Vec<Equality>,
-    /// The world handle of each equality (None for a loop closure).
-    equality_handles: Vec<Option<usize>>,
-    normal_guides: Vec<NormalGuide>,
-    /// The world handle of each normal guide.
-    guide_handles: Vec<usize>,
-}
-
-impl HandleConstraints {
-    /// The constraints of the handles with `object == index` (the one driving a
-    /// prescribed base excepted) and the loop closure, in that order; targets are
-    /// placeholders until the first step sets them.
-    fn new(params: &RibbonParams, index: usize, handles: &[HandleSpec]) -> HandleConstraints {
-        let mut c = HandleConstraints {
-            equalities: Vec::new(),
-            equality_handles: Vec::new(),
-            normal_guides: Vec::new(),
-            guide_handles: Vec::new(),
-        };
-        let driven_by = match &params.base {
-            BaseMode::Prescribed { driven_by, .. } => *driven_by,
-            _ => None,
-        };
-        for (h, spec) in handles.iter().enumerate() {
-            if spec.object != index || Some(h) == driven_by {
-                continue;
-            }
-            if spec.position_axes.iter().any(|&a| a) {
-                c.equalities.push(Equality::Position {
-                    material_point: spec.material_point,
-                    target: Point3::origin(),
-                    axes: spec.position_axes,
-                });
-                c.equality_handles.push(Some(h));
-            }
-            match spec.orientation {
-                OrientationMode::Free => {}
-                OrientationMode::Normal { stiffness } => {
-                    c.normal_guides.push(NormalGuide {
-                        material_point: spec.material_point,
-                        target: Vector3::z(),
-                        stiffness,
-                    });
-                    c.guide_handles.push(h);
-                }
-                OrientationMode::Full => {
-                    c.equalities.push(Equality::Orientation {
-                        material_point: spec.material_point,
-                        target: nalgebra::Matrix3::identity(),
-                    });
-                    c.equality_handles.push(Some(h));
-                }
-            }
-        }
-        if let Some(kind) = params.loop_closure {
-            c.equalities.push(Equality::Loop(kind));
-            c.equality_handles.push(None);
-        }
-        c
-    }
 }
 
 /// The coordinates of a ribbon in `initial` shape with its base at `base_pose`, plus
@@ -231,6 +171,7 @@ fn initial_terms(
         equalities,
         multipliers,
         end_crease_multipliers: [0.0, 0.0],
+        end_crease_exact: false,
         penalty: params.solver.penalty,
         crease_bound: params.crease_bound(),
     }
@@ -289,6 +230,7 @@ impl RibbonSim {
             terms,
             equality_handles: constraints.equality_handles,
             guide_handles: constraints.guide_handles,
+            stepped: false,
             solver: StepSolver::default(),
             q,
             mesh: SurfaceMesh::default(),
@@ -386,7 +328,8 @@ impl RibbonSim {
             constraint_violation: outcome.constraint_violation,
             violation_handle: outcome
                 .worst_equality
-                .and_then(|e| self.equality_handles.get(e).copied().flatten()),
+                .and_then(|e| self.equality_handles.get(e).copied().flatten())
+                .map(|r| r.handle),
             ..Default::default()
         };
         if finite {
@@ -402,6 +345,7 @@ impl RibbonSim {
                 report.work_bound += self.contact.last.collider_work;
                 report.contact = Some(self.contact.last);
             }
+            self.stepped = true;
         } else {
             // Keep the last valid state and its multipliers; say so in the report.
             self.terms = saved_terms;
@@ -468,8 +412,10 @@ impl RibbonSim {
             self.layout.pack(&self.coords, &base, &mut self.q);
         }
         for (eq, h) in self.terms.equalities.iter_mut().zip(&self.equality_handles) {
-            let Some(h) = h else { continue };
-            let Some(target) = targets.get(*h).copied() else {
+            let Some(h) = h.map(|r| r.handle) else {
+                continue;
+            };
+            let Some(target) = targets.get(h).map(|t| handles[h].grasp_frame(t)) else {
                 continue;
             };
             match eq {
@@ -483,7 +429,10 @@ impl RibbonSim {
             }
         }
         for (guide, h) in self.terms.normal_guides.iter_mut().zip(&self.guide_handles) {
-            if let Some(target) = targets.get(*h).copied() {
+            if let Some(target) = targets
+                .get(h.handle)
+                .map(|t| handles[h.handle].grasp_frame(t))
+            {
                 guide.target = target.rotation * Vector3::z();
             }
         }
@@ -549,6 +498,30 @@ impl RibbonSim {
         // the contact barrier's potential (docs/contact_barrier.md), 0 without one
         e.external += self.contact.last.barrier_energy;
         e
+    }
+
+    /// Linear momentum of the current velocities, kg m/s: sum over elements of
+    /// rho K v (the consistent mass of each trapezoid, appendix B).
+    pub fn momentum(&self) -> Vector3 {
+        let n = self.strip.segments;
+        let c = &self.coords.crease_direction;
+        let rho = self.params.density;
+        let mut p = Vector3::zeros();
+        for el in 0..n {
+            let m = element_mass(self.strip.length, self.strip.width, n, c[el + 1] - c[el]);
+            let v = [
+                self.history.v_bottom[el],
+                self.history.v_top[el],
+                self.history.v_bottom[el + 1],
+                self.history.v_top[el + 1],
+            ];
+            for a in 0..4 {
+                for b in 0..4 {
+                    p += v[b] * (rho * m.k[a][b]);
+                }
+            }
+        }
+        p
     }
 
     /// Mesh, rulings, regions and singular points from the current frames.
@@ -833,6 +806,7 @@ impl ObjectSim for RibbonSim {
             super::SolverKind::GaussNewton => "gauss_newton",
             super::SolverKind::Lbfgsb => "lbfgsb",
             super::SolverKind::Chain => "chain",
+            super::SolverKind::TrustRegion => "trust_region",
         }
     }
     /// One implicit-Euler step, timed as one [`Phase::Simulation`].
@@ -861,6 +835,24 @@ impl ObjectSim for RibbonSim {
     }
     fn material_pose(&self, m: &Point2) -> Pose {
         RibbonSim::material_pose(self, m)
+    }
+    fn handles_changed(&mut self, index: usize, handles: &[HandleSpec]) {
+        self.rebuild_handle_terms(index, handles);
+    }
+    fn graspable(&self, m: &Point2) -> Result<Point2, String> {
+        self.graspable_point(m)
+    }
+    fn drives_base(&self, handle: usize) -> bool {
+        matches!(
+            self.params.base,
+            BaseMode::Prescribed {
+                driven_by: Some(h),
+                ..
+            } if h == handle
+        )
+    }
+    fn handle_wrench(&self, handle: usize) -> Option<Wrench> {
+        self.wrench_on(handle)
     }
     fn coordinates(&self) -> Vec<(&'static str, &[f64])> {
         vec![

@@ -7,11 +7,17 @@
 use crate::geometry::{Point2, Point3, Pose, Rotation, Vector3};
 
 /// What a handle constrains on the object it holds.
+///
+/// A handle is a gripper: it always has a target (from outside, or its script). Whether
+/// it holds an object, which one and where changes at run time ([`super::World::grasp`],
+/// [`super::World::release`]); each grasp is a new attachment with its own
+/// `generation`, so an object keeps a constraint's state (multipliers) across such edits
+/// only while the same attachment lasts.
 #[derive(Clone, Debug, PartialEq)]
 pub struct HandleSpec {
     /// Name (the ROS topic default is `/handles/<name>`).
     pub name: String,
-    /// Index of the object it holds in the world.
+    /// Index of the object it holds (or held last) in the world.
     pub object: usize,
     /// Grasp point in the object's flat pattern, m.
     pub material_point: Point2,
@@ -22,6 +28,119 @@ pub struct HandleSpec {
     pub orientation: OrientationMode,
     /// Scripted target when no external target arrives.
     pub trajectory: Trajectory,
+    /// Whether the handle holds its object now.
+    pub attached: bool,
+    /// `gripper_from_grasp`: where the grasp point's material frame sits in the gripper
+    /// frame, fixed when a grasp happens at run time so that nothing snaps (the point is
+    /// held where it was relative to the gripper). None: at the gripper's origin with
+    /// its axes (a scene's handle, attached from t = 0).
+    pub grasp_offset: Option<Pose>,
+    /// Counts the attachments of this handle (0: the scene's own).
+    pub generation: u64,
+    /// The grasp shortcut's reach: a gripper that closes grasps the surface point nearest
+    /// its target within this distance, m.
+    pub grasp_radius: f64,
+    /// Scripted grasps and releases, in time order; they act only while the handle
+    /// follows its script (nobody drives it).
+    pub script: Vec<GraspEvent>,
+}
+
+/// A scripted change of a handle's hold.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GraspEvent {
+    /// Simulated time, s: applied at the start of the first step that ends at or after it.
+    pub time: f64,
+    /// True: close on the surface point nearest the target (within `grasp_radius`);
+    /// false: let go.
+    pub grasp: bool,
+}
+
+impl HandleSpec {
+    /// A handle named `name` holding `object` at `material_point` (all three position
+    /// axes, orientation free), attached from t = 0, following `trajectory`.
+    pub fn new(name: &str, object: usize, material_point: Point2, trajectory: Trajectory) -> Self {
+        HandleSpec {
+            name: name.to_string(),
+            object,
+            material_point,
+            position_axes: [true; 3],
+            orientation: OrientationMode::Free,
+            trajectory,
+            attached: true,
+            grasp_offset: None,
+            generation: 0,
+            grasp_radius: DEFAULT_GRASP_RADIUS,
+            script: Vec::new(),
+        }
+    }
+
+    /// Whether the handle acts on object `object` now.
+    pub fn holds(&self, object: usize) -> bool {
+        self.attached && self.object == object
+    }
+
+    /// `world_from_grasp`: where the grasp point's material frame is held when the
+    /// gripper is at `world_from_gripper`.
+    pub fn grasp_frame(&self, world_from_gripper: &Pose) -> Pose {
+        match &self.grasp_offset {
+            Some(offset) => world_from_gripper * offset,
+            None => *world_from_gripper,
+        }
+    }
+}
+
+/// Why a grasp or a release was refused.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum GraspError {
+    #[error("no handle {0}")]
+    UnknownHandle(usize),
+    #[error("no object {0}")]
+    UnknownObject(usize),
+    /// The object cannot be held there (the object says why).
+    #[error("{0}")]
+    NotGraspable(String),
+    #[error("the nearest graspable point is {distance:.4} m away, farther than {max:.4} m")]
+    TooFar { distance: f64, max: f64 },
+    #[error("the object has no surface to grasp (its mesh is empty or not finite)")]
+    NoSurface,
+    #[error("handle {0} drives the ribbon's prescribed base: it cannot let go")]
+    DrivesBase(usize),
+}
+
+/// A scripted grasp or release as it happened.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScriptedChange {
+    pub handle: usize,
+    pub grasp: bool,
+    /// Whether anything changed, or why the grasp failed (nothing within reach).
+    pub result: Result<bool, GraspError>,
+}
+
+/// Default of [`HandleSpec::grasp_radius`], m.
+pub const DEFAULT_GRASP_RADIUS: f64 = 0.02;
+
+/// How a handle holds what it grasps (`position`, `normal` or `full` in the grasp
+/// service and the scene files).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Hold {
+    /// The grasp point's position, orientation free (a pinch).
+    Position,
+    /// Position and the surface normal by normal guiding of stiffness K, J.
+    Normal { stiffness: f64 },
+    /// Position and the whole frame (a clamp).
+    Full,
+}
+
+impl Hold {
+    /// The position axes and orientation mode of this hold.
+    pub fn parts(self) -> ([bool; 3], OrientationMode) {
+        let orientation = match self {
+            Hold::Position => OrientationMode::Free,
+            Hold::Normal { stiffness } => OrientationMode::Normal { stiffness },
+            Hold::Full => OrientationMode::Full,
+        };
+        ([true; 3], orientation)
+    }
 }
 
 /// How a handle holds the orientation of the element under its grasp point.

@@ -6,15 +6,19 @@
 //! Every object meets one contract, [`ObjectSim`] (`object`, a leaf: the simulators
 //! import it, not the world).
 
+mod grasp;
 pub mod handle;
 pub mod object;
 pub mod reach;
 mod world;
 
-pub use handle::{HandleSpec, Motion, OrientationMode, Trajectory};
+pub use grasp::{GraspAt, Grasped};
+pub use handle::{
+    GraspError, GraspEvent, HandleSpec, Hold, Motion, OrientationMode, ScriptedChange, Trajectory,
+};
 pub use object::{
     CompressionStats, ContactBody, Energies, ObjectSim, ObjectStepReport, Phase, PhaseClock,
-    SingularPoint, StepContext,
+    SingularPoint, StepContext, Wrench,
 };
 pub use reach::ReachWatch;
 pub use world::{ContactStepReport, StepReport, World};

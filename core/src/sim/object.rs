@@ -9,7 +9,7 @@ use std::any::Any;
 use std::fmt::Debug;
 
 use crate::contact::BodyTopology;
-use crate::geometry::{EdgeStrain, Point2, Point3, Pose, SurfaceMesh};
+use crate::geometry::{EdgeStrain, Point2, Point3, Pose, SurfaceMesh, SurfacePoint, Vector3};
 
 use super::handle::HandleSpec;
 
@@ -42,6 +42,17 @@ impl Energies {
     pub fn total(&self) -> f64 {
         self.kinetic + self.elastic + self.gravity + self.external
     }
+}
+
+/// The force and torque a handle and the object it holds exert on each other, from
+/// the last step's constraint reaction.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Wrench {
+    /// The force the object exerts on the gripper, N, world frame.
+    pub force: Vector3,
+    /// The torque the object exerts on the gripper about the grasp point, N m, world
+    /// frame.
+    pub torque: Vector3,
 }
 
 /// What one object's step did.
@@ -179,6 +190,35 @@ pub trait ObjectSim: AsAny + Send + Sync + Debug {
     /// `world_from_material_point`: the frame at pattern point `m` (m) in the current
     /// state (the default target of a handle grasping there).
     fn material_pose(&self, m: &Point2) -> Pose;
+    /// The world's handles changed at a step boundary (a grasp or a release): rebuild
+    /// what they hold on this object, object `index` of the world (those with
+    /// [`HandleSpec::holds`]`(index)` act on it from the next step on).
+    fn handles_changed(&mut self, index: usize, handles: &[HandleSpec]);
+    /// The material point a handle grasping at `m` (m, flat pattern) holds: `m` itself
+    /// where the object can be held there, or why it cannot (off the pattern; a sheet of
+    /// paper is held on its boundary, Schreck et al. sec. 3.3).
+    fn graspable(&self, m: &Point2) -> Result<Point2, String>;
+    /// `world_from_material_point` at pattern point `m` (m) in the current state: the
+    /// frame a grasp there holds where it is. By default read off the mesh
+    /// ([`SurfaceMesh::frame_at`]); None off the pattern.
+    fn grasp_pose(&self, m: &Point2) -> Option<Pose> {
+        self.mesh().frame_at(*m)
+    }
+    /// The point a handle can grasp nearest the world point `p` (m): on the surface by
+    /// default.
+    fn nearest_graspable(&self, p: &Point3) -> Option<SurfacePoint> {
+        self.mesh().nearest_surface_point(p)
+    }
+    /// Whether world handle `handle` drives this object's prescribed base (it cannot
+    /// let go: the base would have no pose).
+    fn drives_base(&self, _handle: usize) -> bool {
+        false
+    }
+    /// What the object exerts on world handle `handle` in the last step's final state
+    /// (None when the handle holds nothing on this object, or before the first step).
+    fn handle_wrench(&self, _handle: usize) -> Option<Wrench> {
+        None
+    }
     /// Named reduced coordinates of the current state (ribbons: `crease_direction`,
     /// `bending_angle`), in the order the statistics write them; none by default.
     fn coordinates(&self) -> Vec<(&'static str, &[f64])> {

@@ -70,6 +70,7 @@ impl ReachWatch {
                 });
             }
         }
+        messages.extend(scripted_failures(report, handles));
         messages
     }
 
@@ -77,6 +78,27 @@ impl ReachWatch {
     pub fn clear(&mut self) {
         self.out.clear();
     }
+}
+
+/// A scripted grasp (`grasp_at`) that found nothing to close on, said as a warning: the
+/// gripper stays open, and a scene author wants to know why.
+fn scripted_failures<'a>(
+    report: &'a StepReport,
+    handles: &'a [HandleSpec],
+) -> impl Iterator<Item = ReachMessage> + 'a {
+    report.scripted.iter().filter_map(move |c| {
+        let e = c.result.as_ref().err()?;
+        let name = handles.get(c.handle).map_or("handle", |h| h.name.as_str());
+        let what = if c.grasp { "grasp_at" } else { "release_at" };
+        Some(ReachMessage {
+            object: handles.get(c.handle).map_or(0, |h| h.object),
+            out_of_reach: true,
+            text: format!(
+                "handle '{name}': its scripted {what} at t = {:.3} s did nothing: {e}",
+                report.time
+            ),
+        })
+    })
 }
 
 /// One change of an object's reach.
@@ -102,7 +124,7 @@ impl std::fmt::Display for ReachMessage {
 mod tests {
     use super::*;
     use crate::geometry::Point2;
-    use crate::sim::{ObjectStepReport, OrientationMode, Trajectory};
+    use crate::sim::{GraspError, ObjectStepReport, ScriptedChange, Trajectory};
 
     fn report(violation: f64, handle: Option<usize>, time: f64) -> StepReport {
         StepReport {
@@ -112,19 +134,17 @@ mod tests {
                 violation_handle: handle,
                 ..Default::default()
             }],
-            contact: None,
+            ..Default::default()
         }
     }
 
     fn gripper() -> HandleSpec {
-        HandleSpec {
-            name: "right".into(),
-            object: 0,
-            material_point: Point2::new(1.0, 0.0),
-            position_axes: [true; 3],
-            orientation: OrientationMode::Free,
-            trajectory: Trajectory::fixed(crate::geometry::Pose::identity()),
-        }
+        HandleSpec::new(
+            "right",
+            0,
+            Point2::new(1.0, 0.0),
+            Trajectory::fixed(crate::geometry::Pose::identity()),
+        )
     }
 
     #[test]
@@ -169,6 +189,39 @@ mod tests {
             m[0].text.contains("a constraint is violated by 0.0020 m"),
             "{}",
             m[0].text
+        );
+    }
+
+    #[test]
+    fn a_scripted_grasp_that_finds_nothing_is_a_warning_and_a_success_is_silent() {
+        let names = vec!["ribbon".to_string()];
+        let handles = vec![gripper()];
+        let mut r = report(0.0, None, 1.0);
+        let far = GraspError::TooFar {
+            distance: 0.3,
+            max: 0.02,
+        };
+        r.scripted = vec![
+            ScriptedChange {
+                handle: 0,
+                grasp: true,
+                result: Err(far),
+            },
+            ScriptedChange {
+                handle: 0,
+                grasp: false,
+                result: Ok(true),
+            },
+        ];
+        let m = ReachWatch::default().update(&r, &names, &handles);
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert!(
+            m[0].to_string()
+                == "warning: handle 'right': its scripted grasp_at at t = 1.000 s did \
+                    nothing: the nearest graspable point is 0.3000 m away, farther than \
+                    0.0200 m",
+            "{}",
+            m[0]
         );
     }
 }

@@ -9,10 +9,10 @@ use crate::contact::{
 };
 use crate::geometry::{Point3, Pose, SurfaceMesh};
 
-use super::handle::HandleSpec;
+use super::handle::{HandleSpec, ScriptedChange};
 use super::object::{
     pose_is_finite, NoClock, ObjectSim, ObjectStepReport, Phase, PhaseClock, SingularPoint,
-    StepContext,
+    StepContext, Wrench,
 };
 
 /// What a whole-world step did.
@@ -23,6 +23,8 @@ pub struct StepReport {
     pub objects: Vec<ObjectStepReport>,
     /// The contact stage, when the scene has one.
     pub contact: Option<ContactStepReport>,
+    /// The scripted grasps and releases applied at the start of the step.
+    pub scripted: Vec<ScriptedChange>,
 }
 
 /// What the contact stage did in a step (its wall time is measured by the caller's
@@ -47,9 +49,14 @@ struct ContactState {
 #[derive(Clone, Debug)]
 pub struct World {
     names: Vec<String>,
-    objects: Vec<Box<dyn ObjectSim>>,
+    pub(super) objects: Vec<Box<dyn ObjectSim>>,
     initial_objects: Vec<Box<dyn ObjectSim>>,
-    handles: Vec<HandleSpec>,
+    /// The handles now (grasps and releases edit them, `grasp`).
+    pub(super) handles: Vec<HandleSpec>,
+    /// The handles as the scene declared them (a reset restores them).
+    pub(super) initial_handles: Vec<HandleSpec>,
+    /// Per handle: its next scripted grasp or release.
+    pub(super) script_next: Vec<usize>,
     dt: f64,
     time: f64,
     steps: u64,
@@ -57,7 +64,7 @@ pub struct World {
     /// Contact inside the steps (`contact.method: barrier`) instead of the stage.
     barrier: Option<BarrierState>,
     /// Handle targets at the end of the last step (the start of the next one).
-    last_targets: Vec<Pose>,
+    pub(super) last_targets: Vec<Pose>,
 }
 
 /// Contact inside the objects' steps (docs/contact_barrier.md): the settings, the
@@ -83,6 +90,8 @@ impl World {
             names,
             initial_objects: objects.clone(),
             objects,
+            initial_handles: handles.clone(),
+            script_next: vec![0; handles.len()],
             handles,
             dt,
             time: 0.0,
@@ -234,8 +243,13 @@ impl World {
     pub fn steps_taken(&self) -> u64 {
         self.steps
     }
+    /// The handles now (what each holds changes with grasps and releases).
     pub fn handles(&self) -> &[HandleSpec] {
         &self.handles
+    }
+    /// The handles as the scene declared them.
+    pub fn scene_handles(&self) -> &[HandleSpec] {
+        &self.initial_handles
     }
     pub fn object_names(&self) -> &[String] {
         &self.names
@@ -281,6 +295,7 @@ impl World {
         clock: &dyn PhaseClock,
     ) -> StepReport {
         let t_next = self.time + self.dt;
+        let scripted = self.apply_script(t_next, targets);
         let resolved: Vec<Pose> = (0..self.handles.len())
             .map(|i| {
                 let target = targets
@@ -312,6 +327,7 @@ impl World {
                 time: self.time,
                 objects: reports,
                 contact: Some(contact),
+                scripted,
             };
         }
         // Every object's optimization in parallel: each is independent and sequential
@@ -348,7 +364,18 @@ impl World {
             time: self.time,
             objects: reports,
             contact,
+            scripted,
         }
+    }
+
+    /// What handle `handle` feels from the object it holds, from the last step (None:
+    /// it holds nothing, or no step was taken since it grasped).
+    pub fn handle_wrench(&self, handle: usize) -> Option<Wrench> {
+        let spec = self.handles.get(handle)?;
+        if !spec.attached {
+            return None;
+        }
+        self.objects.get(spec.object)?.handle_wrench(handle)
     }
 
     /// The current surface mesh of object `object`.
@@ -364,6 +391,8 @@ impl World {
     /// Back to the state at t = 0.
     pub fn reset(&mut self) {
         self.objects = self.initial_objects.clone();
+        self.handles = self.initial_handles.clone();
+        self.script_next.iter_mut().for_each(|k| *k = 0);
         self.time = 0.0;
         self.steps = 0;
         self.last_targets = self

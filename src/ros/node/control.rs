@@ -67,6 +67,7 @@ impl SimNode {
             self.io.services.step.reply(id, resp);
         }
         self.drain_parameter_services(next_tick);
+        self.drain_grasp_services();
         self.flush_replies();
     }
 

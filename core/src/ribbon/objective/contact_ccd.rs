@@ -81,7 +81,7 @@ impl Objective<'_> {
         let Some(ct) = self.contact else {
             return 1.0;
         };
-        let scratch = &mut ws.contact.ccd;
+        let scratch = &mut ws.ccd;
         let mut alpha = 1.0;
         for _ in 0..24 {
             self.sample(scratch, 0, 0.0, path);

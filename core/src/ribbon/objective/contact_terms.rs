@@ -8,7 +8,7 @@
 //! gradient goes into the element's wrench ([`Accumulator::add_point_gradient`], with the
 //! sliding of a rim vertex along its rim), its Gauss-Newton Hessian B'' u u^T into the
 //! element's 8x8 block. A pair between two elements of this ribbon is recorded as a
-//! [`PairTerm`] (its Hessian is rank one across the chain: `contact_chain`).
+//! [`PairTerm`] (its Hessian is rank one across the chain: `chain::pairs`).
 
 use std::sync::Arc;
 
@@ -121,7 +121,6 @@ pub struct ContactWorkspace {
     /// Per collider: the summed magnitude of the barrier forces on it at the last
     /// evaluation with forces, N (for the work a moving collider does).
     pub collider_force: Vec<f64>,
-    pub(super) ccd: super::contact_ccd::CcdScratch,
     /// A pair's dense gradient (the dense baseline's Hessian).
     pub(super) dense_g: Vec<f64>,
 }

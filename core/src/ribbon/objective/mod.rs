@@ -29,7 +29,6 @@
 mod accumulate;
 pub mod chain;
 mod contact_ccd;
-mod contact_chain;
 pub mod contact_terms;
 #[cfg(test)]
 mod contact_tests;
@@ -98,6 +97,8 @@ pub struct Workspace {
     pub parts: ObjectiveParts,
     /// The contact terms' buffers and what the last evaluation found.
     pub contact: ContactWorkspace,
+    /// The line search's collision checks' buffers (`contact_ccd`).
+    ccd: contact_ccd::CcdScratch,
 }
 
 impl Default for Coordinates {

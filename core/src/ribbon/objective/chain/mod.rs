@@ -22,8 +22,11 @@
 
 use nalgebra::{Cholesky, Matrix2, SMatrix, SVector};
 
+mod pairs;
+mod product;
+
 use super::hessian::geometric_suffix_sums;
-use super::{Mat8, Objective, Workspace};
+use super::{Mat8, Objective, Vec8, Workspace};
 use crate::geometry::{Matrix3, Vector3};
 
 type Vec6 = SVector<f64, 6>;
@@ -80,11 +83,28 @@ pub struct ChainModel {
     /// of one Newton iteration factorizes the same matrix).
     diagonal: Vec<f64>,
     diagonal_ready: bool,
-    /// Contact pairs across the chain (rank one each, `contact_chain`) and their
+    /// Contact pairs across the chain (rank one each, `pairs`) and their
     /// solve's buffers.
-    pub(super) pairs: Vec<super::contact_terms::PairTerm>,
-    pub(super) pair_order: Vec<u32>,
-    pub(super) pair_scratch: super::contact_chain::PairScratch,
+    pairs: Vec<super::contact_terms::PairTerm>,
+    pair_order: Vec<u32>,
+    pair_scratch: pairs::PairScratch,
+    /// Where the last factorization stopped (for [`Self::negative_curvature`]).
+    failure: product::Failure,
+    /// rho of a penalty rho dc_{n-1}^2 / 2 on the last crease's change in the
+    /// factorization (the trust-region solver's slab face, c_{n-1} = Σ z_k); 0: none.
+    terminal_penalty: f64,
+    /// Whether a factorization holds the unknowns of a pivot that is not positive
+    /// definite instead of failing ([`Self::factor_holding`]), and the pivots it held:
+    /// (crease, its 2x2 pivot), and the floating base's 6x6 one.
+    hold_failing: bool,
+    held_pivots: Vec<(usize, Matrix2<f64>)>,
+    /// The creases held so far (by this and earlier factorizations since
+    /// [`Self::release_held`]): per crease.
+    pinned: Vec<bool>,
+    pinned_root: bool,
+    held_root: Option<Mat6>,
+    closure_mask: Vec<bool>,
+    product: product::ProductBuffers,
 }
 
 impl Objective<'_> {
@@ -122,11 +142,7 @@ impl Objective<'_> {
             );
             *model.closure.get_or_insert_with(Mat8::zeros) += b;
         }
-        super::contact_chain::merge_pairs(
-            &ws.contact.pairs,
-            &mut model.pair_order,
-            &mut model.pairs,
-        );
+        pairs::merge_pairs(&ws.contact.pairs, &mut model.pair_order, &mut model.pairs);
     }
 
     /// Per crease k = 1..n-1: the twists ξ and geometric terms W of c_k and psi_k, and
@@ -383,16 +399,31 @@ impl ChainModel {
     /// (on [[H0, U], [U^T, -S]]), In(H) = In(H0) + In(-K) - In(-S): with H0 positive
     /// definite, H is exactly when K has ROOT positive and ROOT negative eigenvalues.
     ///
-    /// Contact pairs across the chain come on top (`contact_chain`).
+    /// Contact pairs across the chain come on top (`pairs`).
     pub fn factor(&mut self, free: &[bool], shift: &[f64]) -> bool {
         self.factor_chain_only(free, shift) && self.factor_pairs()
     }
 
     /// [`Self::factor`] without the contact pairs.
     fn factor_chain_only(&mut self, free: &[bool], shift: &[f64]) -> bool {
+        self.failure = product::Failure::None;
+        self.held_pivots.clear();
+        self.held_root = None;
         if !self.factor_chain(free, shift) {
             return false;
         }
+        // (the sweep may have held more unknowns: the closure's columns use its mask)
+        let mut mask = std::mem::take(&mut self.closure_mask);
+        mask.clear();
+        mask.extend_from_slice(&self.free);
+        let ok = self.factor_closure(&mask);
+        self.closure_mask = mask;
+        ok
+    }
+
+    /// The loop closure's part of [`Self::factor`] after the chain's sweep: Woodbury's
+    /// capacitance on the free unknowns `free` and its inertia.
+    fn factor_closure(&mut self, free: &[bool]) -> bool {
         self.capacitance = None;
         if self.closure.is_none() {
             return true;
@@ -457,6 +488,7 @@ impl ChainModel {
         let positive = eigen.eigenvalues.iter().filter(|&&l| l > tiny).count();
         let negative = eigen.eigenvalues.iter().filter(|&&l| l < -tiny).count();
         if positive != ROOT || negative != ROOT || !scale.is_finite() {
+            self.failure = product::Failure::Closure;
             return false;
         }
         self.capacitance = Some(eigen);
@@ -474,6 +506,7 @@ impl ChainModel {
         self.pivot_inverse.resize(n, Matrix2::zeros());
         // value Hessian after the last crease: element n-1 with c_n = 0
         let mut p = Mat7::from_fn(|i, j| self.blocks[n - 1][(i, j)]);
+        p[(6, 6)] += self.terminal_penalty;
         for k in (1..n).rev() {
             let q = self.stage_matrix(k, &p, shift);
             let (ic, ip) = (self.c_index(k), self.psi_index(k));
@@ -489,8 +522,22 @@ impl ChainModel {
                     qux.row_mut(r).fill(0.0);
                 }
             }
-            let Some(inv) = spd_inverse_2x2(&quu) else {
-                return false;
+            let pinned = self.hold_failing && self.pinned.get(k).copied().unwrap_or(false);
+            let inv = match (pinned, spd_inverse_2x2(&quu)) {
+                (false, Some(inv)) => inv,
+                (_, _) if self.hold_failing => {
+                    if !pinned {
+                        self.held_pivots.push((k, quu));
+                        self.pinned.resize(n, false);
+                        self.pinned[k] = true;
+                    }
+                    self.hold_crease(k, &q, mask[0], &mut p);
+                    continue;
+                }
+                _ => {
+                    self.failure = product::Failure::Crease { k, pivot: quu };
+                    return false;
+                }
             };
             let gain = -(inv * qux);
             // p = Q_xx + Q_ux^T K, symmetric (= Q_xx - Q_ux^T Q_uu^-1 Q_ux): the upper
@@ -525,9 +572,18 @@ impl ChainModel {
                 }
             }
             let r = (r + r.transpose()) * 0.5;
-            match Cholesky::new(r) {
+            match Cholesky::new(r).filter(|_| !(self.hold_failing && self.pinned_root)) {
                 Some(chol) => self.root = Some(chol),
-                None => return false,
+                None if self.hold_failing => {
+                    self.pinned_root = true;
+                    self.held_root = Some(r);
+                    self.free[..6].fill(false);
+                    self.root = Cholesky::new(Mat6::identity());
+                }
+                None => {
+                    self.failure = product::Failure::Root(r);
+                    return false;
+                }
             }
         }
         true
@@ -614,7 +670,7 @@ impl ChainModel {
     /// Solve the factorized system for the right-hand side `rhs` (full length; held
     /// entries ignored), writing the step to `out` (held entries 0). With contact
     /// pairs across the chain, their low-rank solve around the chain's
-    /// (`contact_chain`).
+    /// (`pairs`).
     pub fn solve(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
         if self.pairs.is_empty() {
             self.solve_chain_only(rhs, out)
@@ -749,6 +805,7 @@ impl crate::optim::NewtonMatrix for ChainMatrix {
     }
 
     fn factor(&mut self, free: &[usize], damping: f64) -> bool {
+        self.model.terminal_penalty = 0.0;
         let nq = self.model.dimension();
         self.mask.clear();
         self.mask.resize(nq, false);
@@ -784,5 +841,45 @@ impl crate::optim::NewtonMatrix for ChainMatrix {
             reduced[k] = self.out[i];
         }
         true
+    }
+}
+
+impl crate::optim::ModelMatrix for ChainMatrix {
+    fn multiply(&mut self, v: &[f64], out: &mut [f64]) {
+        self.model.multiply(v, out);
+    }
+
+    /// The slab's face is the last crease's change: c_{n-1} = Σ_k z_k, so the penalty
+    /// rho (Σ d_z)^2 is rho dc_{n-1}^2 on the sweep's terminal value.
+    fn factor_free(
+        &mut self,
+        free: &[bool],
+        shift: f64,
+        face: Option<(std::ops::Range<usize>, f64)>,
+    ) -> bool {
+        let model = &mut self.model;
+        let n = model.segments;
+        model.terminal_penalty = match face {
+            Some((range, rho)) => {
+                assert_eq!(
+                    range,
+                    model.c_index(1)..model.c_index(n - 1) + 1,
+                    "the chain's only slab is the crease differences' sum"
+                );
+                rho
+            }
+            None => 0.0,
+        };
+        self.shift.clear();
+        self.shift.resize(model.dimension(), shift);
+        model.factor(free, &self.shift)
+    }
+
+    fn failed_pivot(&self) -> Option<f64> {
+        self.model.failed_pivot()
+    }
+
+    fn solve_free(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
+        self.model.solve(rhs, out)
     }
 }

@@ -20,9 +20,9 @@
 
 use nalgebra::SVector;
 
-use super::chain::ChainModel;
-use super::contact_terms::PairTerm;
-use super::Vec8;
+use super::ChainModel;
+use crate::ribbon::objective::contact_terms::PairTerm;
+use crate::ribbon::objective::{Objective, Vec8, Workspace};
 
 type Vec6 = SVector<f64, 6>;
 
@@ -77,7 +77,7 @@ impl ChainModel {
     }
 
     /// G w: the gradient over the unknowns of Σ_p w_p (u1 . y_{e1} + u2 . y_{e2}), by
-    /// suffix sums of the pairs' wrenches (held entries 0).
+    /// suffix sums of the pairs' wrenches (every entry, held ones too).
     fn pairs_adjoint(&self, wrench: &mut Vec<Vec8>, w: &[f64], out: &mut [f64]) {
         let n = self.segments;
         wrench.clear();
@@ -102,11 +102,28 @@ impl ChainModel {
             let base = self.base_twists.transpose() * suffix;
             out[..6].copy_from_slice(base.as_slice());
         }
-        for (o, &f) in out.iter_mut().zip(&self.free) {
-            if !f {
-                *o = 0.0;
-            }
+    }
+
+    /// `out` += G D G^T v: the pairs' part of the product H v
+    /// ([`ChainModel::multiply`], the trust region's model).
+    pub(super) fn add_pairs_product(&mut self, v: &[f64], out: &mut [f64]) {
+        if self.pairs.is_empty() {
+            return;
         }
+        let mut ps = std::mem::take(&mut self.pair_scratch);
+        ps.t.clear();
+        ps.t.resize(self.pairs.len(), 0.0);
+        self.pairs_forward(&mut ps.twist, v, &mut ps.t);
+        for (t, p) in ps.t.iter_mut().zip(&self.pairs) {
+            *t *= p.weight.max(0.0);
+        }
+        ps.column.clear();
+        ps.column.resize(v.len(), 0.0);
+        self.pairs_adjoint(&mut ps.wrench, &ps.t, &mut ps.column);
+        for (o, c) in out.iter_mut().zip(&ps.column) {
+            *o += c;
+        }
+        self.pair_scratch = ps;
     }
 
     /// The Woodbury factors of the pairs on top of the chain just factorized (true
@@ -140,6 +157,11 @@ impl ChainModel {
             // column j of U = G D^{1/2} e_j, then Y_j = M^{-1} U_j
             ps.unit[j] = ps.sqrt_d[j];
             self.pairs_adjoint(&mut ps.wrench, &ps.unit, &mut ps.column);
+            for (c, &f) in ps.column.iter_mut().zip(&self.free) {
+                if !f {
+                    *c = 0.0;
+                }
+            }
             ps.unit[j] = 0.0;
             if !self.solve_chain_only(&ps.column, &mut ps.y[j * nq..(j + 1) * nq]) {
                 return false;
@@ -279,13 +301,13 @@ pub(super) fn merge_pairs(from: &[PairTerm], order: &mut Vec<u32>, to: &mut Vec<
     }
 }
 
-impl super::Objective<'_> {
+impl Objective<'_> {
     /// The pairs' B'' g g^T added to the dense Newton matrix `h` (q-coordinates, the
     /// baseline solver's): g_a = ξ_a . u[twist] for every coordinate moving the pair's
     /// element, plus u's local columns at c_e and c_{e+1}. O(N^2) per pair.
-    pub(super) fn add_dense_pairs(
+    pub(in crate::ribbon::objective) fn add_dense_pairs(
         &self,
-        ws: &mut super::Workspace,
+        ws: &mut Workspace,
         h: &mut nalgebra::DMatrix<f64>,
     ) {
         let lay = self.layout;
