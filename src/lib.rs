@@ -20,6 +20,7 @@ pub use developable_core::{
 // imports only the core and the modules of the layers below its own.
 pub mod cli;
 pub mod foxglove; //      4: transports
+pub mod plot; //          1: plots and self-contained pages (no scene, no run)
 pub mod record; //        4
 pub mod render; //        1: offline pictures
 pub mod report; //        6: tools built on runs

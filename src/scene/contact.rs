@@ -160,16 +160,16 @@ impl Default for ContactFile {
 }
 
 /// `world` with its contact: the barrier inside the steps or the contact stage after
-/// them (`contact.method`), or as it is when the scene declares neither colliders nor a
-/// `contact:` section.
+/// them (`contact.method`), or as it is when the scene declares neither colliders, nor
+/// a `contact:` section, nor robot colliders (`robot`: their links become kinematic
+/// colliders at run time).
 pub(super) fn build_contact(
-    collider_files: &[ColliderFile],
-    contact: Option<&ContactFile>,
+    (collider_files, contact, robot): (&[ColliderFile], Option<&ContactFile>, bool),
     ck: &Check,
     file: &Path,
     world: World,
 ) -> Result<World, SceneError> {
-    if collider_files.is_empty() && contact.is_none() {
+    if collider_files.is_empty() && contact.is_none() && !robot {
         return Ok(world);
     }
     let defaults = ContactFile::default();

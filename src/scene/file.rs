@@ -11,6 +11,7 @@ use super::contact::{build_contact, ColliderFile, ContactFile};
 use super::handle_file::{parse_handle, ForceFile, HandleFile};
 use super::paper_file::{prepare_paper, PaperFile, PaperScene, PreparedPaper};
 use super::ribbon_file::{ribbon_entries, ribbon_params, RibbonFile};
+use super::robot_file::RobotCollidersFile;
 use super::{Outputs, Scene, SceneError};
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::ribbon::{
@@ -66,10 +67,15 @@ pub struct SceneFile {
     /// Rigid obstacles (see [`ColliderFile`]). Default none.
     #[serde(default)]
     pub colliders: Vec<ColliderFile>,
-    /// Contact settings. A contact stage is built when the scene has colliders or this
-    /// section (ribbon-ribbon and self contact only); otherwise nothing is built.
+    /// Contact settings. A contact stage is built when the scene has colliders, robot
+    /// colliders or this section (ribbon-ribbon and self contact only); otherwise
+    /// nothing is built.
     #[serde(default)]
     pub contact: Option<ContactFile>,
+    /// A robot's links as colliders, from its URDF on a topic and its TF frames (see
+    /// [`RobotCollidersFile`]). Default none.
+    #[serde(default)]
+    pub robot_colliders: Option<RobotCollidersFile>,
     /// Handles (grippers).
     #[serde(default)]
     pub handles: Vec<HandleFile>,
@@ -274,8 +280,16 @@ impl SceneFile {
             objects.push((name.clone(), sim));
         }
         let world = World::new(objects, handles, dt);
-        let world = build_contact(&self.colliders, self.contact.as_ref(), &ck, file, world)?;
-        Ok(self.into_scene(file, duration, world, topics))
+        let robot = self
+            .robot_colliders
+            .as_ref()
+            .map(|r| r.check(&ck, file))
+            .transpose()?;
+        let sections = (&self.colliders[..], self.contact.as_ref(), robot.is_some());
+        let world = build_contact(sections, &ck, file, world)?;
+        let mut scene = self.into_scene(file, duration, world, topics);
+        scene.robot = robot;
+        Ok(scene)
     }
 
     /// The scene's objects in order: its ribbons (`ribbon:` or `ribbons:`) or one
@@ -286,6 +300,12 @@ impl SceneFile {
                 return Err(ck.fail(
                     "paper",
                     "a scene holds either ribbons (`ribbon:` or `ribbons:`) or one `paper:` sheet, not both",
+                ));
+            }
+            if self.robot_colliders.is_some() {
+                return Err(ck.fail(
+                    "robot_colliders",
+                    "a robot's links collide with ribbons (the contact stage); a paper sheet does not take them",
                 ));
             }
             return Ok(vec![("paper".into(), ObjectEntry::Paper(paper))]);
@@ -514,6 +534,7 @@ impl SceneFile {
             },
             handle_tf_frames: self.handles.iter().map(|h| h.tf_frame.clone()).collect(),
             cameras: Vec::new(),
+            robot: None,
             source: self,
         }
     }

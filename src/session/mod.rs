@@ -17,6 +17,7 @@ pub mod names;
 pub mod outputs;
 pub mod params;
 pub mod produce;
+pub mod robot;
 mod state;
 mod status;
 pub mod style;

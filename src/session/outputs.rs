@@ -184,7 +184,8 @@ pub const OUTPUTS: &[OutputKind] = &[
         on_change: false,
         want: |s, _, _| {
             let has = !s.world.colliders().is_empty();
-            Want::both(s.outputs.markers && has)
+            // a robot's links arrive at run time
+            Want::both(s.outputs.markers && (has || s.robot.is_some()))
         },
         producer: &Typed::<MarkerArray>(markers::colliders),
     },

@@ -316,6 +316,13 @@ class TFMessage(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
     transforms: t.sequence[TransformStamped] = field(default_factory=list)
 
 
+@dataclass
+class String(IdlStruct, typename="std_msgs::msg::dds_::String_"):
+    """std_msgs/msg/String (a robot description's URDF)."""
+
+    data: str = ""
+
+
 # rcl_interfaces (parameter services), on the rmw_cyclonedds service wire format
 
 

@@ -15,7 +15,7 @@
 use std::sync::Arc;
 
 use super::barrier::BarrierSettings;
-use super::collider::{Collider, ColliderGeometry};
+use super::collider::{Collider, ColliderGeometry, ColliderShape};
 use crate::geometry::{Point3, Pose, Vector3};
 
 /// A triangle mesh's cells: triangle t owns `vertices[vertex_start[t]..vertex_start[t+1]]`
@@ -168,6 +168,8 @@ pub struct Obstacles {
     /// Collider geometries (prepared once; colliders do not change shape) and their
     /// Coulomb coefficients μ.
     pub(crate) geometry: Vec<ColliderGeometry>,
+    /// The shapes `geometry` was prepared from.
+    shapes: Vec<ColliderShape>,
     pub friction: Vec<f64>,
     /// Poses of the colliders this solve uses (between the start and the end pose).
     pub poses: Vec<Pose>,
@@ -201,7 +203,15 @@ impl Obstacles {
     pub fn update(&mut self, env: &ContactEnv, tau: f64, axis: usize) {
         self.settings = env.settings;
         self.axis = axis;
-        if self.geometry.len() != env.colliders.len() {
+        // prepared again when the colliders change (a robot's links arrive)
+        let same = self.shapes.len() == env.colliders.len()
+            && self
+                .shapes
+                .iter()
+                .zip(env.colliders)
+                .all(|(s, c)| *s == c.shape);
+        if !same {
+            self.shapes = env.colliders.iter().map(|c| c.shape.clone()).collect();
             self.geometry = env
                 .colliders
                 .iter()

@@ -4,8 +4,8 @@ use rayon::prelude::*;
 
 use crate::contact::barrier::PairSource;
 use crate::contact::{
-    BarrierSettings, BodyInput, CellMesh, Collider, ContactEnv, ContactReport, ContactStage,
-    OtherMesh,
+    BarrierSettings, BodyInput, CellMesh, Collider, ContactEnv, ContactError, ContactReport,
+    ContactStage, OtherMesh,
 };
 use crate::geometry::{Point3, Pose, SurfaceMesh};
 
@@ -43,6 +43,8 @@ struct ContactState {
     previous: Vec<Vec<Point3>>,
     predicted: Vec<Vec<Point3>>,
     corrected: Vec<Vec<Point3>>,
+    /// The stage's first colliders, the scene's; kinematic colliders follow them.
+    scene_colliders: usize,
 }
 
 /// All objects of a scene, their handles and the clock.
@@ -63,8 +65,12 @@ pub struct World {
     contact: Option<ContactState>,
     /// Contact inside the steps (`contact.method: barrier`) instead of the stage.
     barrier: Option<BarrierState>,
-    /// Handle targets at the end of the last step (the start of the next one).
+    /// Carrier poses at the end of the last step (the start of the next one): the
+    /// handles' targets, then the kinematic bodies' poses.
     pub(super) last_targets: Vec<Pose>,
+    /// The kinematic bodies' poses at the end of the next step
+    /// ([`World::set_kinematic_pose`]).
+    kinematic_next: Vec<Pose>,
 }
 
 /// Contact inside the objects' steps (docs/contact_barrier.md): the settings, the
@@ -75,6 +81,8 @@ struct BarrierState {
     colliders: Vec<Collider>,
     /// Per object: its mesh cells when it is a contact body.
     cells: Vec<Option<Arc<CellMesh>>>,
+    /// The first colliders, the scene's; kinematic colliders follow them.
+    scene_colliders: usize,
 }
 
 impl World {
@@ -99,6 +107,7 @@ impl World {
             contact: None,
             barrier: None,
             last_targets,
+            kinematic_next: Vec::new(),
         }
     }
 
@@ -119,6 +128,7 @@ impl World {
             .collect();
         self.barrier = Some(BarrierState {
             settings,
+            scene_colliders: colliders.len(),
             colliders,
             cells,
         });
@@ -212,6 +222,7 @@ impl World {
         );
         let empty = vec![Vec::new(); objects.len()];
         self.contact = Some(ContactState {
+            scene_colliders: stage.colliders().len(),
             stage,
             objects,
             previous: empty.clone(),
@@ -221,12 +232,116 @@ impl World {
         self
     }
 
+    /// Replace the kinematic colliders: rigid bodies the caller moves by setting their
+    /// poses before each step (a robot's links following TF). `poses[b]` is body b's
+    /// `world_from_body` now (bodies start at rest); `colliders[i].attached_to =
+    /// Some(b)` puts collider i on body b, its `pose` relative to the body. The
+    /// contact stage (or the barrier's list) is rebuilt with the scene's colliders
+    /// first, then these (the world's carrier index of body b is `handles().len() + b`).
+    /// Errors: no contact, a collider on no body or a body out of range, a pose that is
+    /// not finite, a stage that cannot be built, or, with barrier contact, a collider
+    /// that would start overlapping a ribbon (the barrier cannot start from an overlap)
+    /// (the world is then unchanged).
+    pub fn set_kinematic_colliders(
+        &mut self,
+        colliders: Vec<Collider>,
+        poses: Vec<Pose>,
+    ) -> Result<(), ContactError> {
+        let handles = self.handles.len();
+        let scene: &[Collider] = match (&self.contact, &self.barrier) {
+            (Some(c), _) => &c.stage.colliders()[..c.scene_colliders],
+            (None, Some(b)) => &b.colliders[..b.scene_colliders],
+            (None, None) => {
+                return Err(ContactError::Invalid(
+                    "kinematic colliders need a contact stage or barrier contact (a `contact:` section)"
+                        .into(),
+                ))
+            }
+        };
+        if let Some(b) = poses.iter().position(|p| !pose_is_finite(p)) {
+            return Err(ContactError::Invalid(format!(
+                "kinematic body {b}: its pose is not finite"
+            )));
+        }
+        let mut all = scene.to_vec();
+        for (i, mut c) in colliders.into_iter().enumerate() {
+            match c.attached_to {
+                Some(b) if b < poses.len() => c.attached_to = Some(handles + b),
+                _ => {
+                    return Err(ContactError::Invalid(format!(
+                        "kinematic collider {i}: on body {:?}, the world has {} bodies",
+                        c.attached_to,
+                        poses.len()
+                    )))
+                }
+            }
+            all.push(c);
+        }
+        if let Some(contact) = self.contact.as_mut() {
+            contact.stage = contact.stage.with_colliders(all)?;
+        } else {
+            self.set_barrier_colliders(all, &poses)?;
+        }
+        self.last_targets.truncate(handles);
+        self.last_targets.extend_from_slice(&poses);
+        self.kinematic_next = poses;
+        Ok(())
+    }
+
+    /// The barrier's colliders replaced by `all` with the kinematic bodies at `poses`,
+    /// unless a ribbon would then start overlapping one (the world unchanged).
+    fn set_barrier_colliders(
+        &mut self,
+        all: Vec<Collider>,
+        poses: &[Pose],
+    ) -> Result<(), ContactError> {
+        let handles = self.handles.len();
+        let barrier = self.barrier.as_mut().expect("called with barrier contact");
+        let kept = std::mem::replace(&mut barrier.colliders, all);
+        let kept_targets = self.last_targets.split_off(handles);
+        self.last_targets.extend_from_slice(poses);
+        let start = self.barrier_start_gap();
+        self.last_targets.truncate(handles);
+        self.last_targets.extend(kept_targets);
+        match start {
+            Some((gap, o, PairSource::Collider(k))) if gap <= 0.0 => {
+                let barrier = self.barrier.as_mut().expect("barrier contact");
+                barrier.colliders = kept;
+                Err(ContactError::Invalid(format!(
+                    "collider {k} would start {:.4} m closer than the thickness to `{}`: contact.method barrier cannot start from an overlap",
+                    -gap, self.names[o]
+                )))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Kinematic body `body`'s pose (`world_from_body`) at the end of the next step:
+    /// over that step its colliders move there from where they are, and friction takes
+    /// their velocity from the two poses. A pose that is not finite is ignored (the
+    /// body stays), as is a body out of range.
+    pub fn set_kinematic_pose(&mut self, body: usize, pose: Pose) {
+        if let Some(next) = self.kinematic_next.get_mut(body) {
+            if pose_is_finite(&pose) {
+                *next = pose;
+            }
+        }
+    }
+
+    /// The kinematic bodies' poses (`world_from_body`) at the end of the last step.
+    pub fn kinematic_poses(&self) -> &[Pose] {
+        &self.last_targets[self.handles.len()..]
+    }
+
     /// The contact stage, if the scene has one.
     pub fn contact_stage(&self) -> Option<&ContactStage> {
         self.contact.as_ref().map(|c| &c.stage)
     }
 
-    /// Handle targets (`world_from_gripper`) at the end of the last step.
+    /// Carrier poses at the end of the last step: the handle targets
+    /// (`world_from_gripper`, one per handle, in order), then the kinematic bodies'
+    /// poses ([`World::set_kinematic_colliders`]). Colliders index it
+    /// ([`Collider::world_pose`]).
     pub fn current_targets(&self) -> &[Pose] {
         &self.last_targets
     }
@@ -310,6 +425,10 @@ impl World {
                 }
             })
             .collect();
+        let n_handles = self.handles.len();
+        // the carriers at the end of the step: the handles, then the kinematic bodies
+        let mut resolved = resolved;
+        resolved.extend_from_slice(&self.kinematic_next);
         let dt = self.dt;
         let handles = &self.handles;
         if let Some(barrier) = &self.barrier {
@@ -342,7 +461,7 @@ impl World {
                     time: t_next,
                     index,
                     handles,
-                    targets: &resolved,
+                    targets: &resolved[..n_handles],
                     clock,
                     contact: None,
                 })
@@ -395,10 +514,13 @@ impl World {
         self.script_next.iter_mut().for_each(|k| *k = 0);
         self.time = 0.0;
         self.steps = 0;
+        // the kinematic bodies stay where they are (a robot is not reset with the world)
+        let kinematic = self.last_targets.split_off(self.handles.len());
         self.last_targets = self
             .handles
             .iter()
             .map(|h| h.trajectory.pose_at(0.0))
+            .chain(kinematic)
             .collect();
     }
 }
@@ -458,7 +580,8 @@ impl BarrierState {
                 time,
                 index,
                 handles,
-                targets: targets1,
+                // (the carriers' poses: the handles' targets, then the kinematic bodies)
+                targets: &targets1[..handles.len()],
                 clock,
                 contact: self.cells[index].as_ref().map(|_| &env),
             });
