@@ -45,7 +45,7 @@ fn no_colliders_builds_no_contact_stage_and_reports_zero() {
 
 #[test]
 fn stats_carry_contact_time_and_penetration() {
-    let text = format!("{ONE}colliders:\n  - {{kind: plane}}\n")
+    let text = format!("{ONE}colliders:\n  - {{kind: plane}}\ncontact: {{method: projection}}\n")
         .replace("duration: 0.05", "duration: 0.4");
     let mut s = scene::load_str(&text, Path::new("drop.yaml"), &[]).unwrap();
     let stats = runner::run(&mut s, &mut (), &|| false).unwrap();
@@ -64,9 +64,19 @@ fn a_contact_section_alone_builds_ribbon_ribbon_contact() {
     let text = "duration: 0.02\ndt: 0.01\ngravity: [0, 0, 0]\nribbons:\n  - {name: a, segments: 10, base: {mode: floating}}\n  - {name: b, segments: 10, base: {mode: floating, position: [0, 0, 0.1]}}\ncontact: {}\n";
     let mut s = scene::load_str(text, Path::new("two.yaml"), &[]).unwrap();
     assert_eq!(s.world.object_names(), ["a", "b"]);
-    assert!(s.world.contact_stage().is_some());
-    assert_eq!(s.world.contact_stage().unwrap().settings().thickness, 1e-3);
+    // the default method: the barrier inside the steps, no stage after them
+    assert!(s.world.contact_stage().is_none());
+    let (settings, colliders) = s.world.barrier_contact().expect("barrier contact");
+    assert_eq!(settings.thickness, 1e-3);
+    assert_eq!(settings.activation_distance, 1e-4);
+    assert!(colliders.is_empty());
     assert!(s.world.step(&[]).contact.is_some());
+    // the baseline on request
+    let projection = text.replace("contact: {}", "contact: {method: projection}");
+    let s = scene::load_str(&projection, Path::new("two.yaml"), &[]).unwrap();
+    assert!(s.world.contact_stage().is_some());
+    assert!(s.world.barrier_contact().is_none());
+    assert_eq!(s.world.contact_stage().unwrap().settings().thickness, 1e-3);
 }
 
 #[test]
@@ -88,10 +98,11 @@ fn a_ribbon_lands_on_a_mesh_collider_read_from_an_obj_file() {
         let r = s.world.step(&[]);
         assert!(r.contact.unwrap().report.resolved);
     }
-    // resting on the mesh: h/2 above its surface, not fallen through
+    // resting on the mesh: between h/2 and h/2 + ŝ (the barrier's reach, h/10) above
+    // its surface, not fallen through
     let zmin = lowest_z(s.world.mesh(0));
     assert!(
-        (zmin - 0.051).abs() < 1e-4,
+        zmin > 0.051 && zmin < 0.051 + 0.0002,
         "lowest vertex at {zmin} m, the mesh is at 0.05 m"
     );
     std::fs::remove_dir_all(&dir).ok();
@@ -150,6 +161,26 @@ fn collider_and_contact_errors_name_the_key() {
     check(
         &format!("{ONE}contact: {{max_iterations: 0}}\n"),
         &["`contact.max_iterations`", "at least 1"],
+    );
+    check(
+        &format!("{ONE}contact: {{method: penalty}}\n"),
+        &["`contact.method`", "barrier, projection"],
+    );
+    check(
+        &format!("{ONE}contact: {{thickness: 0.002, activation_distance: 0.002}}\n"),
+        &["`contact.activation_distance`", "pi/2 - 1"],
+    );
+    check(
+        &format!("{ONE}contact: {{barrier_pressure: 0}}\n"),
+        &["`contact.barrier_pressure`", "> 0"],
+    );
+    check(
+        &format!("{ONE}contact: {{friction_velocity: -1}}\n"),
+        &["`contact.friction_velocity`", "> 0"],
+    );
+    check(
+        &format!("{ONE}solver: {{kind: lbfgsb}}\ncontact: {{}}\n"),
+        &["`solver.kind`", "Newton solver", "projection"],
     );
     // a ribbon starting inside a solid
     check(

@@ -1,6 +1,7 @@
-//! Contact scenes: no vertex ends a step inside a collider or another ribbon, the
-//! developability error after contact does not accumulate, results do not depend on
-//! the thread count.
+//! The projection baseline (`contact.method: projection`, Pan et al. sec. 5.2): no
+//! vertex ends a step inside a collider or another ribbon, the developability error
+//! after contact does not accumulate, results do not depend on the thread count. (The
+//! default, contact inside the step, is tested in `contact_barrier.rs`.)
 //!
 //! Separation is measured independently of the contact stage's own detection: parry's
 //! point projection on each collider solid and on a parry `TriMesh` of every other
@@ -22,6 +23,9 @@ use common::{load, lowest_z};
 
 /// Accepted overlap of thickened surfaces, m.
 const SLACK: f64 = 1e-4;
+
+/// The method these tests run.
+const PROJECTION: &str = "contact.method=projection";
 
 /// The smallest separation margin over all vertices, m: min over colliders of
 /// (signed distance - h/2) and over other ribbons of (distance - h). Negative means
@@ -70,7 +74,9 @@ fn separation_margin(scene: &Scene) -> (f64, String) {
 /// Step a scene for its duration (with overrides), checking separation after every
 /// step; returns the reports.
 fn run_checked(name: &str, sets: &[&str]) -> (Scene, Vec<StepReport>) {
-    let mut s = load(name, sets);
+    let mut sets = sets.to_vec();
+    sets.push(PROJECTION);
+    let mut s = load(name, &sets);
     let steps = (s.duration / s.world.dt()).round() as usize;
     let mut reports = Vec::new();
     let mut contacts = 0;
@@ -167,7 +173,7 @@ fn slide(angle: f64, mu: f64, t: f64) -> f64 {
     let n = [0.0, -angle.sin(), angle.cos()];
     let lift = 0.5 * h + 1e-5;
     let yaml = format!(
-        "duration: {t}\ndt: 0.01\nribbon:\n  segments: 20\n  base: {{mode: floating, position: [{}, {}, {}], rotation: [{angle}, 0, 0]}}\ncolliders:\n  - {{kind: plane, rotation: [{angle}, 0, 0], friction: {mu}}}\ncontact: {{thickness: {h}}}\n",
+        "duration: {t}\ndt: 0.01\nribbon:\n  segments: 20\n  base: {{mode: floating, position: [{}, {}, {}], rotation: [{angle}, 0, 0]}}\ncolliders:\n  - {{kind: plane, rotation: [{angle}, 0, 0], friction: {mu}}}\ncontact: {{thickness: {h}, method: projection}}\n",
         n[0] * lift,
         n[1] * lift,
         n[2] * lift
@@ -222,7 +228,7 @@ fn results_do_not_depend_on_the_thread_count() {
             .build()
             .expect("a thread pool");
         pool.install(|| {
-            let mut s = load("ribbon_double_chain", &["duration=0.15"]);
+            let mut s = load("ribbon_double_chain", &["duration=0.15", PROJECTION]);
             let steps = (s.duration / s.world.dt()).round() as usize;
             let mut contacts = 0;
             for _ in 0..steps {

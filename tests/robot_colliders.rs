@@ -28,21 +28,31 @@ fn finger_box() -> Collider {
 }
 
 /// The gripper-push scene's finger, once carried by its handle and once as a kinematic
-/// body moved along the same poses from outside: the same stage sees the same motion,
-/// so the ribbon must come out bit for bit the same (contact and friction included).
+/// body moved along the same poses from outside: the same contact sees the same motion,
+/// so the ribbon must come out bit for bit the same (contact and friction included),
+/// with either contact method.
 #[test]
 fn a_kinematic_body_moved_along_a_handles_path_pushes_as_the_handle_carried_collider() {
-    let mut carried = common::load("ribbon_gripper_push", &[]);
+    for method in ["barrier", "projection"] {
+        kinematic_pushes_as_carried(method);
+    }
+}
+
+fn kinematic_pushes_as_carried(method: &str) {
+    let with = format!("contact.method={method}");
+    let mut carried = common::load("ribbon_gripper_push", &[&with]);
     let mut kinematic = common::load(
         "ribbon_gripper_push",
-        &["colliders=[{name: table, kind: plane, friction: 0.3}]"],
+        &[
+            "colliders=[{name: table, kind: plane, friction: 0.3}]",
+            &with,
+        ],
     );
     let w = &mut kinematic.world;
     let start = w.scripted_target(0, 0.0);
     w.set_kinematic_colliders(vec![finger_box()], vec![start])
         .unwrap();
-    let colliders =
-        |s: &developable_sim::scene::Scene| s.world.contact_stage().unwrap().colliders().len();
+    let colliders = |s: &developable_sim::scene::Scene| s.world.colliders().len();
     assert_eq!((colliders(&carried), colliders(&kinematic)), (2, 2));
     let mut contacts = 0;
     for _ in 0..60 {
@@ -62,7 +72,33 @@ fn a_kinematic_body_moved_along_a_handles_path_pushes_as_the_handle_carried_coll
         }
     }
     // the finger reaches the ribbon in these 0.6 s: the comparison covers contact
-    assert!(contacts > 0, "no contact in the compared steps");
+    assert!(contacts > 0, "{method}: no contact in the compared steps");
+}
+
+/// With contact inside the step a link cannot arrive through the ribbon (the barrier
+/// cannot start from an overlap): refused, the world unchanged; the projection takes it
+/// (it pushes the ribbon out after the next step).
+#[test]
+fn a_kinematic_collider_through_the_ribbon_is_refused_by_the_barrier() {
+    let inside = Pose::translation(0.1, 0.0, 0.0);
+    let mut barrier = common::load("ribbon_gripper_push", &["contact.method=barrier"]);
+    let e = barrier
+        .world
+        .set_kinematic_colliders(vec![finger_box()], vec![inside])
+        .unwrap_err();
+    assert!(
+        e.to_string().contains("cannot start from an overlap"),
+        "{e}"
+    );
+    assert_eq!(barrier.world.colliders().len(), 2);
+    assert!(barrier.world.kinematic_poses().is_empty());
+    barrier.world.step(&[]);
+    let mut projection = common::load("ribbon_gripper_push", &["contact.method=projection"]);
+    projection
+        .world
+        .set_kinematic_colliders(vec![finger_box()], vec![inside])
+        .unwrap();
+    assert_eq!(projection.world.colliders().len(), 3);
 }
 
 #[test]
@@ -85,7 +121,7 @@ fn kinematic_colliders_refuse_what_they_cannot_place() {
         assert!(w.set_kinematic_colliders(vec![c], poses).is_err());
     }
     // refused: the world is as it was
-    assert_eq!(w.contact_stage().unwrap().colliders().len(), 2);
+    assert_eq!(w.colliders().len(), 2);
     assert!(w.kinematic_poses().is_empty());
     // a body's next pose that is not finite is ignored: it stays; a reset keeps it
     let at = Pose::translation(0.3, 0.2, 0.5);
@@ -99,7 +135,7 @@ fn kinematic_colliders_refuse_what_they_cannot_place() {
     assert_eq!(w.current_targets()[handles], at);
     w.reset();
     assert_eq!(w.kinematic_poses(), [at]);
-    assert_eq!(w.contact_stage().unwrap().colliders().len(), 3);
+    assert_eq!(w.colliders().len(), 3);
 }
 
 /// A one-link robot: a 0.3 x 0.04 x 0.04 m box centred 0.15 m along the link's x.
@@ -184,7 +220,7 @@ fn description(session: &Session, recorder: &mut SessionRecorder, urdf: &str) ->
 fn robot_commands_move_links_through_the_ribbon_and_replay_bit_for_bit() {
     let bag = common::scratch("robot").join("bag");
     let (mut s, mut rec) = recorded_session(&bag);
-    let colliders = |s: &Session| s.scene.world.contact_stage().unwrap().colliders().len();
+    let colliders = |s: &Session| s.scene.world.colliders().len();
     assert_eq!(colliders(&s), 0);
     let d = description(&s, &mut rec, ARM);
     assert_eq!(run(&mut s, &mut rec, d), Applied::Robot(Ok(())));

@@ -529,6 +529,47 @@ fn a_translated_case_gives_the_same_verdict_and_margins() {
     }
 }
 
+/// The contact cases (issue 46): contact inside the step keeps every published frame
+/// isometric and nothing overlapping at both quick time steps, within the energy bound
+/// that counts the moving finger's work.
+#[test]
+fn contact_cases_keep_every_frame_exact_and_apart() {
+    for name in [
+        "contact_falling_n600",
+        "contact_falling_stiff",
+        "contact_fast_push",
+        "contact_chain_impact",
+    ] {
+        for &dt in case(name).quick_dts {
+            let r = check(name, dt);
+            assert_eq!(r.expectation, Expectation::ExactContact);
+        }
+    }
+}
+
+/// ... and the same cases with the paper's projection after the step fail them: its
+/// published frames are not isometric (the check's teeth).
+#[test]
+fn a_contact_case_run_with_the_projection_fails_the_suite() {
+    for name in [
+        "contact_falling_n600",
+        "contact_falling_stiff",
+        "contact_fast_push",
+        "contact_chain_impact",
+    ] {
+        let r = quick_with(
+            &case(name),
+            0.01,
+            RunTweaks {
+                sets: vec!["contact.method=projection".to_string()],
+                ..Default::default()
+            },
+        );
+        assert!(!r.pass, "{name} passed with the projection: {r:#?}");
+        assert!(r.reason.contains("off isometric"), "{name}: {}", r.reason);
+    }
+}
+
 /// `stress` writes index.html beside stress.md: per case its energy over time against
 /// its bound as an inline SVG plot whose legend names both lines of every time step and
 /// whose text does not overlap; the series ends at the run's last step, where its

@@ -53,7 +53,7 @@ pub struct RunOutput {
 pub fn scene_defaults(file: &Path, duration: Option<f64>) -> Result<SceneDefaults, ReportError> {
     let scene = scene::load(file, &[])?;
     let objects = scene.world.objects();
-    if !(objects.len() == 1 && scene.world.contact_stage().is_none()) {
+    if objects.len() != 1 || scene.world.has_contact() {
         return Err(ReportError::Invalid(format!(
             "{}: the report runs scenes with one object and no contact",
             file.display()

@@ -15,6 +15,7 @@
 //! it equals the wall time on an idle machine and is not inflated by other processes
 //! on a shared one.
 
+pub mod contact_cost;
 pub mod errors;
 pub mod exact;
 pub mod exact_output;
@@ -323,6 +324,11 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> Result<Repo
         reports.push(compare_scene(scene, &bar)?);
     }
     let exact_reports = run_exact_scenes(exact_files, opts.quick, &bar)?;
+    // the contact cost against n (issue 46) with the default selection only
+    let contact = match opts.scenes {
+        None => contact_cost::run(&opts.scene_dir, opts.quick)?,
+        Some(_) => Vec::new(),
+    };
     bar.finish_and_clear();
     write_outputs(
         opts,
@@ -331,6 +337,15 @@ fn run_report_on_this_thread(opts: &ReportOptions, command: &str) -> Result<Repo
         &exact_reports,
         (started, cpu_started),
     )?;
+    if !contact.is_empty() {
+        contact_cost::write_csv(&opts.out.join("contact_cost.csv"), &contact)?;
+        let summary = opts.out.join("summary.md");
+        let mut md =
+            std::fs::read_to_string(&summary).map_err(report_error::io("cannot read", &summary))?;
+        md.push('\n');
+        md.push_str(&contact_cost::summary(&contact));
+        std::fs::write(&summary, md).map_err(report_error::io("cannot write", &summary))?;
+    }
     Ok(Report {
         scenes: reports,
         exact: exact_reports,

@@ -8,7 +8,10 @@ use serde::{Deserialize, Serialize};
 use super::check::{pose_from, Check};
 use super::mesh_file::load_mesh;
 use super::SceneError;
-use crate::contact::{Closeness, Collider, ColliderShape, ContactSettings, ContactStage};
+use crate::contact::barrier::PairSource;
+use crate::contact::{
+    BarrierSettings, Closeness, Collider, ColliderShape, ContactSettings, ContactStage,
+};
 use crate::geometry::{Point3, Vector3};
 use crate::sim::World;
 
@@ -35,6 +38,15 @@ fn d_tolerance() -> f64 {
 }
 fn d_true() -> bool {
     true
+}
+fn d_method() -> String {
+    "barrier".into()
+}
+fn d_barrier_pressure() -> f64 {
+    1e3
+}
+fn d_friction_velocity() -> f64 {
+    1e-4
 }
 
 /// A rigid obstacle.
@@ -82,10 +94,27 @@ pub struct ColliderFile {
     pub handle: Option<String>,
 }
 
-/// Contact settings (Pan et al. sec. 5.2).
+/// Contact settings: inside the step (`barrier`, docs/contact_barrier.md) or after it
+/// (`projection`, Pan et al. sec. 5.2).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ContactFile {
+    /// `barrier` (IPC's barrier inside the step: every frame isometric and intersection
+    /// free) or `projection` (the paper's post-step impact-zone QP, the baseline).
+    /// Default `barrier`.
+    #[serde(default = "d_method")]
+    pub method: String,
+    /// barrier: the gap beyond the thickness within which the barrier acts, ŝ, m
+    /// (> 0, below (pi/2 - 1) thickness). Default thickness / 10.
+    #[serde(default)]
+    pub activation_distance: Option<f64>,
+    /// barrier: the contact pressure at a gap of ŝ/2, Pa (> 0). Default 1000.
+    #[serde(default = "d_barrier_pressure")]
+    pub barrier_pressure: f64,
+    /// barrier: the slip speed below which friction is a viscous stick, m/s (> 0).
+    /// Default 1e-4.
+    #[serde(default = "d_friction_velocity")]
+    pub friction_velocity: f64,
     /// Ribbon thickness h, m (> 0): a mid-surface stays h/2 from colliders and h from
     /// other ribbons. Default 0.001.
     #[serde(default = "d_thickness")]
@@ -115,6 +144,10 @@ pub struct ContactFile {
 impl Default for ContactFile {
     fn default() -> Self {
         ContactFile {
+            method: d_method(),
+            activation_distance: None,
+            barrier_pressure: d_barrier_pressure(),
+            friction_velocity: d_friction_velocity(),
             thickness: d_thickness(),
             stiffness: d_stiffness(),
             closeness: d_closeness(),
@@ -126,20 +159,143 @@ impl Default for ContactFile {
     }
 }
 
-/// The contact stage of a scene, or `None` when it declares neither colliders, nor a
-/// `contact:` section, nor robot colliders (`robot`: their links become the stage's
-/// kinematic colliders at run time).
-pub(super) fn build_stage(
+/// `world` with its contact: the barrier inside the steps or the contact stage after
+/// them (`contact.method`), or as it is when the scene declares neither colliders, nor
+/// a `contact:` section, nor robot colliders (`robot`: their links become kinematic
+/// colliders at run time).
+pub(super) fn build_contact(
     (collider_files, contact, robot): (&[ColliderFile], Option<&ContactFile>, bool),
+    ck: &Check,
+    file: &Path,
+    world: World,
+) -> Result<World, SceneError> {
+    if collider_files.is_empty() && contact.is_none() && !robot {
+        return Ok(world);
+    }
+    let defaults = ContactFile::default();
+    let c = contact.unwrap_or(&defaults);
+    // the projection's keys are checked whichever method runs (a typo is an error)
+    contact_settings(ck, c)?;
+    if ck.choice("contact.method", &c.method, &["barrier", "projection"])? == "barrier" {
+        return build_barrier(collider_files, c, ck, file, world);
+    }
+    match build_stage(collider_files, c, ck, file, &world)? {
+        Some(stage) => Ok(world.with_contact(stage)),
+        None => Ok(world),
+    }
+}
+
+/// Contact inside every ribbon's step (`contact.method: barrier`), checked: the
+/// settings, every ribbon solved by our Newton method, nothing touching at the start.
+fn build_barrier(
+    collider_files: &[ColliderFile],
+    c: &ContactFile,
+    ck: &Check,
+    file: &Path,
+    world: World,
+) -> Result<World, SceneError> {
+    let thickness = ck.positive("contact.thickness", c.thickness)?;
+    let settings = BarrierSettings {
+        thickness,
+        activation_distance: match c.activation_distance {
+            Some(d) => ck.positive("contact.activation_distance", d)?,
+            None => 0.1 * thickness,
+        },
+        barrier_pressure: ck.positive("contact.barrier_pressure", c.barrier_pressure)?,
+        friction_velocity: ck.positive("contact.friction_velocity", c.friction_velocity)?,
+        self_contact: c.self_contact,
+    };
+    settings
+        .check()
+        .map_err(|m| ck.fail("contact.activation_distance", m))?;
+    for (o, object) in world.objects().iter().enumerate() {
+        if object.contact_body().is_none() {
+            return Err(ck.fail(
+                "contact",
+                format!(
+                    "contact acts on ribbons, not on a {} object; a paper sheet collides through `paper.colliders`",
+                    object.kind()
+                ),
+            ));
+        }
+        if object.solver_name() == "lbfgsb" {
+            return Err(ck.fail(
+                "solver.kind",
+                format!(
+                    "`{}`: contact.method barrier needs a Newton solver (chain or gauss_newton): L-BFGS-B's line search cannot be clamped by the collision check; or set contact.method: projection",
+                    world.object_names()[o]
+                ),
+            ));
+        }
+    }
+    let colliders = colliders(ck, collider_files, file, &world)?;
+    check_outside_solids(ck, &colliders, &world, thickness)?;
+    let mut world = world.with_barrier(settings, colliders);
+    check_barrier_start(ck, &mut world, thickness)?;
+    Ok(world)
+}
+
+/// Every ribbon vertex at least thickness/2 outside every collider's solid.
+fn check_outside_solids(
+    ck: &Check,
+    colliders: &[Collider],
+    world: &World,
+    thickness: f64,
+) -> Result<(), SceneError> {
+    let half = 0.5 * thickness;
+    for (k, collider) in colliders.iter().enumerate() {
+        for (o, name) in world.object_names().iter().enumerate() {
+            for v in &world.mesh(o).vertices {
+                if let Some((sd, _)) = collider.signed_distance(world.current_targets(), &v.coords)
+                {
+                    if sd <= half {
+                        return Err(ck.fail(
+                            &format!("colliders.{k}"),
+                            format!(
+                                "ribbon `{name}` starts inside or closer than thickness/2 = {half} m (a vertex at [{:.4}, {:.4}, {:.4}] is at {sd:.4} m)",
+                                v.x, v.y, v.z
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A barrier scene must start with every pair apart (a gap beyond the thickness).
+fn check_barrier_start(ck: &Check, world: &mut World, thickness: f64) -> Result<(), SceneError> {
+    let Some((gap, o, source)) = world.barrier_start_gap() else {
+        return Ok(());
+    };
+    if gap > 0.0 {
+        return Ok(());
+    }
+    let names = world.object_names();
+    let other = match source {
+        PairSource::Collider(k) => format!("collider {k}"),
+        PairSource::Body(b) => format!("ribbon `{}`", names[b]),
+        PairSource::Itself => "itself".to_string(),
+    };
+    Err(ck.fail(
+        "contact",
+        format!(
+            "the scene starts with overlapping surfaces: ribbon `{}` and {other} are {:.4} m closer than the thickness {thickness} m; move them apart or reduce contact.thickness",
+            names[o], -gap
+        ),
+    ))
+}
+
+/// The contact stage of a scene (`contact.method: projection`).
+fn build_stage(
+    collider_files: &[ColliderFile],
+    c: &ContactFile,
     ck: &Check,
     file: &Path,
     world: &World,
 ) -> Result<Option<ContactStage>, SceneError> {
-    if collider_files.is_empty() && contact.is_none() && !robot {
-        return Ok(None);
-    }
-    let defaults = ContactFile::default();
-    let settings = contact_settings(ck, contact.unwrap_or(&defaults))?;
+    let settings = contact_settings(ck, c)?;
     let colliders = colliders(ck, collider_files, file, world)?;
     let topologies = world
         .objects()

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use super::camera_file::{build_cameras, CameraFile};
 use super::check::Check;
-use super::contact::{build_stage, ColliderFile, ContactFile};
+use super::contact::{build_contact, ColliderFile, ContactFile};
 use super::handle_file::{parse_handle, ForceFile, HandleFile};
 use super::paper_file::{prepare_paper, PaperFile, PaperScene, PreparedPaper};
 use super::ribbon_file::{ribbon_entries, ribbon_params, RibbonFile};
@@ -279,16 +279,14 @@ impl SceneFile {
             };
             objects.push((name.clone(), sim));
         }
-        let mut world = World::new(objects, handles, dt);
+        let world = World::new(objects, handles, dt);
         let robot = self
             .robot_colliders
             .as_ref()
             .map(|r| r.check(&ck, file))
             .transpose()?;
         let sections = (&self.colliders[..], self.contact.as_ref(), robot.is_some());
-        if let Some(stage) = build_stage(sections, &ck, file, &world)? {
-            world = world.with_contact(stage);
-        }
+        let world = build_contact(sections, &ck, file, world)?;
         let mut scene = self.into_scene(file, duration, world, topics);
         scene.robot = robot;
         Ok(scene)

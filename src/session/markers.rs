@@ -101,7 +101,7 @@ fn markers(
 pub fn colliders(p: &Produce, _: Scope) -> Option<MarkerArray> {
     let (scene, header) = (p.scene, p.header());
     let world = &scene.world;
-    let colliders = world.contact_stage()?.colliders();
+    let colliders = world.colliders();
     let robot = scene.robot.is_some();
     if colliders.is_empty() && !robot {
         return None;

@@ -183,10 +183,7 @@ pub const OUTPUTS: &[OutputKind] = &[
         throttled: false,
         on_change: false,
         want: |s, _, _| {
-            let has = s
-                .world
-                .contact_stage()
-                .is_some_and(|c| !c.colliders().is_empty());
+            let has = !s.world.colliders().is_empty();
             // a robot's links arrive at run time
             Want::both(s.outputs.markers && (has || s.robot.is_some()))
         },

@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 
 use plotters::style::RGBColor;
 
-use super::{cases, CaseResult, StressReport, DEFAULT_ALLOWANCE};
+use super::{cases, CaseResult, StressReport, DEFAULT_ALLOWANCE, EXACT_ISOMETRY};
 use crate::plot::axis::{engineering, Scale, Unit};
 use crate::plot::page::{escape, inline_svg, STYLE};
 use crate::plot::{svg, Axis, Figure, PlotError, Series, Style};
@@ -37,11 +37,13 @@ pub fn markdown(report: &StressReport) -> String {
          no energy balance); at most {} % of the steps unconverged (iteration limit) and none \
          rejected (non-finite result, previous state kept), unless the case's allowance says \
          otherwise (listed below with its reason); over_stretch: the reported violation reaches \
-         (1.5 m - l)/2 = 0.25 m.\n\n",
+         (1.5 m - l)/2 = 0.25 m; contact cases: every published frame isometric to {:e} and no \
+         overlap reported.\n\n",
         report.energy_absolute_tolerance_j,
         report.energy_relative_tolerance,
         report.paper_energy_relative_tolerance,
-        report.unconverged_fraction * 100.0
+        report.unconverged_fraction * 100.0,
+        EXACT_ISOMETRY
     ));
     s.push_str("| case | dt (s) | steps | finite | E rise max (J) | W bound (J) | rise / allowance | violation max (m) | paper: largest edge strain, any frame; edges over 1 % at the end | unconverged | rejected | result |\n");
     s.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|\n");

@@ -153,7 +153,7 @@ impl ConformingFem {
             Some(r) if world.objects().len() == 1 => r,
             _ => return Err(BaselineError::NotOneRibbon),
         };
-        if world.contact_stage().is_some() {
+        if world.has_contact() {
             return Err(BaselineError::Unsupported("contact"));
         }
         let rp = &ribbon.params;

@@ -36,9 +36,9 @@ impl Snapshot {
     }
 }
 
-/// The colliders a camera of `world` draws (the contact stage's; none without one), in
-/// the order of [`Snapshot::collider_poses`]: give them to
+/// The colliders a camera of `world` draws (whichever contact method runs them; none
+/// without contact), in the order of [`Snapshot::collider_poses`]: give them to
 /// [`Renderer::new`](super::Renderer::new).
 pub fn world_colliders(world: &World) -> &[Collider] {
-    world.contact_stage().map_or(&[], |s| s.colliders())
+    world.colliders()
 }

@@ -61,6 +61,13 @@ pub struct Collider {
 }
 
 impl Collider {
+    /// Signed distance (m, negative inside) of world point `x` to this collider's solid
+    /// with the carrier poses `targets`, and the outward normal; None for a mesh (a
+    /// surface). Prepares the geometry on every call: for checks, not for loops.
+    pub fn signed_distance(&self, targets: &[Pose], x: &Vector3) -> Option<(f64, Vector3)> {
+        ColliderGeometry::new(&self.shape).signed_distance(&self.world_pose(targets), x)
+    }
+
     /// `world_from_collider` given the world's carrier poses (handle targets, then
     /// kinematic bodies).
     pub fn world_pose(&self, targets: &[Pose]) -> Pose {

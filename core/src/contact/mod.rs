@@ -13,18 +13,25 @@
 //! - [`qp`]: the dual active-set solver.
 //! - [`ContactStage`]: rounds of detection and response until collision-free, zones,
 //!   Coulomb friction, the report.
+//! - [`barrier`], [`obstacles`]: contact inside the step instead (`contact.method:
+//!   barrier`, docs/contact_barrier.md): IPC's barrier, the friction mollifier,
+//!   distances and conservative advancement; what one ribbon's step sees of the world.
 //!
 //! Pure: no I/O, no serde. A scene without colliders and without a `contact:` section
 //! builds no stage and pays nothing.
 
+pub mod barrier;
 mod ccd;
 pub mod collider;
 mod detect;
 mod metric;
+pub mod obstacles;
 pub mod qp;
 mod stage;
 
+pub use barrier::BarrierSettings;
 pub use collider::{Collider, ColliderShape};
+pub use obstacles::{CellMesh, ContactEnv, Obstacles, OtherMesh};
 pub use stage::{BodyInput, BodyTopology, Closeness, ContactReport, ContactSettings, ContactStage};
 
 /// Why a contact stage could not be built.

@@ -30,12 +30,20 @@ pub trait BoxProblem {
     fn hessian(&mut self, x: &[f64], hessian: &mut Self::Matrix) {
         self.evaluate(x, None, Some(hessian));
     }
-    /// The largest fraction t in [0, 1] of `step` from `x` that is safe to evaluate f
-    /// at: the hook for a contact barrier in the objective (issue 46), which clamps
-    /// every trial step by continuous collision detection. The trust-region solver
-    /// scales each trial step by it before evaluating (`TrustRegion::trial`, the one
-    /// place a step is chosen); the default never clamps.
-    fn max_step_fraction(&mut self, _x: &[f64], _step: &[f64]) -> f64 {
+    /// The largest fraction α in [0, 1] of the step `direction` from `x` the problem
+    /// admits: every point clamp(x + s direction, lower, upper), s in [0, α], must be
+    /// a valid iterate (contact: no pair crosses or comes closer than its minimum
+    /// separation on the way, docs/contact_barrier.md). The projected Newton line
+    /// search starts there; the trust-region solver scales each trial step by it before
+    /// evaluating (`TrustRegion::trial`, the one place a step is chosen; its steps lie
+    /// in the box). 1.0 by default.
+    fn max_step_fraction(
+        &mut self,
+        _x: &[f64],
+        _direction: &[f64],
+        _lower: &[f64],
+        _upper: &[f64],
+    ) -> f64 {
         1.0
     }
     /// The unit of each unknown in the trust region's l-infinity norm (`out`, one per
@@ -134,6 +142,9 @@ pub struct ProjectedNewton<M: NewtonMatrix = Dense> {
     free: Vec<usize>,
     reduced: Vec<f64>,
     trial: Vec<f64>,
+    /// The direction over all variables (zero where held), for
+    /// [`BoxProblem::max_step_fraction`].
+    step: Vec<f64>,
     /// Levenberg-Marquardt damping relative to the Hessian diagonal, adapted per step.
     damping: f64,
     /// The damping the first iteration of the last solve needed.
@@ -146,6 +157,8 @@ pub struct ProjectedNewton<M: NewtonMatrix = Dense> {
     factor_valid: bool,
     /// Factorizations in this solve.
     factorizations: u32,
+    /// Where the last line search started ([`BoxProblem::max_step_fraction`]).
+    first_alpha: f64,
 }
 
 /// Relative tolerance of "on a bound": x_i <= lower_i + eps (1 + |lower_i|).
@@ -356,7 +369,8 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         if let Some(next) = self.after_search(problem, x, state, accepted, alpha) {
             return next;
         }
-        self.adapt_damping(alpha, direction.escalated);
+        // a step cut short by the problem's admissible fraction is as full as it can be
+        self.adapt_damping(alpha / self.first_alpha, direction.escalated);
         let f_old = state.f;
         self.accept(problem, x, alpha, f_new, state);
         state.pg = projected_gradient_inf(x, &self.g, lower, upper);
@@ -367,6 +381,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         if state.pg <= stopping.pgtol {
             Iteration::Converged
         } else if !direction.fallback
+            && self.first_alpha >= 1.0
             && (f_old - f) <= stopping.ftol * f_old.abs().max(f.abs()).max(1.0)
         {
             // After any accepted Newton step, as L-BFGS-B applies `factr`: where the
@@ -393,7 +408,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         accepted: bool,
         alpha: f64,
     ) -> Option<Iteration> {
-        if state.chord && !(accepted && alpha == 1.0) {
+        if state.chord && !(accepted && alpha == self.first_alpha) {
             // the old factorization no longer models f here: a Newton step from x
             state.chord = false;
             if !accepted {
@@ -542,8 +557,19 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         state: &mut IterationState,
         trials: u32,
     ) -> (bool, f64, f64) {
-        let mut alpha = 1.0;
+        self.step.clear();
+        self.step.resize(x.len(), 0.0);
+        for (k, &i) in self.free.iter().enumerate() {
+            self.step[i] = self.reduced[k];
+        }
+        let mut alpha = problem.max_step_fraction(x, &self.step, lower, upper);
+        self.first_alpha = alpha;
         let mut f_new = state.f;
+        if !(alpha > 0.0) {
+            // no step admissible at all: as a rejected step (more damping, a shorter
+            // direction)
+            return (false, 0.0, f_new);
+        }
         for trial in 0..trials {
             self.trial.copy_from_slice(x);
             for (k, &i) in self.free.iter().enumerate() {
@@ -605,7 +631,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         state: &mut IterationState,
     ) {
         x.copy_from_slice(&self.trial);
-        if alpha == 1.0 {
+        if alpha == self.first_alpha {
             // the full-step trial was evaluated with its gradient
             state.f = f_new;
             std::mem::swap(&mut self.g, &mut self.g_trial);

@@ -258,6 +258,7 @@ impl PaperSim {
             violation_handle,
             singular_points: self.singular.len(),
             work_bound: fem.handle_work,
+            contact: None,
         }
     }
 

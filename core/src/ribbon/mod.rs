@@ -8,8 +8,10 @@
 //!   (appendix C), the chain-rule baseline (appendix A) and a Gauss-Newton Hessian.
 //! - [`step`]: one time step (algorithm 2): box constraints after the variable
 //!   substitution, augmented Lagrangian, and the two inner solvers.
+//! - [`contact`]: a step with contact inside it (the barrier, docs/contact_barrier.md).
 
 pub mod bending;
+pub mod contact;
 mod handle_terms;
 mod handles;
 pub mod mass;

@@ -1,13 +1,15 @@
 //! A ribbon as a simulated object: state, handles, one step, mesh and singular points.
 
 use super::bending::{clamp_stations, crease_bending_weights};
+use super::contact::{ContactStep, RibbonContact};
 use super::handle_terms::{HandleConstraints, HandleRef};
 use super::mass::element_mass;
 use super::objective::{Equality, Layout, NormalGuide, PointForce, RimHistory, StepTerms};
 use super::params::{BaseMode, KineticModel, RibbonParams};
 use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
 use super::step::StepSolver;
-use crate::contact::BodyTopology;
+use crate::contact::barrier::PairSource;
+use crate::contact::{BodyTopology, ContactEnv};
 use crate::geometry::{Point2, Point3, Pose, SurfaceMesh, Vector3, VertexRegion};
 use crate::sim::handle::HandleSpec;
 use crate::sim::object::{
@@ -79,6 +81,9 @@ pub struct RibbonSim {
     q_delta: Vec<f64>,
     /// Frames of the loaded material points at the start of a step (for the work bound).
     loaded_before: Vec<Pose>,
+    /// Contact inside the step (`contact.method: barrier`), used when the world hands
+    /// the step a [`ContactEnv`].
+    contact: RibbonContact,
 }
 
 /// The coordinates of a ribbon in `initial` shape with its base at `base_pose`, plus
@@ -232,6 +237,7 @@ impl RibbonSim {
             singular: Vec::new(),
             q_delta: Vec::new(),
             loaded_before: Vec::new(),
+            contact: RibbonContact::default(),
         };
         sim.rebuild_outputs();
         sim
@@ -286,21 +292,23 @@ impl RibbonSim {
     }
 
     /// One implicit-Euler step of `dt` s to time `time`; `targets[h]` is the target of
-    /// world handle h (`world_from_gripper`).
+    /// world handle h (`world_from_gripper`); with `contact`, contact is part of the
+    /// step (docs/contact_barrier.md).
     pub fn step(
         &mut self,
         dt: f64,
         _time: f64,
-        _index: usize,
         handles: &[HandleSpec],
         targets: &[Pose],
+        contact: Option<&ContactEnv>,
     ) -> ObjectStepReport {
         // `targets` are finite: the world keeps a handle's last target instead of a
         // non-finite one (see `StepContext::targets`).
         self.terms.h = dt;
         let base = self.follow_targets(handles, targets);
         let mut q = self.q.clone();
-        if self.params.solver.extrapolate && self.q_delta.len() == q.len() {
+        // (not into contact: the extrapolated start could cross something)
+        if self.params.solver.extrapolate && self.q_delta.len() == q.len() && contact.is_none() {
             // start from the linear extrapolation of the last step (the solver clamps
             // it into the crease bounds)
             for (qi, di) in q.iter_mut().zip(&self.q_delta) {
@@ -314,15 +322,19 @@ impl RibbonSim {
         let saved_terms = self.terms.clone();
         let mut loaded_before = std::mem::take(&mut self.loaded_before);
         self.loaded_poses(&mut loaded_before);
-        let outcome = self.solver.solve(
-            self.strip,
-            self.layout.floating,
-            &self.history,
-            base,
-            &mut self.terms,
-            &self.params.solver,
-            &mut q,
-        );
+        let outcome = match contact {
+            None => self.solver.solve(
+                self.strip,
+                self.layout.floating,
+                &self.history,
+                base,
+                &mut self.terms,
+                &self.params.solver,
+                None,
+                &mut q,
+            ),
+            Some(env) => self.contact_step(base, dt, |c, step| c.solve(env, step, &mut q)),
+        };
         let finite = q.iter().all(|x| x.is_finite()) && outcome.objective.is_finite();
         let mut report = ObjectStepReport {
             iterations: outcome.iterations,
@@ -345,6 +357,10 @@ impl RibbonSim {
             reconstruct(&self.strip, &self.coords, &mut self.frames);
             self.update_history(dt);
             report.work_bound = self.work_bound(&loaded_before);
+            if contact.is_some() {
+                report.work_bound += self.contact.last.collider_work;
+                report.contact = Some(self.contact.last);
+            }
             self.stepped = true;
         } else {
             // Keep the last valid state and its multipliers; say so in the report.
@@ -361,6 +377,29 @@ impl RibbonSim {
         // a rejected step keeps its NaN violation: the new state is unknown, and 0 would
         // read as "every constraint met"
         report
+    }
+
+    /// `f` with the ribbon's contact state and what a step with contact needs of it.
+    fn contact_step<R>(
+        &mut self,
+        base: Pose,
+        dt: f64,
+        f: impl FnOnce(&mut RibbonContact, ContactStep) -> R,
+    ) -> R {
+        let step = ContactStep {
+            solver: &mut self.solver,
+            strip: self.strip,
+            floating: self.layout.floating,
+            history: &self.history,
+            base,
+            terms: &mut self.terms,
+            settings: &self.params.solver,
+            triangles: &self.mesh.triangles,
+            period: self.params.loop_closure.map(|_| self.strip.length),
+            frames: &self.frames,
+            dt,
+        };
+        f(&mut self.contact, step)
     }
 
     /// Move what the handles drive to their `targets` (`world_from_gripper`): a driven
@@ -472,6 +511,8 @@ impl RibbonSim {
             e.elastic += self.terms.crease_bending[k] * (1.0 + c[k] * c[k]) * psi[k] * psi[k]
                 + self.params.crease_regularizer * c[k] * c[k];
         }
+        // the contact barrier's potential (docs/contact_barrier.md), 0 without one
+        e.external += self.contact.last.barrier_energy;
         e
     }
 
@@ -726,6 +767,18 @@ impl ContactBody for RibbonSim {
         }
     }
 
+    /// The smallest gap of the current state against `env` (see
+    /// [`ContactBody::barrier_gap`]).
+    fn barrier_gap(&mut self, env: &ContactEnv) -> (f64, PairSource) {
+        let base = match &self.params.base {
+            BaseMode::Prescribed { pose, .. } => *pose,
+            BaseMode::Floating { .. } => self.coords.base,
+        };
+        let q = self.q.clone();
+        let dt = self.terms.h;
+        self.contact_step(base, dt, |c, step| c.gap_at(env, step, &q))
+    }
+
     /// Replace the reconstructed mesh of the last step by the collision-free one
     /// (Pan et al. sec. 5.2): it becomes X^{n+1} of the kinetic term, with velocities
     /// V = (X^{n+1} - R(X̄^{n+1}, X^n)) / h from the corrected positions; the next
@@ -776,7 +829,14 @@ impl ObjectSim for RibbonSim {
     fn step(&mut self, ctx: &StepContext<'_>) -> ObjectStepReport {
         let mut report = ObjectStepReport::default();
         ctx.clock.time(Some(ctx.index), Phase::Simulation, &mut || {
-            report = RibbonSim::step(self, ctx.dt, ctx.time, ctx.index, ctx.handles, ctx.targets)
+            report = RibbonSim::step(
+                self,
+                ctx.dt,
+                ctx.time,
+                ctx.handles,
+                ctx.targets,
+                ctx.contact,
+            )
         });
         report
     }

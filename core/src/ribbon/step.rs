@@ -17,7 +17,9 @@
 use nalgebra::DMatrix;
 
 use super::objective::chain::ChainMatrix;
-use super::objective::{GradientMode, Layout, Objective, RimHistory, StepTerms, Workspace};
+use super::objective::{
+    ContactTerms, GradientMode, Layout, Objective, RimHistory, StepTerms, Workspace,
+};
 use super::params::{SolverKind, SolverSettings};
 use super::reconstruct::Strip;
 use crate::geometry::Pose;
@@ -80,6 +82,7 @@ pub struct StepSolver {
     /// (`ChainModel::perturb_local_blocks`); 0: exact.
     #[cfg(any(test, feature = "test-hooks"))]
     pub newton_matrix_error: f64,
+    z_scratch: Vec<f64>,
 }
 
 impl Clone for StepSolver {
@@ -135,6 +138,8 @@ struct ZProblem<'o, 'w> {
     second_order: bool,
     #[cfg(any(test, feature = "test-hooks"))]
     newton_matrix_error: f64,
+    /// A z on the line search's path (contact hook).
+    z_scratch: Vec<f64>,
 }
 
 impl ZProblem<'_, '_> {
@@ -182,6 +187,22 @@ impl ZProblem<'_, '_> {
 
     fn dimension(&self) -> usize {
         self.q.len()
+    }
+
+    /// The contact hook of the line search ([`BoxProblem::max_step_fraction`]): the
+    /// safe fraction of the path z(α) = clamp(z + α d) mapped to q.
+    fn max_step_fraction(&mut self, z: &[f64], d: &[f64], lower: &[f64], upper: &[f64]) -> f64 {
+        let lay = self.objective.layout;
+        let mut zs = std::mem::take(&mut self.z_scratch);
+        let fraction = self
+            .objective
+            .safe_step_fraction(self.workspace, &mut |alpha, q| {
+                zs.clear();
+                zs.extend((0..z.len()).map(|i| (z[i] + alpha * d[i]).clamp(lower[i], upper[i])));
+                z_to_q(&lay, &zs, q);
+            });
+        self.z_scratch = zs;
+        fraction
     }
     /// f(q(z)) and, if asked, its z-gradient (second-order data as `second_order`).
     fn evaluate(&mut self, z: &[f64], gradient: Option<&mut [f64]>) -> f64 {
@@ -233,6 +254,9 @@ impl BoxProblem for ZNewton<'_, '_, '_> {
         }
         f
     }
+    fn max_step_fraction(&mut self, z: &[f64], d: &[f64], lo: &[f64], hi: &[f64]) -> f64 {
+        self.0.max_step_fraction(z, d, lo, hi)
+    }
     fn hessian(&mut self, _z: &[f64], h: &mut Dense) {
         // the workspace holds the second-order data of the evaluation at z
         let problem = &mut *self.0;
@@ -261,6 +285,9 @@ impl BoxProblem for ZChain<'_, '_, '_> {
             self.hessian(z, h);
         }
         f
+    }
+    fn max_step_fraction(&mut self, z: &[f64], d: &[f64], lo: &[f64], hi: &[f64]) -> f64 {
+        self.0.max_step_fraction(z, d, lo, hi)
     }
     fn hessian(&mut self, _z: &[f64], h: &mut ChainMatrix) {
         let problem = &mut *self.0;
@@ -395,6 +422,7 @@ impl StepSolver {
         base: Pose,
         objective_terms: &mut StepTerms,
         settings: &SolverSettings,
+        contact: Option<&ContactTerms>,
         q: &mut [f64],
     ) -> SolveOutcome {
         let mut outcome = SolveOutcome {
@@ -423,7 +451,8 @@ impl StepSolver {
         for outer in 0..settings.max_outer_iterations.max(1) {
             self.q_prev.clear();
             self.q_prev.extend_from_slice(q);
-            let objective = Objective::new(strip, floating, objective_terms, history, base);
+            let objective = Objective::new(strip, floating, objective_terms, history, base)
+                .with_contact(contact);
             let layout = objective.layout;
             let bound = objective_terms.crease_bound;
             self.start_round(&layout, q, bound);
@@ -530,6 +559,7 @@ impl StepSolver {
             second_order: false,
             #[cfg(any(test, feature = "test-hooks"))]
             newton_matrix_error: self.newton_matrix_error,
+            z_scratch: std::mem::take(&mut self.z_scratch),
         };
         let result = match settings.kind {
             SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => {
@@ -611,6 +641,7 @@ impl StepSolver {
         };
         self.q_scratch = std::mem::take(&mut problem.q);
         self.gq_scratch = std::mem::take(&mut problem.gq);
+        self.z_scratch = std::mem::take(&mut problem.z_scratch);
         result
     }
 }

@@ -83,7 +83,10 @@ pub struct ObjectStepReport {
     /// |Δn_target|, per point force |F . Δx|. Gravity is not included: its potential is
     /// part of [`Energies`]. Implicit Euler is dissipative, so the total energy cannot
     /// rise by more than the sum of these over the steps (the stress suite checks it).
+    /// With contact inside the step, moving colliders' work is included.
     pub work_bound: f64,
+    /// What contact inside the step did (`contact.method: barrier`), if it ran.
+    pub contact: Option<crate::contact::barrier::BarrierOutcome>,
 }
 
 /// The phases of a world step: each object's optimization (a ribbon's implicit step,
@@ -131,6 +134,9 @@ pub struct StepContext<'a> {
     pub targets: &'a [Pose],
     /// Runs each phase of the step (an edge times them).
     pub clock: &'a dyn PhaseClock,
+    /// Contact inside the step (`contact.method: barrier`): the colliders and the
+    /// other bodies this object must not cross; None without it.
+    pub contact: Option<&'a crate::contact::ContactEnv<'a>>,
 }
 
 /// Edge strains of an object's physical mesh in its last frame (Schreck et al. table
@@ -153,6 +159,15 @@ pub trait ContactBody {
     /// Take the collision-free mesh `corrected` (mesh order, m) as the state after the
     /// last step of `dt` s.
     fn apply_contact_correction(&mut self, corrected: &[Point3], dt: f64);
+    /// With contact inside the step: the smallest gap (m, beyond the thickness) of the
+    /// current state against `env` and what it is against; +∞ when nothing is within
+    /// the barrier's reach.
+    fn barrier_gap(
+        &mut self,
+        _env: &crate::contact::ContactEnv,
+    ) -> (f64, crate::contact::barrier::PairSource) {
+        (f64::INFINITY, Default::default())
+    }
 }
 
 /// One simulated object: what the world, the edges (statistics, runner, report, ROS

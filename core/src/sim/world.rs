@@ -1,6 +1,12 @@
+use std::sync::Arc;
+
 use rayon::prelude::*;
 
-use crate::contact::{BodyInput, Collider, ContactError, ContactReport, ContactStage};
+use crate::contact::barrier::PairSource;
+use crate::contact::{
+    BarrierSettings, BodyInput, CellMesh, Collider, ContactEnv, ContactError, ContactReport,
+    ContactStage, OtherMesh,
+};
 use crate::geometry::{Point3, Pose, SurfaceMesh};
 
 use super::handle::{HandleSpec, ScriptedChange};
@@ -57,12 +63,26 @@ pub struct World {
     time: f64,
     steps: u64,
     contact: Option<ContactState>,
+    /// Contact inside the steps (`contact.method: barrier`) instead of the stage.
+    barrier: Option<BarrierState>,
     /// Carrier poses at the end of the last step (the start of the next one): the
     /// handles' targets, then the kinematic bodies' poses.
     pub(super) last_targets: Vec<Pose>,
     /// The kinematic bodies' poses at the end of the next step
     /// ([`World::set_kinematic_pose`]).
     kinematic_next: Vec<Pose>,
+}
+
+/// Contact inside the objects' steps (docs/contact_barrier.md): the settings, the
+/// colliders, and the contact bodies' mesh cells (for the other bodies' steps).
+#[derive(Clone, Debug)]
+struct BarrierState {
+    settings: BarrierSettings,
+    colliders: Vec<Collider>,
+    /// Per object: its mesh cells when it is a contact body.
+    cells: Vec<Option<Arc<CellMesh>>>,
+    /// The first colliders, the scene's; kinematic colliders follow them.
+    scene_colliders: usize,
 }
 
 impl World {
@@ -85,9 +105,107 @@ impl World {
             time: 0.0,
             steps: 0,
             contact: None,
+            barrier: None,
             last_targets,
             kinematic_next: Vec::new(),
         }
+    }
+
+    /// Contact inside every contact body's step (`contact.method: barrier`) against
+    /// `colliders`, the other bodies and itself, instead of a contact stage after the
+    /// steps. Bodies are then stepped one after the other (block Gauss-Seidel; the order
+    /// alternates between steps).
+    pub fn with_barrier(mut self, settings: BarrierSettings, colliders: Vec<Collider>) -> World {
+        let cells = self
+            .objects
+            .iter()
+            .map(|o| {
+                o.contact_body().map(|_| {
+                    let mesh = o.mesh();
+                    Arc::new(CellMesh::new(&mesh.triangles, mesh.vertices.len()))
+                })
+            })
+            .collect();
+        self.barrier = Some(BarrierState {
+            settings,
+            scene_colliders: colliders.len(),
+            colliders,
+            cells,
+        });
+        self
+    }
+
+    /// With barrier contact: the smallest gap (m, beyond the thickness) of any contact
+    /// body against the colliders (at the current targets) and the other bodies: the
+    /// gap, that body's index and what the pair is against (another body as its object
+    /// index); None without barrier contact or without bodies.
+    pub fn barrier_start_gap(&mut self) -> Option<(f64, usize, PairSource)> {
+        let barrier = self.barrier.as_ref()?;
+        let poses: Vec<Pose> = barrier
+            .colliders
+            .iter()
+            .map(|c| c.world_pose(&self.last_targets))
+            .collect();
+        let mut worst: Option<(f64, usize, PairSource)> = None;
+        let count = self.objects.len();
+        for index in 0..count {
+            let (before, rest) = self.objects.split_at_mut(index);
+            let (object, after) = rest.split_first_mut().expect("index < len");
+            let others: Vec<OtherMesh> = before
+                .iter()
+                .enumerate()
+                .chain(after.iter().enumerate().map(|(j, o)| (index + 1 + j, o)))
+                .filter_map(|(j, o)| {
+                    barrier.cells[j].as_ref().map(|cells| OtherMesh {
+                        vertices: &o.mesh().vertices,
+                        cells,
+                    })
+                })
+                .collect();
+            let env = ContactEnv {
+                settings: barrier.settings,
+                colliders: &barrier.colliders,
+                poses0: &poses,
+                poses1: &poses,
+                others: &others,
+            };
+            let bodies: Vec<usize> = (0..count)
+                .filter(|&j| j != index && barrier.cells[j].is_some())
+                .collect();
+            if let Some(body) = object.contact_body_mut() {
+                let (g, source) = body.barrier_gap(&env);
+                let source = match source {
+                    PairSource::Body(b) => PairSource::Body(bodies[b]),
+                    s => s,
+                };
+                if worst.is_none_or(|(w, _, _)| g < w) {
+                    worst = Some((g, index, source));
+                }
+            }
+        }
+        worst
+    }
+
+    /// The colliders of the scene, whichever contact method runs them (empty without
+    /// contact).
+    pub fn colliders(&self) -> &[Collider] {
+        match (&self.contact, &self.barrier) {
+            (Some(c), _) => c.stage.colliders(),
+            (None, Some(b)) => &b.colliders,
+            (None, None) => &[],
+        }
+    }
+
+    /// Whether the scene has contact (a stage after the steps or a barrier in them).
+    pub fn has_contact(&self) -> bool {
+        self.contact.is_some() || self.barrier.is_some()
+    }
+
+    /// The barrier contact's settings and colliders, if the world has it.
+    pub fn barrier_contact(&self) -> Option<(&BarrierSettings, &[Collider])> {
+        self.barrier
+            .as_ref()
+            .map(|b| (&b.settings, b.colliders.as_slice()))
     }
 
     /// Add a contact stage whose bodies are the objects of this world that offer one
@@ -118,25 +236,34 @@ impl World {
     /// poses before each step (a robot's links following TF). `poses[b]` is body b's
     /// `world_from_body` now (bodies start at rest); `colliders[i].attached_to =
     /// Some(b)` puts collider i on body b, its `pose` relative to the body. The
-    /// contact stage is rebuilt with the scene's colliders first, then these (the
-    /// world's carrier index of body b is `handles().len() + b`). Errors: no contact
-    /// stage, a collider on no body or a body out of range, a pose that is not finite,
-    /// or a stage that cannot be built (the world is then unchanged).
+    /// contact stage (or the barrier's list) is rebuilt with the scene's colliders
+    /// first, then these (the world's carrier index of body b is `handles().len() + b`).
+    /// Errors: no contact, a collider on no body or a body out of range, a pose that is
+    /// not finite, a stage that cannot be built, or, with barrier contact, a collider
+    /// that would start overlapping a ribbon (the barrier cannot start from an overlap)
+    /// (the world is then unchanged).
     pub fn set_kinematic_colliders(
         &mut self,
         colliders: Vec<Collider>,
         poses: Vec<Pose>,
     ) -> Result<(), ContactError> {
         let handles = self.handles.len();
-        let contact = self.contact.as_mut().ok_or_else(|| {
-            ContactError::Invalid("kinematic colliders need a contact stage".into())
-        })?;
+        let scene: &[Collider] = match (&self.contact, &self.barrier) {
+            (Some(c), _) => &c.stage.colliders()[..c.scene_colliders],
+            (None, Some(b)) => &b.colliders[..b.scene_colliders],
+            (None, None) => {
+                return Err(ContactError::Invalid(
+                    "kinematic colliders need a contact stage or barrier contact (a `contact:` section)"
+                        .into(),
+                ))
+            }
+        };
         if let Some(b) = poses.iter().position(|p| !pose_is_finite(p)) {
             return Err(ContactError::Invalid(format!(
                 "kinematic body {b}: its pose is not finite"
             )));
         }
-        let mut all = contact.stage.colliders()[..contact.scene_colliders].to_vec();
+        let mut all = scene.to_vec();
         for (i, mut c) in colliders.into_iter().enumerate() {
             match c.attached_to {
                 Some(b) if b < poses.len() => c.attached_to = Some(handles + b),
@@ -150,11 +277,43 @@ impl World {
             }
             all.push(c);
         }
-        contact.stage = contact.stage.with_colliders(all)?;
+        if let Some(contact) = self.contact.as_mut() {
+            contact.stage = contact.stage.with_colliders(all)?;
+        } else {
+            self.set_barrier_colliders(all, &poses)?;
+        }
         self.last_targets.truncate(handles);
         self.last_targets.extend_from_slice(&poses);
         self.kinematic_next = poses;
         Ok(())
+    }
+
+    /// The barrier's colliders replaced by `all` with the kinematic bodies at `poses`,
+    /// unless a ribbon would then start overlapping one (the world unchanged).
+    fn set_barrier_colliders(
+        &mut self,
+        all: Vec<Collider>,
+        poses: &[Pose],
+    ) -> Result<(), ContactError> {
+        let handles = self.handles.len();
+        let barrier = self.barrier.as_mut().expect("called with barrier contact");
+        let kept = std::mem::replace(&mut barrier.colliders, all);
+        let kept_targets = self.last_targets.split_off(handles);
+        self.last_targets.extend_from_slice(poses);
+        let start = self.barrier_start_gap();
+        self.last_targets.truncate(handles);
+        self.last_targets.extend(kept_targets);
+        match start {
+            Some((gap, o, PairSource::Collider(k))) if gap <= 0.0 => {
+                let barrier = self.barrier.as_mut().expect("barrier contact");
+                barrier.colliders = kept;
+                Err(ContactError::Invalid(format!(
+                    "collider {k} would start {:.4} m closer than the thickness to `{}`: contact.method barrier cannot start from an overlap",
+                    -gap, self.names[o]
+                )))
+            }
+            _ => Ok(()),
+        }
     }
 
     /// Kinematic body `body`'s pose (`world_from_body`) at the end of the next step:
@@ -272,6 +431,24 @@ impl World {
         resolved.extend_from_slice(&self.kinematic_next);
         let dt = self.dt;
         let handles = &self.handles;
+        if let Some(barrier) = &self.barrier {
+            let (reports, contact) = barrier.step(
+                &mut self.objects,
+                self.steps,
+                (&self.last_targets, &resolved),
+                (dt, t_next, handles),
+                clock,
+            );
+            self.last_targets = resolved;
+            self.time = t_next;
+            self.steps += 1;
+            return StepReport {
+                time: self.time,
+                objects: reports,
+                contact: Some(contact),
+                scripted,
+            };
+        }
         // Every object's optimization in parallel: each is independent and sequential
         // inside, so the results do not depend on the thread count.
         let mut reports: Vec<ObjectStepReport> = self
@@ -286,6 +463,7 @@ impl World {
                     handles,
                     targets: &resolved[..n_handles],
                     clock,
+                    contact: None,
                 })
             })
             .collect();
@@ -344,6 +522,84 @@ impl World {
             .map(|h| h.trajectory.pose_at(0.0))
             .chain(kinematic)
             .collect();
+    }
+}
+
+impl BarrierState {
+    /// Every object's step in turn (forward on even steps, backward on odd), each
+    /// contact body with the colliders and the other bodies' current meshes; the
+    /// bodies' contact outcomes summed into a [`ContactStepReport`].
+    fn step(
+        &self,
+        objects: &mut [Box<dyn ObjectSim>],
+        step_index: u64,
+        (targets0, targets1): (&[Pose], &[Pose]),
+        (dt, time, handles): (f64, f64, &[HandleSpec]),
+        clock: &dyn PhaseClock,
+    ) -> (Vec<ObjectStepReport>, ContactStepReport) {
+        let poses0: Vec<Pose> = self
+            .colliders
+            .iter()
+            .map(|c| c.world_pose(targets0))
+            .collect();
+        let poses1: Vec<Pose> = self
+            .colliders
+            .iter()
+            .map(|c| c.world_pose(targets1))
+            .collect();
+        let count = objects.len();
+        let mut reports = vec![ObjectStepReport::default(); count];
+        let order: Vec<usize> = if step_index.is_multiple_of(2) {
+            (0..count).collect()
+        } else {
+            (0..count).rev().collect()
+        };
+        for index in order {
+            let (before, rest) = objects.split_at_mut(index);
+            let (object, after) = rest.split_first_mut().expect("index < count");
+            let others: Vec<OtherMesh> = before
+                .iter()
+                .enumerate()
+                .chain(after.iter().enumerate().map(|(j, o)| (index + 1 + j, o)))
+                .filter_map(|(j, o)| {
+                    self.cells[j].as_ref().map(|cells| OtherMesh {
+                        vertices: &o.mesh().vertices,
+                        cells,
+                    })
+                })
+                .collect();
+            let env = ContactEnv {
+                settings: self.settings,
+                colliders: &self.colliders,
+                poses0: &poses0,
+                poses1: &poses1,
+                others: &others,
+            };
+            reports[index] = object.step(&StepContext {
+                dt,
+                time,
+                index,
+                handles,
+                // (the carriers' poses: the handles' targets, then the kinematic bodies)
+                targets: &targets1[..handles.len()],
+                clock,
+                contact: self.cells[index].as_ref().map(|_| &env),
+            });
+        }
+        let mut report = ContactReport {
+            resolved: true,
+            ..Default::default()
+        };
+        for outcome in reports.iter().filter_map(|r| r.contact) {
+            report.contacts += outcome.active;
+            report.constraints += outcome.active;
+            report.iterations = report.iterations.max(outcome.rounds);
+            report.resolved &= outcome.resolved;
+            // the smallest gap left, as an overlap when it is negative (never, by
+            // construction: every iterate is feasible)
+            report.penetration_max = report.penetration_max.max(-outcome.min_gap);
+        }
+        (reports, ContactStepReport { report })
     }
 }
 

@@ -391,7 +391,7 @@ impl<M: ModelMatrix> TrustRegion<M> {
         state: &mut State,
     ) -> Next {
         let (mut predicted, mut on_boundary) = (step.predicted, step.on_boundary);
-        let fraction = problem.max_step_fraction(x, &self.s);
+        let fraction = problem.max_step_fraction(x, &self.s, lower, upper);
         if fraction < 1.0 {
             let fraction = fraction.max(0.0);
             for (s, hs) in self.s.iter_mut().zip(self.hs.iter_mut()) {

@@ -80,6 +80,8 @@ impl Objective<'_> {
             }
         }
         self.assemble_hessian(ws, hm);
+        // contact pairs across the chain (rank one each, dense here)
+        self.add_dense_pairs(ws, hm);
     }
 
     /// Hessian of the bending energy k_k (1+c^2) psi^2 of crease k in (c_k, psi_k),
@@ -126,6 +128,7 @@ impl Objective<'_> {
             scratch_columns,
             scratch_left,
             scratch_right,
+            contact,
             ..
         } = ws;
         // first element moved by each coordinate, and the twists as 6-vectors
@@ -135,6 +138,7 @@ impl Objective<'_> {
             element_hessian,
             element_gradient,
             element_second,
+            &contact.wrench,
             hessian_suffix,
             scratch_psuf,
         );
@@ -181,6 +185,7 @@ pub(super) fn suffix_sums(
     element_hessian: &[Mat8],
     element_gradient: &[Vec8],
     element_second: &[SecondOrder],
+    excluded: &[Vec8],
     hessian_suffix: &mut Vec<Mat6>,
     psuf: &mut Vec<(Matrix3, Vector3, Vector3)>,
 ) {
@@ -191,14 +196,17 @@ pub(super) fn suffix_sums(
         let g = &element_hessian[e];
         hessian_suffix[e] = hessian_suffix[e + 1] + Mat6::from_fn(|i, j| g[(i, j)]);
     }
-    geometric_suffix_sums(element_gradient, element_second, psuf);
+    geometric_suffix_sums(element_gradient, element_second, excluded, psuf);
 }
 
 /// The geometric part of [`suffix_sums`] alone (P_m, F_m, M_m): all the chain model
 /// needs, since it folds the twist blocks along its own sweep.
+/// `excluded`: per element, a wrench left out of the force and moment sums (the
+/// contact forces when their geometric stiffness is left out; empty: none).
 pub(super) fn geometric_suffix_sums(
     element_gradient: &[Vec8],
     element_second: &[SecondOrder],
+    excluded: &[Vec8],
     psuf: &mut Vec<(Matrix3, Vector3, Vector3)>,
 ) {
     let n = element_gradient.len();
@@ -209,7 +217,10 @@ pub(super) fn geometric_suffix_sums(
     );
     for e in (0..n).rev() {
         let (p, f, m) = psuf[e + 1];
-        let g = &element_gradient[e];
+        let mut g = element_gradient[e];
+        if let Some(x) = excluded.get(e) {
+            g -= x;
+        }
         psuf[e] = (
             p + element_second[e].p_gamma,
             f + Vector3::new(g[3], g[4], g[5]),

@@ -28,6 +28,10 @@
 
 mod accumulate;
 pub mod chain;
+mod contact_ccd;
+pub mod contact_terms;
+#[cfg(test)]
+mod contact_tests;
 mod gradient;
 mod hessian;
 pub mod kinetic;
@@ -43,6 +47,7 @@ use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
 use crate::geometry::{Matrix3, Pose, Twist, Vector3};
 use accumulate::{Accumulator, PointGradient, SecondOrder};
 
+pub use contact_terms::{ContactTerms, ContactWorkspace, FrictionLag, PairTerm};
 pub use gradient::GradientMode;
 pub(crate) use kinetic::interpolate;
 pub use kinetic::RimHistory;
@@ -90,6 +95,10 @@ pub struct Workspace {
     /// Whether the last evaluation kept what `assemble_newton_hessian` needs.
     second_order_recorded: bool,
     pub parts: ObjectiveParts,
+    /// The contact terms' buffers and what the last evaluation found.
+    pub contact: ContactWorkspace,
+    /// The line search's collision checks' buffers (`contact_ccd`).
+    ccd: contact_ccd::CcdScratch,
 }
 
 impl Default for Coordinates {
@@ -107,6 +116,8 @@ pub struct Objective<'a> {
     /// Base frame when prescribed; for a floating base, the reference rotation R_ref
     /// (R = exp(w) R_ref) and nothing else.
     pub base: Pose,
+    /// Contact inside the step (docs/contact_barrier.md), when the scene has it.
+    pub contact: Option<&'a ContactTerms>,
 }
 
 impl<'a> Objective<'a> {
@@ -126,7 +137,14 @@ impl<'a> Objective<'a> {
             terms,
             history,
             base,
+            contact: None,
         }
+    }
+
+    /// The same objective with the contact terms `contact`.
+    pub fn with_contact(mut self, contact: Option<&'a ContactTerms>) -> Self {
+        self.contact = contact;
+        self
     }
 
     /// Set up coordinates and frames for q.
@@ -258,6 +276,7 @@ impl<'a> Objective<'a> {
             parts.constraint +=
                 self.equality(&mut acc, &mut ws.cross_blocks, eq, lambda, t.penalty);
         }
+        parts.contact = self.contact_terms(&mut acc, &mut ws.contact);
         parts
     }
 }

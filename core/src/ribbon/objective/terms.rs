@@ -102,11 +102,13 @@ pub struct ObjectiveParts {
     pub gravity: f64,
     pub external: f64,
     pub constraint: f64,
+    /// Contact barrier and friction (+∞ where a pair touches or has crossed).
+    pub contact: f64,
 }
 
 impl ObjectiveParts {
     pub fn total(&self) -> f64 {
-        self.kinetic + self.elastic + self.gravity + self.external + self.constraint
+        self.kinetic + self.elastic + self.gravity + self.external + self.constraint + self.contact
     }
 }
 

@@ -175,7 +175,22 @@ fn check_hessian(
     floating: bool,
     coords: &[usize],
 ) {
-    let obj = Objective::new(strip, floating, terms, history, base);
+    check_hessian_with(terms, history, strip, base, q, floating, coords, None);
+}
+
+/// [`check_hessian`] of the objective with the contact terms `contact`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn check_hessian_with(
+    terms: &StepTerms,
+    history: &RimHistory,
+    strip: Strip,
+    base: Pose,
+    q: &[f64],
+    floating: bool,
+    coords: &[usize],
+    contact: Option<&ContactTerms>,
+) {
+    let obj = Objective::new(strip, floating, terms, history, base).with_contact(contact);
     let mut ws = Workspace::default();
     let mut hm = DMatrix::zeros(q.len(), q.len());
     let mut g = vec![0.0; q.len()];
@@ -185,7 +200,16 @@ fn check_hessian(
         Some((&mut g, GradientMode::Adjoint)),
         Some(&mut hm),
     );
-    check_hessian_against(terms, history, strip, base, q, floating, coords, &hm);
+    check_hessian_against(
+        terms,
+        history,
+        strip,
+        base,
+        q,
+        (floating, contact),
+        coords,
+        &hm,
+    );
 }
 
 /// `hm` against central differences of the analytic gradient of the objective of
@@ -197,11 +221,11 @@ fn check_hessian_against(
     strip: Strip,
     base: Pose,
     q: &[f64],
-    floating: bool,
+    (floating, contact): (bool, Option<&ContactTerms>),
     coords: &[usize],
     hm: &DMatrix<f64>,
 ) {
-    let obj = Objective::new(strip, floating, terms, history, base);
+    let obj = Objective::new(strip, floating, terms, history, base).with_contact(contact);
     let mut ws = Workspace::default();
     assert!(
         (hm - hm.transpose()).amax() <= 1e-12 * hm.amax(),
@@ -402,7 +426,7 @@ fn hessian_check_sees_a_wrong_kinetic_term() {
     let mut hm = DMatrix::zeros(q.len(), q.len());
     obj.evaluate(&q, &mut ws, None, Some(&mut hm));
     terms.density *= 1.01;
-    check_hessian_against(&terms, &history, strip, base, &q, true, &all, &hm);
+    check_hessian_against(&terms, &history, strip, base, &q, (true, None), &all, &hm);
 }
 
 /// ... and an error at the soft modes' scale: a rank-one error of 1e-7 |H|max (what
@@ -422,7 +446,7 @@ fn hessian_check_sees_an_error_at_the_soft_modes_scale() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(9);
     let v = nalgebra::DVector::from_fn(q.len(), |_, _| rng.random_range(-1.0..1.0)).normalize();
     let hm = &hm + &v * v.transpose() * (1e-7 * hm.amax());
-    check_hessian_against(&terms, &history, strip, base, &q, true, &all, &hm);
+    check_hessian_against(&terms, &history, strip, base, &q, (true, None), &all, &hm);
 }
 
 #[test]

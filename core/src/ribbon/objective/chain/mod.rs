@@ -22,6 +22,7 @@
 
 use nalgebra::{Cholesky, Matrix2, SMatrix, SVector};
 
+mod pairs;
 mod product;
 
 use super::hessian::geometric_suffix_sums;
@@ -46,19 +47,19 @@ const ROOT: usize = 7;
 /// Buffers are reused from step to step (no allocation once warm).
 #[derive(Clone, Debug, Default)]
 pub struct ChainModel {
-    segments: usize,
-    floating: bool,
+    pub(super) segments: usize,
+    pub(super) floating: bool,
     /// Per crease k (index 0 unused): twists of c_k and psi_k, their geometric cross
     /// vectors W (J per unit of the coordinate and rad), the local 2x2 block.
-    xi_c: Vec<Vec6>,
-    xi_psi: Vec<Vec6>,
+    pub(super) xi_c: Vec<Vec6>,
+    pub(super) xi_psi: Vec<Vec6>,
     w_c: Vec<Vector3>,
     w_psi: Vec<Vector3>,
     local: Vec<Matrix2<f64>>,
     /// Per element: G̃_e over (twist, c_e, c_{e+1}).
     blocks: Vec<Mat8>,
     /// Base twists (columns: w_1..3, t_1..3) and the base's own geometric 3x3 block.
-    base_twists: Mat6,
+    pub(super) base_twists: Mat6,
     base_local: Matrix3,
     /// Loop closure: B of the term y_{n-1}^T B y_0 (summed over the closures), if any.
     closure: Option<Mat8>,
@@ -74,7 +75,7 @@ pub struct ChainModel {
     // --- factors ---
     gain: Vec<Mat2x7>,
     pivot_inverse: Vec<Matrix2<f64>>,
-    free: Vec<bool>,
+    pub(super) free: Vec<bool>,
     root: Option<Cholesky<f64, nalgebra::Const<6>>>,
     feedforward: Vec<nalgebra::Vector2<f64>>,
     prefix: Vec<Vec6>,
@@ -82,6 +83,11 @@ pub struct ChainModel {
     /// of one Newton iteration factorizes the same matrix).
     diagonal: Vec<f64>,
     diagonal_ready: bool,
+    /// Contact pairs across the chain (rank one each, `pairs`) and their
+    /// solve's buffers.
+    pairs: Vec<super::contact_terms::PairTerm>,
+    pair_order: Vec<u32>,
+    pair_scratch: pairs::PairScratch,
     /// Where the last factorization stopped (for [`Self::negative_curvature`]).
     failure: product::Failure,
     /// rho of a penalty rho dc_{n-1}^2 / 2 on the last crease's change in the
@@ -115,6 +121,7 @@ impl Objective<'_> {
         geometric_suffix_sums(
             &ws.element_gradient,
             &ws.element_second,
+            &ws.contact.wrench,
             &mut ws.scratch_psuf,
         );
         model.segments = n;
@@ -135,6 +142,7 @@ impl Objective<'_> {
             );
             *model.closure.get_or_insert_with(Mat8::zeros) += b;
         }
+        pairs::merge_pairs(&ws.contact.pairs, &mut model.pair_order, &mut model.pairs);
     }
 
     /// Per crease k = 1..n-1: the twists ξ and geometric terms W of c_k and psi_k, and
@@ -256,10 +264,10 @@ impl ChainModel {
         base + 2 * (self.segments - 1)
     }
 
-    fn c_index(&self, k: usize) -> usize {
+    pub(super) fn c_index(&self, k: usize) -> usize {
         (if self.floating { 6 } else { 0 }) + k - 1
     }
-    fn psi_index(&self, k: usize) -> usize {
+    pub(super) fn psi_index(&self, k: usize) -> usize {
         (if self.floating { 6 } else { 0 }) + self.segments - 1 + k - 1
     }
 
@@ -403,7 +411,14 @@ impl ChainModel {
     /// 14 x 14 capacitance K = S + U^T H0^{-1} U. By Haynsworth's inertia additivity
     /// (on [[H0, U], [U^T, -S]]), In(H) = In(H0) + In(-K) - In(-S): with H0 positive
     /// definite, H is exactly when K has ROOT positive and ROOT negative eigenvalues.
+    ///
+    /// Contact pairs across the chain come on top (`pairs`).
     pub fn factor(&mut self, free: &[bool], shift: &[f64]) -> bool {
+        self.factor_chain_only(free, shift) && self.factor_pairs()
+    }
+
+    /// [`Self::factor`] without the contact pairs.
+    fn factor_chain_only(&mut self, free: &[bool], shift: &[f64]) -> bool {
         self.failure = product::Failure::None;
         self.held_pivots.clear();
         self.held_root = None;
@@ -666,9 +681,20 @@ impl ChainModel {
     }
 
     /// Solve the factorized system for the right-hand side `rhs` (full length; held
-    /// entries ignored), writing the step to `out` (held entries 0). With a loop
-    /// closure, Woodbury: x = x0 - Y K^{-1} U^T x0, x0 = H0^{-1} rhs.
+    /// entries ignored), writing the step to `out` (held entries 0). With contact
+    /// pairs across the chain, their low-rank solve around the chain's
+    /// (`pairs`).
     pub fn solve(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
+        if self.pairs.is_empty() {
+            self.solve_chain_only(rhs, out)
+        } else {
+            self.solve_with_pairs(rhs, out)
+        }
+    }
+
+    /// The chain's solve with its loop closure (no contact pairs). With a loop
+    /// closure, Woodbury: x = x0 - Y K^{-1} U^T x0, x0 = H0^{-1} rhs.
+    pub(super) fn solve_chain_only(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
         if !self.solve_chain(rhs, out) {
             return false;
         }

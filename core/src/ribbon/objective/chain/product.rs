@@ -50,7 +50,7 @@ fn angular(v: &Vec6) -> Vector3 {
 
 impl ChainModel {
     /// `out` = H v (full length, the model's dimension), exactly the dense matrix's
-    /// product (loop closure included), in O(n).
+    /// product (loop closure and contact pairs across the chain included), in O(n + m).
     pub fn multiply(&mut self, v: &[f64], out: &mut [f64]) {
         let n = self.segments;
         let mut b = std::mem::take(&mut self.product);
@@ -136,6 +136,7 @@ impl ChainModel {
             }
         }
         self.product = b;
+        self.add_pairs_product(v, out);
     }
 
     /// After a [`Self::factor`] that returned false: the least eigenvalue of the pivot
