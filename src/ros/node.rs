@@ -35,12 +35,14 @@ use crate::session::{
 };
 use crate::sim::ReachWatch;
 
+mod camera;
 mod control;
 mod endpoints;
 mod grasp;
 mod inputs;
 mod latency;
 
+use camera::CameraThreads;
 use endpoints::Endpoints;
 use latency::Latency;
 
@@ -123,6 +125,9 @@ pub struct SimNode {
     /// Which topics' dropped publications were already said in this episode.
     drop_log: DropLog,
     latency: Latency,
+    /// The cameras' drawing threads, and each frame's drawing time, ms.
+    cameras: CameraThreads,
+    camera_draw_ms: Vec<f64>,
 }
 
 /// Lock-step on a handle steps once per pose accepted on its topic. A handle that
@@ -164,6 +169,15 @@ fn start_foxglove(
         out.port()
     );
     Ok(Some(out))
+}
+
+/// What the node's settings decide about outputs beyond the scene file.
+pub fn run_outputs(cfg: &NodeConfig) -> RunOutputs {
+    RunOutputs {
+        own_clock: !cfg.use_sim_time,
+        recording: cfg.record.is_some(),
+        record_cameras: cfg.record.as_ref().is_some_and(|(_, o)| o.record_cameras),
+    }
 }
 
 /// The statistics' run mode, e.g. `real_time x1`, `lockstep:service`.
@@ -208,19 +222,22 @@ impl SimNode {
             .collect();
         // the outputs the scene and the node's settings ask for; recorded-only rows
         // (statuses not published) only when recording
-        let run = RunOutputs {
-            own_clock: !cfg.use_sim_time,
-            recording: cfg.record.is_some(),
-        };
+        let run = run_outputs(&cfg);
         let table = OutputTable::for_scene(&cfg.scene, &cfg.names, run)
             .map_err(|e| NodeError::Config(e.to_string()))?;
+        let tf_cameras = cfg
+            .scene
+            .cameras
+            .iter()
+            .any(|c| matches!(c.mount, crate::scene::CameraMount::TfFrame(_)));
         let io = Endpoints::open(
             cfg.domain_id,
             &cfg.names,
             &table,
             (cfg.use_sim_time, cfg.tf_max_lag),
-            &tf_handles,
+            (&tf_handles, tf_cameras),
         )?;
+        let cameras = CameraThreads::start(&cfg.scene, &table.rows, &io.waker)?;
         let (params, markers_rate) = param_table(&cfg);
         let foxglove = start_foxglove(&cfg, &table)?;
         let names = cfg.names;
@@ -265,6 +282,8 @@ impl SimNode {
             stats,
             drop_log: DropLog::default(),
             latency: Latency::new(),
+            cameras,
+            camera_draw_ms: Vec::new(),
         })
     }
 
@@ -292,6 +311,7 @@ impl SimNode {
     pub fn run(mut self, stop: &AtomicBool) -> Result<NodeStats, NodeError> {
         self.latency.start();
         self.emit_current(Content::All, None);
+        self.capture_cameras();
         let mut next_tick = Instant::now() + self.period();
         let mut events = Events::with_capacity(64);
         // under use_sim_time the external clock drives the steps
@@ -321,6 +341,7 @@ impl SimNode {
             self.drain_graph();
             self.drain_inputs();
             self.drain_services(&mut next_tick);
+            self.drain_cameras();
             if stop.load(Ordering::SeqCst) || self.done() {
                 break;
             }
@@ -364,6 +385,9 @@ impl SimNode {
             Some(Ok(frame)) => self.emit(&frame, trigger),
             Some(Err(e)) => self.encode_failed(&e),
             None => {}
+        }
+        if applied == Applied::NewState {
+            self.capture_cameras();
         }
         applied
     }
@@ -491,7 +515,10 @@ impl SimNode {
             std::thread::sleep(crate::ros::reply::RECHECK);
             self.flush_replies();
         }
+        self.finish_cameras();
         let mut stats = std::mem::take(&mut self.stats);
+        stats.camera_frames_skipped = self.session.counters.camera_frames_skipped;
+        stats.camera_draw = crate::ros::node_stats::LatencyStats::of(&self.camera_draw_ms);
         stats.sim_time = self.session.scene.world.time();
         self.latency.finish(&mut stats);
         stats.overrun_ticks = self.session.counters.overrun_ticks;

@@ -32,6 +32,11 @@ macro_rules! ros_message {
     };
 }
 
+// sensor_msgs of the camera (Image, CameraInfo, PointCloud2): after the macro they use
+#[path = "sensor_msgs.rs"]
+mod sensor_msgs;
+pub use sensor_msgs::*;
+
 // ---------------------------------------------------------------- builtin_interfaces
 
 /// `builtin_interfaces/msg/Time`.
@@ -414,6 +419,7 @@ pub struct SimStatus {
     pub strained_edges_pct: f64,
     pub overrun_ticks: u64,
     pub dropped_publications: u64,
+    pub camera_frames_skipped: u64,
     pub rejected_inputs: u64,
     pub unconverged_steps: u64,
     pub rejected_steps: u64,
@@ -422,7 +428,7 @@ pub struct SimStatus {
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_2f6e8cd48d94d2cd1db9744bc6580096a2315cc845a5e8fa31cefb4f1c9e53d3"
+    "RIHS01_615730ff673d8a48a63eed650420bcd4a088d172fcce3507a8f98d64c6702d48"
 );
 
 /// `developable_sim/msg/SimCommand`: one external action on the simulation as the node
@@ -443,11 +449,13 @@ pub struct SimCommand {
     pub object: String,
     pub material_point: [f64; 2],
     pub hold: String,
+    pub camera: String,
+    pub pose: Pose,
 }
 ros_message!(
     SimCommand,
     "developable_sim/msg/SimCommand",
-    "RIHS01_f96d3e592944db8d7ea6a83fbd99c2a17e14a92f0363a06439e4157771e7b26d"
+    "RIHS01_80a5bb5e88ada42a59b8c9ef7236b85803b1a27644869d7bc542365d7d6fb8c6"
 );
 
 impl SimCommand {
@@ -457,6 +465,7 @@ impl SimCommand {
     pub const SET_PARAMETER: u8 = 4;
     pub const GRASP: u8 = 5;
     pub const RELEASE: u8 = 6;
+    pub const CAPTURE: u8 = 7;
     pub const PARAMETER_BOOL: u8 = 1;
     pub const PARAMETER_INTEGER: u8 = 2;
     pub const PARAMETER_DOUBLE: u8 = 3;

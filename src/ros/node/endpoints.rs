@@ -117,15 +117,15 @@ impl Endpoints {
         names: &NodeNames,
         outputs: &OutputTable,
         (use_sim_time, tf_max_lag): (bool, f64),
-        tf_handles: &[(usize, String)],
+        (tf_handles, tf_cameras): (&[(usize, String)], bool),
     ) -> Result<Self, NodeError> {
         let (context, node_name, mut node, spinner) = start_node(domain_id, names)?;
         let poll = Poll::new()?;
         let waker = Arc::new(Waker::new(poll.registry(), WAKE)?);
         let subs = handle_subscriptions(&mut node, names, tf_handles, &poll)?;
-        // TF in for every scene with handles: TF-driven handles, and poses in another
-        // frame of the tree
-        let tf_in = (!names.handles.is_empty())
+        // TF in for every scene with handles (TF-driven handles, and poses in another
+        // frame of the tree) or with a camera carried by a TF frame
+        let tf_in = (!names.handles.is_empty() || tf_cameras)
             .then(|| {
                 let lag = Duration::from_secs_f64(tf_max_lag);
                 TfIn::new(
