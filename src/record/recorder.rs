@@ -21,11 +21,11 @@ use super::RecordError;
 use crate::camera::Renderer;
 use crate::runner::StepObserver;
 use crate::scene::Scene;
+use crate::session::camera::{draw_frame, fixed_pose, renderer};
 use crate::session::command::Names;
 use crate::session::input::InputPolicy;
 use crate::session::names::NodeNames;
 use crate::session::outputs::{kind_named, OutputRow, Want};
-use crate::session::camera::{draw_frame, fixed_pose, renderer};
 use crate::session::{Command, Content, Frame, OutputTable, RunOutputs, Scope, Session};
 use crate::sim::StepReport;
 use crate::wire::clock::now_ns;
@@ -266,7 +266,12 @@ impl SessionRecorder {
                 .map(|h| h.name.clone())
                 .collect(),
             object_names: session.scene.world.object_names().to_vec(),
-            camera_names: session.scene.cameras.iter().map(|c| c.name.clone()).collect(),
+            camera_names: session
+                .scene
+                .cameras
+                .iter()
+                .map(|c| c.name.clone())
+                .collect(),
             outputs,
             last_ns: 0,
         })

@@ -480,16 +480,16 @@ impl Replayed {
             return;
         };
         for (k, row) in self.session.table.rows.iter().enumerate() {
-            if current.seen.contains(&k) || current.frame.messages.get(k).is_none_or(|m| m.is_none()) {
+            if current.seen.contains(&k)
+                || current.frame.messages.get(k).is_none_or(|m| m.is_none())
+            {
                 continue;
             }
             let entry = topic_entry(&mut self.per_topic, &row.topic, row.type_name());
             entry.missing += 1;
             if entry.first_difference.is_empty() {
-                entry.first_difference = format!(
-                    "step {}: drawn by the replay, not in the bag",
-                    current.step
-                );
+                entry.first_difference =
+                    format!("step {}: drawn by the replay, not in the bag", current.step);
             }
         }
     }

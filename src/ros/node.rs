@@ -37,12 +37,13 @@ use crate::sim::ReachWatch;
 
 mod camera;
 mod control;
+mod drawing;
 mod endpoints;
 mod grasp;
 mod inputs;
 mod latency;
 
-use camera::CameraThreads;
+use drawing::CameraThreads;
 use endpoints::Endpoints;
 use latency::Latency;
 

@@ -13,24 +13,16 @@
 //! pose it is drawn from and its noise key (scene seed, camera, tick), nothing else.
 
 use std::collections::VecDeque;
-use std::marker::PhantomData;
 
-use bytes::Bytes;
-
-use crate::camera::truth::{fill_mesh_points, TRUTH_FIELDS, TRUTH_POINT_STEP};
-use crate::camera::{self, Snapshot, CLOUD_FIELDS, CLOUD_POINT_STEP};
+use crate::camera::{self, Snapshot};
 use crate::geometry::Pose;
 use crate::scene::{CameraMount, Scene, SceneCamera};
-use crate::wire::cdr::{self, CdrError};
-use crate::wire::convert::to_transform;
-use crate::wire::introspect::{to_value, Value};
-use crate::wire::msgs::{
-    float32_fields, CameraInfo, Header, ImageRef, PointCloud2, PointCloud2Ref, RosMessage,
-    TFMessage, Time, TransformStamped,
-};
+use crate::wire::cdr::CdrError;
+use crate::wire::msgs::Time;
 
-use super::outputs::{Frame, OutputRow, Producer};
-use super::produce::{Produce, Scope};
+use super::outputs::{Frame, OutputRow};
+use super::produce::Scope;
+use super::sensor::CameraView;
 
 /// The newest tick of a camera at `rate` Hz that the state at time `t` (s) of a
 /// simulation stepping `dt` (s) has reached: tick k, at k / rate, belongs to the first
@@ -93,12 +85,13 @@ impl Cameras {
     pub fn new(scene: &Scene, rows: &[OutputRow]) -> Cameras {
         let n = scene.cameras.len();
         let has = |c: usize, draws: bool| {
-            rows.iter().any(|r| {
-                r.scope == Scope::Camera(c) && (!draws || r.kind.producer.draws())
-            })
+            rows.iter()
+                .any(|r| r.scope == Scope::Camera(c) && (!draws || r.kind.producer.draws()))
         };
         Cameras {
-            next_tick: (0..n).map(|c| if has(c, false) { 0 } else { u64::MAX }).collect(),
+            next_tick: (0..n)
+                .map(|c| if has(c, false) { 0 } else { u64::MAX })
+                .collect(),
             due: vec![None; n],
             pending: vec![VecDeque::new(); n],
             draws: (0..n).map(|c| has(c, true)).collect(),
@@ -195,67 +188,13 @@ pub fn fixed_pose(cam: &SceneCamera) -> Option<Pose> {
     }
 }
 
-/// What a camera row's message is made from: the camera, the stamp of the captured
-/// state and the drawn frame (None: not drawn; the rows carrying pixels are left out).
-pub struct CameraView<'a> {
-    pub camera: &'a SceneCamera,
-    pub stamp: Time,
-    pub drawn: Option<&'a camera::Frame>,
-}
-
-impl CameraView<'_> {
-    fn header(&self) -> Header {
-        Header {
-            stamp: self.stamp,
-            frame_id: self.camera.optical_frame(),
-        }
-    }
-}
-
-/// The producer of a camera row: a message of type `M` from a [`CameraView`], encoded
-/// (the frame's rows are made beside the tick, not from a state: [`Producer::produce`]
-/// makes nothing).
-pub struct Drawn<M: 'static> {
-    /// The message carries the pixels (a capture must copy what the camera sees).
-    pub draws: bool,
-    pub make: fn(&CameraView) -> Option<Result<Vec<u8>, CdrError>>,
-    pub message: PhantomData<fn() -> M>,
-}
-
-impl<M> std::fmt::Debug for Drawn<M> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "Drawn<{}>", std::any::type_name::<M>())
-    }
-}
-
-impl<M: RosMessage> Producer for Drawn<M> {
-    fn type_name(&self) -> &'static str {
-        M::TYPE
-    }
-    fn type_hash(&self) -> &'static str {
-        M::HASH
-    }
-    fn schema(&self) -> String {
-        M::schema()
-    }
-    fn produce(&self, _: &Produce, _: Scope) -> Option<Result<Bytes, CdrError>> {
-        None
-    }
-    fn value(&self, bytes: &[u8]) -> Result<Value, String> {
-        let m: M = cdr::decode(bytes).map_err(|e| format!("{}: {e}", M::TYPE))?;
-        to_value(&m).map_err(|e| format!("{}: {e}", M::TYPE))
-    }
-    fn camera(&self, view: &CameraView) -> Option<Result<Bytes, CdrError>> {
-        (self.make)(view).map(|r| r.map(Bytes::from))
-    }
-    fn draws(&self) -> bool {
-        self.draws
-    }
-}
-
 /// The messages of camera `camera`'s frame `view`: one per row of `rows` that belongs
 /// to it, in a frame of every row (the others empty).
-pub fn camera_frame(rows: &[OutputRow], camera: usize, view: &CameraView) -> Result<Frame, CdrError> {
+pub fn camera_frame(
+    rows: &[OutputRow],
+    camera: usize,
+    view: &CameraView,
+) -> Result<Frame, CdrError> {
     let mut messages = Vec::with_capacity(rows.len());
     for row in rows {
         let m = match row.scope == Scope::Camera(camera) {
@@ -298,140 +237,260 @@ pub fn renderer(scene: &Scene, cam: &SceneCamera) -> camera::Renderer {
     camera::Renderer::new(cam.camera, camera::world_colliders(&scene.world))
 }
 
-/// Room for a message of `data` bytes: the header and fields fit in 256 bytes.
-fn sized(data: usize) -> usize {
-    data + 256
-}
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
 
-/// `/<camera>/color/image_raw`: `rgb8`, 3 bytes a pixel.
-pub fn color(v: &CameraView) -> Option<Result<Vec<u8>, CdrError>> {
-    let f = v.drawn?;
-    image(v, "rgb8", 3, &f.color)
-}
+    use super::*;
+    use crate::session::names::NodeNames;
+    use crate::session::outputs::{OutputTable, RunOutputs};
+    use crate::wire::convert::to_transform;
+    use crate::wire::msgs::{CameraInfo, Image, PointCloud2, TFMessage};
 
-/// `/<camera>/aligned_depth_to_color/image_raw`: `32FC1`, m along the optical axis,
-/// NaN where nothing is hit.
-pub fn depth(v: &CameraView) -> Option<Result<Vec<u8>, CdrError>> {
-    let f = v.drawn?;
-    image(v, "32FC1", 4, &f.depth)
-}
-
-fn image(
-    v: &CameraView,
-    encoding: &str,
-    bytes_per_pixel: u32,
-    data: &[u8],
-) -> Option<Result<Vec<u8>, CdrError>> {
-    let i = v.camera.camera.intrinsics;
-    let header = v.header();
-    let m = ImageRef {
-        header: &header,
-        height: i.height,
-        width: i.width,
-        encoding,
-        is_bigendian: 0,
-        step: bytes_per_pixel * i.width,
-        data,
-    };
-    Some(cdr::encode_sized(&m, sized(data.len())))
-}
-
-/// `/<camera>/depth/color/points`: organized (height x width), x y z rgb float32, NaN
-/// points where the depth is NaN (`is_dense` false).
-pub fn cloud(v: &CameraView) -> Option<Result<Vec<u8>, CdrError>> {
-    let f = v.drawn?;
-    let i = v.camera.camera.intrinsics;
-    let header = v.header();
-    let fields = float32_fields(&CLOUD_FIELDS);
-    let m = PointCloud2Ref {
-        header: &header,
-        height: i.height,
-        width: i.width,
-        fields: &fields,
-        is_bigendian: false,
-        point_step: CLOUD_POINT_STEP as u32,
-        row_step: CLOUD_POINT_STEP as u32 * i.width,
-        data: &f.cloud,
-        is_dense: false,
-    };
-    Some(cdr::encode_sized(&m, sized(f.cloud.len())))
-}
-
-/// `/<camera>/color/camera_info` and `/<camera>/aligned_depth_to_color/camera_info`
-/// (the depth is aligned to the colour: one pinhole): K, P = [K | 0], R = I,
-/// `plumb_bob` with D = 0.
-pub fn camera_info(v: &CameraView) -> Option<Result<Vec<u8>, CdrError>> {
-    let i = v.camera.camera.intrinsics;
-    let k = i.k();
-    let m = CameraInfo {
-        header: v.header(),
-        height: i.height,
-        width: i.width,
-        distortion_model: "plumb_bob".into(),
-        d: vec![0.0; 5],
-        k,
-        r: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
-        p: [
-            k[0], k[1], k[2], 0.0, k[3], k[4], k[5], 0.0, k[6], k[7], k[8], 0.0,
-        ],
-        ..CameraInfo::default()
-    };
-    Some(cdr::encode(&m))
-}
-
-/// `/tf_static`: each camera's `<name>_color_optical_frame` (x right, y down, z
-/// forward), in the initial state (start-up and after a reset; the topic is latched). A
-/// fixed camera's parent is the scene frame; a camera carried by a TF frame has that
-/// frame as parent with the constant `camera::body_from_optical`, as a RealSense's
-/// `camera_link` -> `camera_color_optical_frame`.
-pub fn optical_frames(p: &Produce, _: Scope) -> Option<TFMessage> {
-    if p.report.is_some() || p.scene.cameras.is_empty() {
-        return None;
+    fn scene(name: &str, sets: &[&str]) -> Scene {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("config/scenes")
+            .join(format!("{name}.yaml"));
+        let sets: Vec<String> = sets.iter().map(|s| s.to_string()).collect();
+        crate::scene::load(&path, &sets).unwrap()
     }
-    let transforms = p
-        .scene
-        .cameras
-        .iter()
-        .map(|cam| {
-            let (parent, pose) = match &cam.mount {
-                CameraMount::Fixed(pose) => (p.scene.frame_id.clone(), *pose),
-                CameraMount::TfFrame(f) => (f.clone(), camera::body_from_optical()),
-            };
-            TransformStamped {
-                header: Header {
-                    stamp: p.stamp(),
-                    frame_id: parent,
-                },
-                child_frame_id: cam.optical_frame(),
-                transform: to_transform(&pose),
+
+    fn table(s: &Scene, record_cameras: bool) -> OutputTable {
+        let names = NodeNames::resolve(s, "developable_sim", "/", &[]).unwrap();
+        let run = RunOutputs {
+            own_clock: true,
+            recording: true,
+            record_cameras,
+        };
+        OutputTable::for_scene(s, &names, run).unwrap()
+    }
+
+    #[test]
+    fn each_tick_falls_on_the_state_nearest_to_it() {
+        // dt 0.01 s at 15 Hz: over 1 s ticks 0..=15, each once, within dt/2 of k / 15
+        let dt = 0.01;
+        let mut ticks: Vec<(u64, f64)> = Vec::new();
+        for n in 0..=100 {
+            let t = n as f64 * dt;
+            let k = reached_tick(t, dt, 15.0);
+            if ticks.last().is_none_or(|l| l.0 != k) {
+                ticks.push((k, t));
             }
-        })
-        .collect();
-    Some(TFMessage { transforms })
-}
-
-/// `/<object>/points`: the object's mesh vertices, x y z (scene frame) and u v
-/// (material), float32, m: an unorganized cloud (height 1); none for a mesh that is not
-/// finite.
-pub fn mesh_points(p: &Produce, scope: Scope) -> Option<PointCloud2> {
-    let Scope::Object(o) = scope else {
-        return None;
-    };
-    let mesh = p.scene.world.mesh(o);
-    if !mesh.is_finite() {
-        return None;
+        }
+        let ks: Vec<u64> = ticks.iter().map(|t| t.0).collect();
+        assert_eq!(ks, (0..=15).collect::<Vec<_>>());
+        for (k, t) in ticks {
+            assert!((t - k as f64 / 15.0).abs() <= 0.5 * dt + 1e-12, "{k} {t}");
+        }
+        // faster than the steps: the newest tick of the state, the others passed over
+        assert_eq!(reached_tick(0.1, 0.1, 25.0), 3);
+        assert_eq!(reached_tick(-1.0, 0.01, 15.0), 0);
     }
-    let mut data = Vec::with_capacity(TRUTH_POINT_STEP * mesh.vertices.len());
-    let n = fill_mesh_points(mesh, &mut data) as u32;
-    Some(PointCloud2 {
-        header: p.header(),
-        height: 1,
-        width: n,
-        fields: float32_fields(&TRUTH_FIELDS),
-        is_bigendian: false,
-        point_step: TRUTH_POINT_STEP as u32,
-        row_step: TRUTH_POINT_STEP as u32 * n,
-        data,
-        is_dense: true,
-    })
+
+    #[test]
+    fn a_due_tick_without_a_capture_by_the_next_state_is_skipped() {
+        let mut s = scene("ribbon_gripper", &[]);
+        let t = table(&s, false);
+        let mut cams = Cameras::new(&s, &t.rows);
+        assert_eq!(cams.on_state(&s), 0);
+        assert_eq!(cams.due(0), Some(0));
+        let pose = fixed_pose(&s.cameras[0]).unwrap();
+        assert_eq!(cams.capture(&s, 0, &pose), Some(0));
+        assert_eq!(cams.capture(&s, 0, &pose), None, "a tick is captured once");
+        // ticks 1 and 2 fall on steps 7 (t = 0.07) and 13 (0.13); tick 1 not captured
+        let targets = vec![None; s.world.handles().len()];
+        let (mut skipped, mut dues) = (0, Vec::new());
+        for _ in 0..13 {
+            s.world.step(&targets);
+            skipped += cams.on_state(&s);
+            if let Some(k) = cams.due(0) {
+                dues.push((k, s.world.steps_taken()));
+            }
+        }
+        // a due tick is captured at its state or never
+        assert_eq!(dues, [(1, 7), (2, 13)]);
+        assert_eq!(skipped, 1, "tick 1 went by without a capture");
+        // the capture of tick 0 waits, with what the camera saw at t = 0
+        let c = cams.take(0).unwrap();
+        assert_eq!((c.frame, c.step, c.stamp), (0, 0, Time::default()));
+        assert!(c.snapshot.is_some(), "the images are published: drawn");
+        assert!(cams.take(0).is_none());
+        // a reset: the due tick 2 is lost (skipped), tick 0 comes again
+        assert_eq!(cams.restart(), 1);
+        s.world.reset();
+        assert_eq!(cams.on_state(&s), 0);
+        assert_eq!(cams.due(0), Some(0));
+    }
+
+    #[test]
+    fn a_camera_whose_pixels_no_row_wants_captures_no_snapshot() {
+        let s = scene("ribbon_gripper", &[]);
+        let t = table(&s, false);
+        // a replay of a bag recorded without --record-cameras: camera_info rows only
+        let infos: Vec<OutputRow> = (t.rows.iter())
+            .filter(|r| r.scope == Scope::Camera(0) && !r.kind.producer.draws())
+            .cloned()
+            .collect();
+        assert_eq!(infos.len(), 2);
+        let mut cams = Cameras::new(&s, &infos);
+        cams.on_state(&s);
+        let pose = fixed_pose(&s.cameras[0]).unwrap();
+        assert_eq!(cams.capture(&s, 0, &pose), Some(0));
+        assert_eq!(cams.take(0).unwrap().snapshot, None);
+        // no camera row at all: never due
+        let mut none = Cameras::new(&s, &[]);
+        none.on_state(&s);
+        assert_eq!(none.due(0), None);
+    }
+
+    /// The frame of tick 0 of `s`'s first camera, drawn on a pool of `threads`.
+    fn drawn(s: &Scene, rows: &[OutputRow], threads: usize) -> Frame {
+        let mut cams = Cameras::new(s, rows);
+        cams.on_state(s);
+        let pose = fixed_pose(&s.cameras[0]).unwrap();
+        cams.capture(s, 0, &pose).unwrap();
+        let capture = cams.take(0).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut r = renderer(s, &s.cameras[0]);
+        pool.install(|| draw_frame(&mut r, (&s.cameras[0], s.source.seed), rows, &capture))
+            .unwrap()
+    }
+
+    #[test]
+    fn the_five_messages_share_one_stamp_and_frame_and_carry_the_drawn_buffers() {
+        let s = scene("ribbon_gripper_push", &[]);
+        let t = table(&s, true);
+        let f = drawn(&s, &t.rows, 2);
+        let row = |kind: &str| t.find(kind, Scope::Camera(0)).unwrap();
+        let color: Image = f.decode(row("camera_color")).unwrap().unwrap();
+        let depth: Image = f.decode(row("camera_depth")).unwrap().unwrap();
+        let info: CameraInfo = f.decode(row("camera_color_info")).unwrap().unwrap();
+        let info_d: CameraInfo = f.decode(row("camera_depth_info")).unwrap().unwrap();
+        let cloud: PointCloud2 = f.decode(row("camera_points")).unwrap().unwrap();
+        let headers = [
+            &color.header,
+            &depth.header,
+            &info.header,
+            &info_d.header,
+            &cloud.header,
+        ];
+        for h in headers {
+            assert_eq!(h.frame_id, "camera_color_optical_frame");
+            assert_eq!(h.stamp, f.stamp);
+        }
+        assert_eq!(info, info_d, "the depth is aligned to the colour");
+        // draw the same state again, directly: the messages carry its buffers
+        let mut r = renderer(&s, &s.cameras[0]);
+        let mut snap = Snapshot::default();
+        snap.capture(&s.world);
+        let pose = fixed_pose(&s.cameras[0]).unwrap();
+        let want = r.render(&snap, &pose, &s.cameras[0].noise_key(s.source.seed, 0));
+        assert_eq!((color.encoding.as_str(), color.step), ("rgb8", 3 * 640));
+        assert_eq!((depth.encoding.as_str(), depth.step), ("32FC1", 4 * 640));
+        assert_eq!(
+            (color.width, color.height, depth.width, depth.height),
+            (640, 480, 640, 480)
+        );
+        assert_eq!(color.data, want.color);
+        assert_eq!(depth.data, want.depth);
+        assert_eq!(cloud.data, want.cloud);
+        assert_eq!(
+            (cloud.width, cloud.height, cloud.point_step, cloud.row_step),
+            (640, 480, 16, 16 * 640)
+        );
+        let names: Vec<&str> = cloud.fields.iter().map(|p| p.name.as_str()).collect();
+        assert_eq!(names, ["x", "y", "z", "rgb"]);
+        assert!(!cloud.is_dense && !cloud.is_bigendian);
+        let k = s.cameras[0].camera.intrinsics.k();
+        assert_eq!(info.k, k);
+        assert_eq!(
+            info.p,
+            [k[0], 0.0, k[2], 0.0, 0.0, k[4], k[5], 0.0, 0.0, 0.0, 1.0, 0.0]
+        );
+        assert_eq!(
+            (info.distortion_model.as_str(), info.d.as_slice()),
+            ("plumb_bob", &[0.0; 5][..])
+        );
+        // not drawn: the camera_info only
+        let view = CameraView {
+            camera: &s.cameras[0],
+            stamp: f.stamp,
+            drawn: None,
+        };
+        let infos_only = camera_frame(&t.rows, 0, &view).unwrap();
+        let made: Vec<usize> = (0..t.rows.len())
+            .filter(|k| infos_only.messages[*k].is_some())
+            .collect();
+        assert_eq!(made, [row("camera_color_info"), row("camera_depth_info")]);
+    }
+
+    #[test]
+    fn a_frame_is_the_same_bytes_at_any_thread_count() {
+        // the D435 noise and the colliders too
+        let s = scene(
+            "ribbon_gripper_push",
+            &["cameras.0.width=320", "cameras.0.height=240"],
+        );
+        let t = table(&s, true);
+        let one = drawn(&s, &t.rows, 1);
+        assert_eq!(one, drawn(&s, &t.rows, 3));
+        assert_eq!(one.messages.iter().flatten().count(), 5);
+        // and the check can fail: another tick's noise differs
+        let other = scene(
+            "ribbon_gripper_push",
+            &["cameras.0.width=320", "cameras.0.height=240", "seed=1"],
+        );
+        assert_ne!(one, drawn(&other, &t.rows, 1));
+    }
+
+    #[test]
+    fn the_optical_frames_and_the_ground_truth() {
+        let s = scene("ribbon_gripper", &["outputs.points=true"]);
+        let t = table(&s, false);
+        let mut session = crate::session::Session::new(
+            s.clone(),
+            crate::session::input::InputPolicy {
+                frame_id: "world".into(),
+                accept_empty_frame_id: false,
+                max_stamp_lead: 1.0,
+            },
+            vec![],
+            t.clone(),
+        );
+        let f = session.frame(crate::session::Content::All).unwrap();
+        let tf: TFMessage = f
+            .decode(t.find("camera_frames", Scope::Global).unwrap())
+            .unwrap()
+            .unwrap();
+        assert_eq!(tf.transforms.len(), 1);
+        let ts = &tf.transforms[0];
+        assert_eq!(
+            (ts.header.frame_id.as_str(), ts.child_frame_id.as_str()),
+            ("world", "camera_color_optical_frame")
+        );
+        assert_eq!(
+            ts.transform,
+            to_transform(&fixed_pose(&s.cameras[0]).unwrap())
+        );
+        let truth: PointCloud2 = f
+            .decode(t.find("points", Scope::Object(0)).unwrap())
+            .unwrap()
+            .unwrap();
+        let mesh = s.world.mesh(0);
+        assert_eq!(
+            (truth.height, truth.width as usize),
+            (1, mesh.vertices.len())
+        );
+        let at = |k: usize| f32::from_le_bytes(truth.data[4 * k..4 * k + 4].try_into().unwrap());
+        let last = mesh.vertices.len() - 1;
+        assert_eq!(at(5 * last), mesh.vertices[last].x as f32);
+        assert_eq!(at(5 * last + 3), mesh.material[last].x as f32);
+        // after a step the optical frames are not sent again (latched)
+        session.apply(&crate::session::Command::Step);
+        let g = session.frame(crate::session::Content::All).unwrap();
+        assert!(g.messages[t.find("camera_frames", Scope::Global).unwrap()].is_none());
+    }
 }

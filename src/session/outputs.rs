@@ -23,7 +23,7 @@ use crate::wire::qos::Qos;
 use super::names::{NameError, NodeNames};
 use super::produce::Produce;
 pub use super::produce::Scope;
-use super::camera::{self as cam, CameraView, Drawn};
+use super::sensor::{self as cam, CameraView};
 use super::{frames, markers, status};
 
 /// How many rows an output kind has.
@@ -122,6 +122,47 @@ impl<M: RosMessage> Producer for Typed<M> {
     fn value(&self, bytes: &[u8]) -> Result<Value, String> {
         let m: M = cdr::decode(bytes).map_err(|e| format!("{}: {e}", M::TYPE))?;
         to_value(&m).map_err(|e| format!("{}: {e}", M::TYPE))
+    }
+}
+
+/// The producer of a camera row: a message of type `M` from a [`CameraView`], encoded
+/// (the frame's rows are made beside the tick, not from a state: [`Producer::produce`]
+/// makes nothing).
+pub struct Drawn<M: 'static> {
+    /// The message carries the pixels (a capture must copy what the camera sees).
+    pub draws: bool,
+    pub make: fn(&CameraView) -> Option<Result<Vec<u8>, CdrError>>,
+    pub message: std::marker::PhantomData<fn() -> M>,
+}
+
+impl<M> std::fmt::Debug for Drawn<M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Drawn<{}>", std::any::type_name::<M>())
+    }
+}
+
+impl<M: RosMessage> Producer for Drawn<M> {
+    fn type_name(&self) -> &'static str {
+        M::TYPE
+    }
+    fn type_hash(&self) -> &'static str {
+        M::HASH
+    }
+    fn schema(&self) -> String {
+        M::schema()
+    }
+    fn produce(&self, _: &Produce, _: Scope) -> Option<Result<Bytes, CdrError>> {
+        None
+    }
+    fn value(&self, bytes: &[u8]) -> Result<Value, String> {
+        let m: M = cdr::decode(bytes).map_err(|e| format!("{}: {e}", M::TYPE))?;
+        to_value(&m).map_err(|e| format!("{}: {e}", M::TYPE))
+    }
+    fn camera(&self, view: &CameraView) -> Option<Result<Bytes, CdrError>> {
+        (self.make)(view).map(|r| r.map(Bytes::from))
+    }
+    fn draws(&self) -> bool {
+        self.draws
     }
 }
 

@@ -300,7 +300,12 @@ impl Session {
 
     /// [`Command::Capture`] applied to another copy of this session's scene (see
     /// [`Session::note_state_of`]); returns the tick captured.
-    pub fn capture_of(&mut self, scene: &Scene, camera: usize, world_from_optical: &Pose) -> Option<u64> {
+    pub fn capture_of(
+        &mut self,
+        scene: &Scene,
+        camera: usize,
+        world_from_optical: &Pose,
+    ) -> Option<u64> {
         self.cameras.capture(scene, camera, world_from_optical)
     }
 
