@@ -220,10 +220,8 @@ pub fn draw_frame(
     capture: &Capture,
 ) -> Result<Frame, CdrError> {
     let key = capture.noise_key(cam, seed);
-    let drawn = match &capture.snapshot {
-        Some(s) => Some(&*renderer.render(s, &capture.world_from_optical, &key)),
-        None => None,
-    };
+    let drawn =
+        (capture.snapshot.as_ref()).map(|s| renderer.render(s, &capture.world_from_optical, &key));
     let view = CameraView {
         camera: cam,
         stamp: capture.stamp,

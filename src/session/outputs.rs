@@ -125,13 +125,16 @@ impl<M: RosMessage> Producer for Typed<M> {
     }
 }
 
+/// A camera row's message made from a drawn frame, CDR-encoded (None: not made).
+pub type MakeCameraMessage = fn(&CameraView) -> Option<Result<Vec<u8>, CdrError>>;
+
 /// The producer of a camera row: a message of type `M` from a [`CameraView`], encoded
 /// (the frame's rows are made beside the tick, not from a state: [`Producer::produce`]
 /// makes nothing).
 pub struct Drawn<M: 'static> {
     /// The message carries the pixels (a capture must copy what the camera sees).
     pub draws: bool,
-    pub make: fn(&CameraView) -> Option<Result<Vec<u8>, CdrError>>,
+    pub make: MakeCameraMessage,
     pub message: std::marker::PhantomData<fn() -> M>,
 }
 

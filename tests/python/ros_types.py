@@ -215,6 +215,21 @@ class MarkerArrayHead(IdlStruct, typename="visualization_msgs::msg::dds_::Marker
     header: Header = field(default_factory=Header)
 
 
+@dataclass
+class ImageHead(IdlStruct, typename="sensor_msgs::msg::dds_::Image_"):
+    """The head of an Image on the wire (the pixels are not decoded), as MarkerArrayHead:
+    a reader that counts camera frames without spending the CPU it measures."""
+
+    header: Header = field(default_factory=Header)
+
+
+@dataclass
+class PointCloud2Head(IdlStruct, typename="sensor_msgs::msg::dds_::PointCloud2_"):
+    """The head of a PointCloud2 on the wire (see ImageHead)."""
+
+    header: Header = field(default_factory=Header)
+
+
 # Services on the rmw_cyclonedds wire format: every request and reply starts with a
 # header {client guid (8 bytes), sequence number (int64)}.
 
