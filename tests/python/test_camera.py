@@ -3,21 +3,25 @@ the five RealSense topics of a frame arrive with one identical header.stamp, the
 optical frame is on /tf_static, Image and PointCloud2 decode as cv_bridge and
 sensor_msgs_py decode them, the cloud is the depth back-projected through K, and an
 independent numpy ray caster on the published mesh (the markers' TRIANGLE_LIST) and
-camera_info agrees with the depth image."""
+camera_info agrees with the depth image; a camera carried by a TF frame draws from where
+TF puts it, and replays."""
 
 from __future__ import annotations
 
 import json
 import math
 import os
+import subprocess
 import sys
 import time
 
 import numpy as np
 import pytest
 import ros_types as rt
-from conftest import SCENES, Ros, _cdr1, reliable_qos
+from conftest import BIN, ROOT, SCENES, Ros, _cdr1, reliable_qos
 from cyclonedds.core import Policy
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
 
 GRIPPER = str(SCENES / "ribbon_gripper.yaml")
 OPTICAL = "camera_color_optical_frame"
@@ -125,8 +129,8 @@ def rotation(q) -> np.ndarray:
     )
 
 
-def optical_frame(ros) -> tuple[np.ndarray, np.ndarray]:
-    """(R, t) of world_from_optical from the latched /tf_static."""
+def optical_transform(ros):
+    """The camera's optical frame from the latched /tf_static."""
     tf = ros.reader("/tf_static", rt.TFMessage, reliable_qos(100, transient_local=True))
     found = []
 
@@ -135,7 +139,12 @@ def optical_frame(ros) -> tuple[np.ndarray, np.ndarray]:
         return bool(found)
 
     Ros.take(tf, 10.0, until=has)
-    t = found[-1]
+    return found[-1]
+
+
+def optical_frame(ros) -> tuple[np.ndarray, np.ndarray]:
+    """(R, t) of world_from_optical from the latched /tf_static."""
+    t = optical_transform(ros)
     assert t.header.frame_id == "world"
     tr = t.transform.translation
     return rotation(t.transform.rotation), np.array([tr.x, tr.y, tr.z])
@@ -338,3 +347,89 @@ def test_an_independent_ray_caster_agrees_with_the_depth_image(start_node, ros, 
     _, err, z = compare(depth + np.float32(1e-3))
     assert err.max() > 1e-4
     check_frame(frame)
+
+
+def quaternion(m: np.ndarray) -> rt.Quaternion:
+    """The unit quaternion of a rotation matrix (Shepperd: the largest diagonal term)."""
+    t = np.trace(m)
+    if t > 0:
+        s = 2 * math.sqrt(1 + t)
+        x, y, z = (m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s
+        return rt.Quaternion(x=x, y=y, z=z, w=s / 4)
+    k = int(np.argmax(np.diag(m)))
+    i, j = (k + 1) % 3, (k + 2) % 3
+    s = 2 * math.sqrt(1 + m[k, k] - m[i, i] - m[j, j])
+    q = [0.0] * 3
+    q[k] = s / 4
+    q[i] = (m[i, k] + m[k, i]) / s
+    q[j] = (m[j, k] + m[k, j]) / s
+    return rt.Quaternion(x=q[0], y=q[1], z=q[2], w=(m[j, i] - m[i, j]) / s)
+
+
+def test_a_camera_on_a_tf_frame_draws_from_where_tf_puts_it(start_node, ros, domain_id, tmp_path):
+    """`tf_frame: cam_link` instead of a position: until TF has the frame the camera's
+    ticks are skipped (said once); then it draws from the looked-up pose, its optical
+    frame hangs under cam_link on /tf_static, and the bag's captures carry the pose drawn
+    from, so the replay is identical."""
+    bag = tmp_path / "bag"
+    sets = ["cameras.0.position=null", "cameras.0.look_at=null", "cameras.0.tf_frame=cam_link"]
+    args = [GRIPPER, "--record", str(bag), "--record-cameras"]
+    for s in sets:
+        args += ["--set", s]
+    node = start_node(domain_id, *args)
+    info = ros.reader("/camera/color/camera_info", rt.CameraInfo, CAMERA_QOS)
+    ros.wait_matched(info)
+    deadline = time.monotonic() + 10
+    while "camera camera: TF frame cam_link" not in node.log():
+        assert time.monotonic() < deadline, node.log()
+        time.sleep(0.05)
+    assert not [m for m in info.take(N=16) if hasattr(m, "header")], "drawn without a pose"
+    # cam_link, a REP 103 body frame (x forward, z up), where the fixed camera is:
+    # world_from_body = world_from_optical * optical_from_body
+    z = (LOOK_AT - POSITION) / np.linalg.norm(LOOK_AT - POSITION)
+    up = np.array([0.0, 0.0, 1.0]) - z * z[2]
+    y = -up / np.linalg.norm(up)
+    world_from_optical = np.column_stack([np.cross(y, z), y, z])
+    body_from_optical = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+    world_from_body = world_from_optical @ body_from_optical.T
+    static = ros.writer("/tf_static", rt.TFMessage, reliable_qos(100, transient_local=True))
+    link = rt.TransformStamped(
+        header=rt.Header(frame_id="world"),
+        child_frame_id="cam_link",
+        transform=rt.Transform(
+            translation=rt.Vector3(x=POSITION[0], y=POSITION[1], z=POSITION[2]),
+            rotation=quaternion(world_from_body),
+        ),
+    )
+    static.write(rt.TFMessage(transforms=[link]))
+    Ros.take(info, 10.0, until=lambda m: m.header.frame_id == OPTICAL)
+    assert "camera camera: TF frame cam_link found again" in node.log()
+    # the optical frame hangs under cam_link (the node's own /tf_static)
+    mounted = optical_transform(ros)
+    assert mounted.header.frame_id == "cam_link"
+    assert np.allclose(rotation(mounted.transform.rotation), body_from_optical, atol=1e-15)
+    assert node.stop() == 0
+    # the captures carry the pose drawn from: where the fixed camera is
+    poses = []
+    with open(next(bag.glob("*.mcap")), "rb") as fh:
+        reader = make_reader(fh, decoder_factories=[DecoderFactory()])
+        for _s, _c, _m, msg in reader.iter_decoded_messages(topics=["/developable_sim/commands"]):
+            if msg.kind == 7:  # CAPTURE
+                assert msg.camera == "camera"
+                poses.append(msg.pose)
+    assert poses
+    for p in poses:
+        assert np.allclose([p.position.x, p.position.y, p.position.z], POSITION, atol=1e-12)
+        assert np.allclose(rotation(p.orientation), world_from_optical, atol=1e-12)
+    out = tmp_path / "replay.json"
+    r = subprocess.run(
+        [str(BIN), "replay", str(bag), "--stats", str(out)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert r.returncode == 0, r.stdout + r.stderr
+    rep = json.loads(out.read_text())
+    color = next(t for t in rep["topics"] if t["topic"] == "/camera/color/image_raw")
+    assert color["compared"] == len(poses) and color["differing"] == 0, color
