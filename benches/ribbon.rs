@@ -110,6 +110,7 @@ fn kind_name(kind: SolverKind) -> &'static str {
         SolverKind::Chain => "chain",
         SolverKind::GaussNewton => "gauss_newton",
         SolverKind::Lbfgsb => "lbfgsb",
+        SolverKind::TrustRegion => "trust_region",
     }
 }
 

@@ -3,7 +3,9 @@
 //! that speak a protocol, write a file format or draw (ARCHITECTURE.md, "Layers"). A
 //! library user who wants the simulators builds no DDS, tokio or plotters.
 
-use std::process::Command;
+mod purity;
+
+use purity::{cargo_tree, packages};
 
 /// Crates the core must not depend on, directly or through another crate, and why.
 const FORBIDDEN: &[(&str, &str)] = &[
@@ -24,49 +26,14 @@ const FORBIDDEN: &[(&str, &str)] = &[
     ("clap", "the command line"),
 ];
 
-/// The package names in `cargo tree --prefix none` output (one `name vX.Y.Z ...` a line).
-fn packages(tree: &str) -> Vec<&str> {
-    tree.lines()
-        .filter_map(|l| l.split_whitespace().next())
-        .collect()
-}
-
 /// The forbidden crates found in a dependency tree listing, with the reason.
 fn forbidden_in(tree: &str) -> Vec<String> {
-    let found = packages(tree);
-    FORBIDDEN
-        .iter()
-        .filter(|(name, _)| found.contains(name))
-        .map(|(name, why)| format!("{name} ({why})"))
-        .collect()
-}
-
-fn core_tree() -> String {
-    let out = Command::new(env!("CARGO"))
-        .args([
-            "tree",
-            "-p",
-            "developable_core",
-            "-e",
-            "normal",
-            "--prefix",
-            "none",
-            "--offline",
-        ])
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("cargo tree runs");
-    assert!(
-        out.status.success(),
-        "cargo tree failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).expect("utf-8")
+    purity::forbidden_in(tree, FORBIDDEN)
 }
 
 #[test]
 fn the_core_depends_on_no_edge_crate() {
-    let tree = core_tree();
+    let tree = cargo_tree("developable_core");
     // the listing is the core's: it starts with the core and holds its math crates
     let found = packages(&tree);
     assert_eq!(found.first(), Some(&"developable_core"), "{tree}");

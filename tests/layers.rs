@@ -26,6 +26,8 @@ const LAYERS: &[(&str, u32)] = &[
     // 1: scene files, run statistics
     ("scene", 1),
     ("stats", 1),
+    // plots and pages shared by the tools (report, stress); no scene, no run
+    ("plot", 1),
     // 2: messages, CDR, schemas, QoS, the stamping clock; offline pictures of a scene
     ("wire", 2),
     ("render", 2),

@@ -2,7 +2,9 @@
 //! projected Newton: from the same state, one step of each lands on the same step
 //! minimizer, on every ribbon scene at n = 50 and n = 100 (docs/ribbon_chain_solver.md):
 //! open ribbons, loops (mobius_band, the orientable loop of ribbon_extreme_dragging)
-//! and the multi-ribbon chains of loops with contact (double and Moebius chains).
+//! and the multi-ribbon chains of loops with contact (double and Moebius chains):
+//! the same iterates up to round-off and the same iteration counts, except on the
+//! double chain (a measured gap, asserted as such below).
 
 use developable_sim::metrics::{rms_distance, strip_samples};
 use developable_sim::ribbon::{RibbonSim, SolverKind};
@@ -43,14 +45,34 @@ fn set_kind(s: &mut Scene, kind: SolverKind) {
 /// vertex distance (over the ribbons) at matched material points, m, both reports'
 /// convergence and the iterations of ribbon 0.
 fn step_distance(name: &str, n: usize, warm: usize) -> (f64, bool, u32, u32) {
+    step_distance_with(name, n, warm, |_| {})
+}
+
+/// [`step_distance`] with `alter` applied to the chain solver's ribbons after the warm
+/// steps (the negative control).
+fn step_distance_with(
+    name: &str,
+    n: usize,
+    warm: usize,
+    alter: impl Fn(&mut RibbonSim),
+) -> (f64, bool, u32, u32) {
     let mut s = load(name, n);
     set_kind(&mut s, SolverKind::GaussNewton);
     for _ in 0..warm {
         s.world.step(&[]);
     }
+    // both solvers from the same state and a fresh start (a clone keeps the dense
+    // solver's damping from the warm steps, which the chain solver never had)
+    for i in 0..ribbons(&s) {
+        let r = s.world.object_as_mut::<RibbonSim>(i).expect("a ribbon");
+        r.forget_solver_history();
+    }
     let mut dense = s.clone();
     let mut chain = s.clone();
     set_kind(&mut chain, SolverKind::Chain);
+    for i in 0..ribbons(&chain) {
+        alter(chain.world.object_as_mut::<RibbonSim>(i).expect("a ribbon"));
+    }
     let rd = dense.world.step(&[]);
     let rc = chain.world.step(&[]);
     let mut rms: f64 = 0.0;
@@ -86,6 +108,15 @@ const OPEN_RIBBON_SCENES: [&str; 9] = [
     "exact_heavy_cantilever",
 ];
 
+/// The chain sweep and the dense Cholesky factorize the same Newton matrix in a
+/// different order, so their iterates differ by round-off only, and the stopping tests
+/// fire at the same iteration. Measured (2026-12-07): RMS at most 1.9e-15 m on the open
+/// scenes, 6.4e-13 m on the Moebius chain (its Woodbury step's capacitance matrix
+/// amplifies round-off), equal iteration counts on both. The bounds are 50x and 15x
+/// above those and 1e4 below what the negative control below produces.
+const OPEN_RMS: f64 = 1e-13;
+const LOOP_RMS: f64 = 1e-11;
+
 #[test]
 fn chain_and_dense_reach_the_same_step_minimizer_on_every_open_ribbon_scene() {
     for n in [50, 100] {
@@ -95,16 +126,15 @@ fn chain_and_dense_reach_the_same_step_minimizer_on_every_open_ribbon_scene() {
                 "{name} n={n}: RMS {rms:.3e} m, iterations dense {dense_it} chain {chain_it}"
             );
             assert!(converged, "{name} n={n}: a solver did not converge");
-            // the same Newton iterates up to round-off (the factorizations differ)
-            assert!(rms < 1e-6, "{name} n={n}: RMS {rms} m");
+            assert!(rms < OPEN_RMS, "{name} n={n}: RMS {rms} m");
+            assert_eq!(dense_it, chain_it, "{name} n={n}: iterations");
         }
     }
 }
 
-const LOOP_SCENES: [&str; 4] = [
+const LOOP_SCENES: [&str; 3] = [
     "mobius_band",
     "ribbon_extreme_dragging",
-    "ribbon_double_chain",
     "ribbon_mobius_chain",
 ];
 
@@ -116,7 +146,8 @@ fn chain_and_dense_reach_the_same_step_minimizer_on_every_loop_scene() {
         for name in LOOP_SCENES {
             if name == "ribbon_mobius_chain" && n != 50 {
                 // its links start from explicit crease directions for 50 elements
-                // (tools/gen_chain_scenes.py); mobius_band covers Moebius at n = 100
+                // (tools/gen_chain_scenes.py); the test below shows the scene cannot
+                // be run at n = 100, and mobius_band covers Moebius at n = 100
                 continue;
             }
             let (rms, converged, dense_it, chain_it) = step_distance(name, n, 3);
@@ -124,9 +155,61 @@ fn chain_and_dense_reach_the_same_step_minimizer_on_every_loop_scene() {
                 "{name} n={n}: RMS {rms:.3e} m, iterations dense {dense_it} chain {chain_it}"
             );
             assert!(converged, "{name} n={n}: a solver did not converge");
-            assert!(rms < 1e-6, "{name} n={n}: RMS {rms} m");
+            assert!(rms < LOOP_RMS, "{name} n={n}: RMS {rms} m");
+            assert_eq!(dense_it, chain_it, "{name} n={n}: iterations");
         }
     }
+}
+
+#[test]
+fn the_moebius_chain_is_skipped_at_n_100_because_it_cannot_load_there() {
+    // not a silent skip: its explicit 50-element crease directions make n = 100 an
+    // error of the scene file, not a scene the chain solver could fail on
+    let path = scene_path("ribbon_mobius_chain");
+    let text = std::fs::read_to_string(&path).expect("scene");
+    let copy = std::env::temp_dir().join("chain_solver_mobius_chain_100_load.yaml");
+    std::fs::write(&copy, text.replace("segments: 50", "segments: 100")).expect("copy");
+    assert!(
+        scene::load(&copy, &[]).is_err(),
+        "it loads at n = 100: run it above"
+    );
+}
+
+#[test]
+fn known_gap_the_double_chain_differs_beyond_round_off() {
+    // Open (issue 47's report): on ribbon_double_chain (two linked loops with contact)
+    // the two solvers stop at different iterations (dense 3, chain 6 at n = 50; 2 and
+    // 3 at n = 100) on points 3.2e-8 m and 4.1e-9 m apart: within the solve's
+    // tolerance, but not the same iterates. Asserted as measured so that a fix (or a
+    // worse gap) shows here: both converge, and the distance stays below 1e-7 m (3x
+    // the largest measured; not derived: the cause is not found).
+    for n in [50, 100] {
+        let (rms, converged, dense_it, chain_it) = step_distance("ribbon_double_chain", n, 3);
+        eprintln!("ribbon_double_chain n={n}: RMS {rms:.3e} m, iterations {dense_it} {chain_it}");
+        assert!(converged, "n={n}");
+        assert!(rms < 1e-7, "n={n}: RMS {rms} m");
+        assert!(
+            rms > LOOP_RMS && dense_it != chain_it,
+            "fixed? n={n}: {rms} {dense_it} {chain_it}: move it to the loop scenes"
+        );
+    }
+}
+
+#[test]
+fn the_agreement_check_sees_a_solve_stopped_elsewhere() {
+    // negative control: the chain solver with its relative gradient tolerance at 1e-5
+    // instead of 1e-6 -- the same Newton matrix, iterates that stop one or more
+    // iterations earlier, at a point within the solve's tolerance (what a subtly wrong
+    // Newton matrix gives: different iterates to the same minimizer). Both checks of
+    // the tests above must fail on it.
+    let (rms, converged, dense_it, chain_it) =
+        step_distance_with("ribbon_extreme_torsion", 50, 3, |r| {
+            r.params.solver.tolerance = 1e-5
+        });
+    eprintln!("tolerance 1e-5: RMS {rms:.3e} m, iterations dense {dense_it} chain {chain_it}");
+    assert!(converged);
+    assert!(rms > 1e4 * OPEN_RMS, "{rms}");
+    assert_ne!(dense_it, chain_it);
 }
 
 #[test]

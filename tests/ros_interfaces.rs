@@ -200,6 +200,14 @@ fn every_message_struct_matches_its_msg_definition() {
         PointCloud2::TYPE,
         &mut seen,
     );
+    root(
+        to_value(&StringMsg {
+            data: "<robot/>".into(),
+        })
+        .unwrap(),
+        StringMsg::TYPE,
+        &mut seen,
+    );
     let all: BTreeSet<String> = DEFINITIONS.iter().map(|(n, _)| n.to_string()).collect();
     assert_eq!(seen, all, "every embedded definition has a checked struct");
 }

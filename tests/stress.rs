@@ -529,3 +529,48 @@ fn a_translated_case_gives_the_same_verdict_and_margins() {
         );
     }
 }
+
+/// `stress` writes index.html beside stress.md: per case its energy over time against
+/// its bound as an inline SVG plot whose legend names both lines of every time step and
+/// whose text does not overlap; the series ends at the run's last step, where its
+/// largest rise is the reported one.
+#[test]
+fn the_suite_page_plots_each_case_against_its_bound() {
+    use developable_sim::plot::svg_check::{missing_entries, overlapping, text_boxes};
+    let out = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("stress_page");
+    let _ = std::fs::remove_dir_all(&out);
+    let options = stress::SuiteOptions {
+        quick: true,
+        only: Some("twist_8pi".into()),
+        dt: None,
+        max_steps: Some(8),
+    };
+    let report = stress::run_suite(&config(), &out, &options).unwrap();
+    assert_eq!(report.results.len(), 3);
+    for r in &report.results {
+        let series = &r.energy_series;
+        assert_eq!(series.len(), r.steps, "{}: one sample a step", r.dt);
+        assert!((series.last().unwrap().t_s - r.duration).abs() < 1e-9);
+        let rise = series.iter().map(|e| e.rise_j).fold(f64::MIN, f64::max);
+        assert_eq!(rise, r.energy_rise_max);
+    }
+    let html = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(html.starts_with("<!DOCTYPE html>") && html.ends_with("</html>\n"));
+    assert!(html.contains("<h2 id=\"twist_8pi\">twist_8pi</h2>"));
+    let start = html.find("<svg").expect("an inline plot");
+    let end = html[start..].find("</svg>").unwrap() + start;
+    let boxes = text_boxes(&html[start..end]).unwrap();
+    let overlaps = overlapping(&boxes);
+    assert!(overlaps.is_empty(), "{overlaps:#?}");
+    let legend = [
+        "dt = 1 ms: E(t) - E(0)",
+        "dt = 1 ms: its bound W(t) + tol(t)",
+        "dt = 10 ms: E(t) - E(0)",
+        "dt = 0.1 s: its bound W(t) + tol(t)",
+        "Solid: the rise of the total energy",
+    ];
+    let missing = missing_entries(&boxes, &legend);
+    assert!(missing.is_empty(), "{missing:?}");
+    let md = std::fs::read_to_string(out.join("stress.md")).unwrap();
+    assert!(md.contains("`index.html`"), "{md}");
+}

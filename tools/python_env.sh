@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Creates .venv with the Python packages the interop tests use (idempotent).
+# Creates .venv with the Python packages the interop tests and the Python package's
+# tests use, and maturin, which builds the package's wheel (idempotent).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import pytest" 2>/dev/null; then
@@ -8,4 +9,7 @@ if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import pytest" 2>/dev/nul
 fi
 if [ -f tests/python/requirements.txt ]; then
   .venv/bin/pip install --quiet -r tests/python/requirements.txt
+fi
+if [ -f python/requirements-test.txt ]; then
+  .venv/bin/pip install --quiet -r python/requirements-test.txt
 fi

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# Runs every test of developable_sim: the Rust unit and integration tests, then the
-# Python interop tests (cyclonedds, rosbags, mcap-ros2-support) against the real binary.
-# Creates the Python venv (.venv) on first use. Usage: bash tools/test_all.sh
+# Runs every test of developable_sim: the Rust unit and integration tests, the Python
+# package (python/: its wheel built by maturin, installed into the venv, pytest
+# python/tests), then the Python interop tests (cyclonedds, rosbags, mcap-ros2-support)
+# against the real binary. Creates the Python venv (.venv) on first use.
+# Usage: bash tools/test_all.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -26,6 +28,18 @@ echo "== report --quick =="
 echo "== stress suite (quick) =="
 # the binary `cargo test --release` built; exits non-zero if any run fails
 ./target/release/developable_sim stress --quick --out target/stress
+
+echo "== Python package: wheel (maturin), pytest python/tests =="
+bash tools/python_env.sh
+# the wheel as users get it (abi3, CPython >= 3.9), installed into the venv; the
+# library inside is built without its node and tools features (python/Cargo.toml), so
+# this compiles developable_sim once more, without DDS (about 2 min on the 2-core CI
+# machine, measured in docs/python.md)
+rm -rf target/wheels
+.venv/bin/maturin build --release --quiet -m python/Cargo.toml -o target/wheels
+.venv/bin/pip install --quiet --force-reinstall --no-deps target/wheels/developable_sim-*.whl
+# its tests compare against the binary `cargo test` built (run, render)
+DEVELOPABLE_SIM_BIN="$PWD/target/release/developable_sim" .venv/bin/python -m pytest -q python/tests
 
 if [ -d tests/python ] && ls tests/python/test_*.py >/dev/null 2>&1; then
   echo "== python interop tests =="

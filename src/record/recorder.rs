@@ -3,8 +3,10 @@
 //! A bag holds the commands the node applied, in order, and the frames they produced.
 //! Commands: every handle pose as received, on the handle's topic (rejected ones
 //! included: replay runs them through the same filter), a handle's failed TF lookups on
-//! `<handle topic>/tf_lookup_failed`, and every other command (steps, resets, pauses,
-//! parameter changes) as a `developable_sim/msg/SimCommand` on `~/commands`. Frames:
+//! `<handle topic>/tf_lookup_failed`, a robot description as received on its topic and
+//! the robot links' TF lookups on `~/robot_link_poses` (`robot_colliders:`), and every
+//! other command (steps, resets, pauses, parameter changes) as a
+//! `developable_sim/msg/SimCommand` on `~/commands`. Frames:
 //! every recorded row of the session's outputs table (each object's status even when
 //! the scene does not publish it), statuses first. A `developable_sim` MCAP metadata
 //! record at the start holds the scene (YAML after overrides), the input policy and the
@@ -29,7 +31,7 @@ use crate::session::outputs::{kind_named, OutputRow, Want};
 use crate::session::{Command, Content, Frame, OutputTable, RunOutputs, Scope, Session};
 use crate::sim::StepReport;
 use crate::wire::clock::now_ns;
-use crate::wire::msgs::{PoseStamped, SimCommand, Time};
+use crate::wire::msgs::{PoseStamped, SimCommand, StringMsg, TFMessage, Time};
 
 fn default_max_stamp_lead() -> f64 {
     crate::session::input::DEFAULT_MAX_STAMP_LEAD
@@ -124,6 +126,13 @@ pub struct SessionInfo {
     pub tf_failure_topics: Vec<String>,
     /// The commands' topic.
     pub commands_topic: String,
+    /// With `robot_colliders:`: the robot descriptions' topic (std_msgs/msg/String, as
+    /// received) and the bag topic of the links' TF lookups (tf2_msgs/msg/TFMessage,
+    /// see [`Command::LinkPoses`]).
+    #[serde(default)]
+    pub robot_description_topic: Option<String>,
+    #[serde(default)]
+    pub robot_link_poses_topic: Option<String>,
     /// Whether the session started paused.
     pub start_paused: bool,
     /// The recorded rows of the outputs table, in the session's order.
@@ -190,6 +199,14 @@ impl SessionInfo {
             status_handle_topics: session.handle_topics.clone(),
             tf_failure_topics: names.handles.iter().map(|t| tf_failure_topic(t)).collect(),
             commands_topic: names.commands.clone(),
+            robot_description_topic: scene
+                .robot
+                .is_some()
+                .then(|| names.robot_description.clone()),
+            robot_link_poses_topic: scene
+                .robot
+                .is_some()
+                .then(|| names.robot_link_poses.clone()),
             start_paused: session.paused,
             outputs: session
                 .table
@@ -210,6 +227,10 @@ pub struct SessionRecorder {
     tf_failure_topics: Vec<String>,
     tf_failures: Vec<Option<TopicId>>,
     commands: TopicId,
+    /// The robot description and link-pose topics (with `robot_colliders:`), created at
+    /// their first message.
+    robot_topics: Option<(String, String)>,
+    robot_ids: (Option<TopicId>, Option<TopicId>),
     /// The scene's handle and object names (commands name them).
     handle_names: Vec<String>,
     object_names: Vec<String>,
@@ -252,9 +273,15 @@ impl SessionRecorder {
                 false => None,
             });
         }
+        let robot_topics = info
+            .robot_description_topic
+            .clone()
+            .zip(info.robot_link_poses_topic.clone());
         Ok(SessionRecorder {
             bag,
             handles,
+            robot_topics,
+            robot_ids: (None, None),
             tf_failures: vec![None; info.tf_failure_topics.len()],
             tf_failure_topics: info.tf_failure_topics,
             commands,
@@ -315,6 +342,18 @@ impl SessionRecorder {
                 what,
                 arrival_ns,
             } => self.record_tf_failure(*handle, what, *arrival_ns),
+            Command::RobotDescription {
+                urdf, arrival_ns, ..
+            } => self.record_robot(true, *arrival_ns, &StringMsg { data: urdf.clone() }),
+            Command::LinkPoses {
+                transforms,
+                arrival_ns,
+            } => {
+                let m = TFMessage {
+                    transforms: transforms.clone(),
+                };
+                self.record_robot(false, *arrival_ns, &m)
+            }
             other => match other.to_msg(stamp, &self.names()) {
                 Some(m) => {
                     let t = self.stamp();
@@ -353,6 +392,29 @@ impl SessionRecorder {
             }
         };
         let data = crate::wire::cdr::encode(what)?;
+        self.bag.write_raw(id, arrival_ns, arrival_ns, &data)
+    }
+
+    /// A robot description as received (`description`) or the links' TF lookups, on
+    /// its topic (created at its first message), log time `arrival_ns`.
+    fn record_robot<M: crate::wire::msgs::RosMessage>(
+        &mut self,
+        description: bool,
+        arrival_ns: u64,
+        m: &M,
+    ) -> Result<(), RecordError> {
+        let Some((d, l)) = &self.robot_topics else {
+            return Ok(());
+        };
+        let (slot, topic, qos) = match description {
+            true => (&mut self.robot_ids.0, d, Qos::LATCHED),
+            false => (&mut self.robot_ids.1, l, Qos::DATA),
+        };
+        let id = match *slot {
+            Some(id) => id,
+            None => *slot.insert(self.bag.add_topic::<M>(topic, qos)?),
+        };
+        let data = crate::wire::cdr::encode(m)?;
         self.bag.write_raw(id, arrival_ns, arrival_ns, &data)
     }
 

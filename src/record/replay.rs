@@ -27,7 +27,7 @@ use crate::session::outputs::OutputRow;
 use crate::session::{Command, Content, Frame, OutputTable, Scope, Session};
 use crate::wire::cdr;
 use crate::wire::introspect::{compare, Value};
-use crate::wire::msgs::{PoseStamped, RosMessage, SimCommand};
+use crate::wire::msgs::{PoseStamped, RosMessage, SimCommand, StringMsg, TFMessage};
 
 /// Replay settings.
 #[derive(Clone, Debug, Default)]
@@ -177,6 +177,9 @@ enum Route {
     TfFailure(usize),
     /// The other commands (`~/commands`).
     Commands,
+    /// Robot descriptions as received, and the robot links' TF lookups (commands).
+    RobotDescription,
+    LinkPoses,
     /// A row of the outputs table.
     Output(usize),
 }
@@ -267,6 +270,20 @@ impl Replayed {
                 Command::from_msg(&msg, &names)
                     .map_err(|e| bag_error(dir, format!("{}: {e}", m.topic)))?
             }
+            Route::RobotDescription => {
+                let urdf = decode::<StringMsg>(dir, m)?.data;
+                // loaded again as the node loaded it (its mesh files read again)
+                let loaded = crate::scene::urdf::load_for(&self.session.scene, &urdf);
+                Command::RobotDescription {
+                    urdf,
+                    loaded,
+                    arrival_ns: m.log_time,
+                }
+            }
+            Route::LinkPoses => Command::LinkPoses {
+                transforms: decode::<TFMessage>(dir, m)?.transforms,
+                arrival_ns: m.log_time,
+            },
             Route::Output(row) => return self.output(dir, m, row, report),
         };
         if matches!(route, Route::Input(_) | Route::TfFailure(_)) {
@@ -337,6 +354,8 @@ impl Replayed {
         let (want_type, want_hash) = match route {
             Route::Input(_) | Route::TfFailure(_) => (PoseStamped::TYPE, PoseStamped::HASH),
             Route::Commands => (SimCommand::TYPE, SimCommand::HASH),
+            Route::RobotDescription => (StringMsg::TYPE, StringMsg::HASH),
+            Route::LinkPoses => (TFMessage::TYPE, TFMessage::HASH),
             Route::Output(row) => {
                 let p = self.session.table.rows[row].kind.producer;
                 (p.type_name(), p.type_hash())
@@ -581,6 +600,12 @@ fn start_session(
         routes.insert(t.clone(), Route::TfFailure(h));
     }
     routes.insert(info.commands_topic.clone(), Route::Commands);
+    if let Some(t) = &info.robot_description_topic {
+        routes.insert(t.clone(), Route::RobotDescription);
+    }
+    if let Some(t) = &info.robot_link_poses_topic {
+        routes.insert(t.clone(), Route::LinkPoses);
+    }
     for (k, r) in rows.iter().enumerate() {
         routes.insert(r.topic.clone(), Route::Output(k));
     }

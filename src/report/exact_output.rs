@@ -1,18 +1,14 @@
-//! The exact-solution scenes' files: `exact.csv`, `<scene>.png` (error against run
-//! time) and `<scene>_order.png` (error against n or dt), the summary.md section and
-//! the README's table. An edge (writes files); the numbers come from [`super::exact`].
+//! The exact-solution scenes' tables: `exact.csv`, the summary.md section and the
+//! README's table (their plots are [`super::figures::exact_figures`]). An edge (writes
+//! files); the numbers come from [`super::exact`].
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use plotters::prelude::*;
-
 use super::errors::pareto_front;
 use super::exact::{order, CLAMPS, SEGMENTS};
 use super::exact_run::{ExactRow, ExactSceneReport};
-use super::output::color;
 use super::plan::{Method, Sweep};
-use super::plot::{write_log_log, LogLogPlot, Series};
 use super::report_error::{io, ReportError};
 
 const EXACT_CSV_HEADER: &str = "scene,method,clamp,sweep,dt_s,segments,tolerance,steps,error_rms_m,error_relative,cpu_s,wall_s,iterations_median,unconverged_steps,stuck_steps,finite";
@@ -60,7 +56,7 @@ fn clamp_of(r: &ExactRow) -> &'static str {
 }
 
 /// A series of one scene: its method, clamp and sweep.
-fn series<'a>(
+pub(crate) fn series<'a>(
     s: &'a ExactSceneReport,
     method: Method,
     clamp: &str,
@@ -75,7 +71,7 @@ fn series<'a>(
 }
 
 /// (x, error) of a series, x = n (static) or dt.
-fn xy(rows: &[&ExactRow], by_n: bool) -> Vec<(f64, f64)> {
+pub(crate) fn xy(rows: &[&ExactRow], by_n: bool) -> Vec<(f64, f64)> {
     rows.iter()
         .filter_map(|r| {
             let x = if by_n {
@@ -89,7 +85,7 @@ fn xy(rows: &[&ExactRow], by_n: bool) -> Vec<(f64, f64)> {
 }
 
 /// The series a scene's plots and order lines show: (label, method, clamp, sweep).
-fn lines(s: &ExactSceneReport) -> Vec<(String, Method, &'static str, Sweep)> {
+pub(crate) fn lines(s: &ExactSceneReport) -> Vec<(String, Method, &'static str, Sweep)> {
     let mut out = Vec::new();
     let sweep = if s.problem.is_static() {
         Sweep::Resolution
@@ -97,6 +93,7 @@ fn lines(s: &ExactSceneReport) -> Vec<(String, Method, &'static str, Sweep)> {
         Sweep::TimeStep
     };
     for method in [
+        Method::Chain,
         Method::GaussNewton,
         Method::Lbfgsb,
         Method::Lumped,
@@ -231,7 +228,7 @@ pub fn exact_summary(scenes: &[ExactSceneReport]) -> Result<String, ReportError>
 }
 
 /// The README's table: the static scenes' error (m and relative) at n = 10, 20, 50,
-/// 100 for each clamp rule (our Gauss-Newton) and the measured order in n, and the
+/// 100 for each clamp rule (the default solver, chain) and the measured order in n, and the
 /// vibrating cantilever's order in dt. Markdown, printed by `report`.
 pub fn readme_table(scenes: &[ExactSceneReport]) -> String {
     let mut md = String::from("| scene | clamp |");
@@ -243,7 +240,7 @@ pub fn readme_table(scenes: &[ExactSceneReport]) -> String {
     md.push('\n');
     for s in scenes.iter().filter(|s| s.problem.is_static()) {
         for clamp in CLAMPS {
-            let rows = series(s, Method::GaussNewton, clamp, Sweep::Resolution);
+            let rows = series(s, Method::Chain, clamp, Sweep::Resolution);
             md.push_str(&format!("| {} | {clamp} |", s.name));
             for n in SEGMENTS {
                 let cell = rows
@@ -263,7 +260,7 @@ pub fn readme_table(scenes: &[ExactSceneReport]) -> String {
         }
     }
     for s in scenes.iter().filter(|s| !s.problem.is_static()) {
-        let gn = series(s, Method::GaussNewton, s.clamp, Sweep::TimeStep);
+        let gn = series(s, Method::Chain, s.clamp, Sweep::TimeStep);
         let pts = xy(&gn, false);
         let o = order(&pts);
         md.push_str(&format!(
@@ -283,84 +280,4 @@ pub fn readme_table(scenes: &[ExactSceneReport]) -> String {
         ));
     }
     md
-}
-
-/// A plotted line: its label, colour and points.
-type Line = (String, RGBColor, Vec<(f64, f64)>);
-
-/// A log-log plot of lines (label, colour, points) with markers, into a PNG.
-fn log_log_png(path: &Path, title: &str, x_desc: &str, data: Vec<Line>) -> Result<(), ReportError> {
-    let series = data
-        .into_iter()
-        .map(|(label, color, points)| Series {
-            label: Some(label),
-            color,
-            points,
-            line: true,
-        })
-        .collect();
-    write_log_log(
-        path,
-        &LogLogPlot {
-            title,
-            x_desc,
-            y_desc: "RMS error against the exact solution, m",
-            series,
-            level: None,
-        },
-    )
-}
-
-/// A series' colour: the method's, darker for the dual-length clamp, lighter for the
-/// paper's.
-fn shade(method: Method, clamp: &str) -> RGBColor {
-    let RGBColor(r, g, b) = color(method);
-    let f = |v: u8, k: f64| (v as f64 * k).min(255.0) as u8;
-    match clamp {
-        "dual_length" => RGBColor(f(r, 0.55), f(g, 0.55), f(b, 0.55)),
-        "paper" => RGBColor(f(r, 0.5) + 120, f(g, 0.5) + 120, f(b, 0.5) + 120),
-        _ => RGBColor(r, g, b),
-    }
-}
-
-/// `<scene>.png` (error against CPU time) and `<scene>_order.png` (against n or dt).
-pub fn write_exact_plots(dir: &Path, s: &ExactSceneReport) -> Result<(), ReportError> {
-    let by_n = s.problem.is_static();
-    let mut cost = Vec::new();
-    let mut conv = Vec::new();
-    for (label, m, c, sw) in lines(s) {
-        let rows = series(s, m, c, sw);
-        let col = shade(m, c);
-        cost.push((
-            label.clone(),
-            col,
-            rows.iter()
-                .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms)))
-                .collect(),
-        ));
-        conv.push((label, col, xy(&rows, by_n)));
-    }
-    if !s.theory.is_empty() {
-        conv.push((
-            "implicit Euler theory (first mode)".into(),
-            RGBColor(120, 120, 120),
-            s.theory.clone(),
-        ));
-    }
-    log_log_png(
-        &dir.join(format!("{}.png", s.name)),
-        &format!("{}: error vs run time", s.name),
-        "run time (process CPU time), s",
-        cost,
-    )?;
-    log_log_png(
-        &dir.join(format!("{}_order.png", s.name)),
-        &format!("{}: error vs {}", s.name, if by_n { "n" } else { "dt" }),
-        if by_n {
-            "ribbon elements n"
-        } else {
-            "time step dt, s"
-        },
-        conv,
-    )
 }

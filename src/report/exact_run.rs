@@ -206,7 +206,7 @@ pub fn run_exact_scene(
                 / pts.len() as f64)
                 .sqrt();
             rows.iter()
-                .filter(|r| r.spec.run.method == Method::GaussNewton)
+                .filter(|r| r.spec.run.method == Method::Chain)
                 .filter(|r| r.spec.run.sweep == super::plan::Sweep::TimeStep)
                 .map(|r| {
                     let dt = r.spec.run.dt;

@@ -20,12 +20,14 @@ pub mod exact;
 pub mod exact_output;
 pub mod exact_run;
 pub mod exec;
+mod figures;
+pub mod findings;
+pub mod html;
 pub mod output;
 pub mod plan;
-mod plot;
 pub mod report_error;
 
-pub use plot::write_lines;
+pub use crate::plot::write_lines;
 pub use report_error::ReportError;
 
 use std::path::{Path, PathBuf};
@@ -73,6 +75,9 @@ pub struct ReportScene {
     /// Why the reference's halvings do not converge in dt (measured), for summary.md;
     /// empty where they do.
     pub reference_note: &'static str,
+    /// What was measured, beyond the report's own numbers, about a method whose error
+    /// rises while its dt falls (index.html); empty where nothing was.
+    pub rise_note: &'static str,
 }
 
 /// The scenes reported by default. The ribbons are compared only over the part of
@@ -99,6 +104,24 @@ const DEFAULT_SCENES: [ReportScene; 3] = [
               and which one a run follows depends on its steps. The order in time is \
               meaningful only for errors well above that floor",
         reference_note: "",
+        // measured 2026-12-07 on 7ed2380: L-BFGS-B's stop reasons with a trace in
+        // core/src/ribbon/step.rs and the FTOL experiment (neither kept); chain against
+        // the dense solver with report::exec::execute and report::errors::error_against
+        rise_note: "Measured beyond this report (2026-12-07, on 7ed2380): L-BFGS-B at dt \
+              5 ms stops each of its 80 steps after one iteration on the relative-decrease \
+              test (f falls by less than 1e-12 of max(|f|, 1 J): `FTOL` in \
+              core/src/ribbon/step.rs), its projected gradient still 0.1 to 9 times its \
+              value at the step's start; with that test off for L-BFGS-B (an experiment) \
+              the same run takes a median of 3793 iterations a step (23 of 80 steps on the \
+              5000-iteration limit) and ends 17.20 mm from the reference instead of 17.22 \
+              mm, so the early stop is not why its error stops falling. Its runs at dt 40 \
+              to 5 ms are 17 to 47 mm from chain's at the same dt, the size of their \
+              errors: L-BFGS-B ends its steps on other states of the nearly flat strip, \
+              whose crease pattern is not unique (above). The same non-uniqueness splits \
+              even chain from the dense gauss_newton, which share their iterates to \
+              round-off: at dt 2.5 ms, n = 100, tolerance 1e-10 the two runs are 0.22 mm \
+              apart at 0.04 s and 18 mm at 0.4 s, while at dt 1.25, 5, 10, 20 and 40 ms \
+              they agree to 4e-9 m; the reference's 2 dt run is that run",
     },
     ReportScene {
         name: "ribbon_helix_unrolling",
@@ -145,6 +168,7 @@ const DEFAULT_SCENES: [ReportScene; 3] = [
               iterations a step at every dt; still below first order down to 0.5 us \
               (the whip is stiff), so a converged helix reference needs both a smooth \
               resampling and far smaller steps than the report can afford",
+        rise_note: "",
     },
     ReportScene {
         name: "paper_cylinder_then_bend",
@@ -167,6 +191,7 @@ const DEFAULT_SCENES: [ReportScene; 3] = [
               change them. No window both converges and contains the motion that the \
               report compares, so the paper runs' errors below (a few mm over 3 s) are of \
               the size of the reference's own and do not rank the runs",
+        rise_note: "",
     },
 ];
 
@@ -440,7 +465,11 @@ impl SceneRuns<'_> {
                 .map_err(|e| ReportError::in_run(self.describe(spec), e))?;
             self.bar.inc(1);
             let error = error_against(&run.samples, &reference.samples, self.points);
-            Ok(Row { run, error })
+            Ok(Row {
+                run,
+                error,
+                to_default: None,
+            })
         };
         let mut reference_check = check(&self.plan.reference_check)?;
         let mut reference_check_coarse = check(&self.plan.reference_check_coarse)?;
@@ -464,10 +493,38 @@ impl SceneRuns<'_> {
                 .execute(spec)
                 .map_err(|e| ReportError::in_run(self.describe(spec), e))?;
             let error = error_against(&run.samples, &reference.samples, self.points);
-            rows.push(Row { run, error });
+            rows.push(Row {
+                run,
+                error,
+                to_default: None,
+            });
             self.bar.inc(1);
         }
+        distances_to_default(&mut rows, self.plan.defaults.kind, self.points);
         Ok(rows)
+    }
+}
+
+/// Each run's distance to the default solver's run at the same dt, resolution and
+/// tolerance (RMS over time at `points`), where the default has one: the measured
+/// difference between the solutions two methods reach for the same step problem.
+fn distances_to_default(rows: &mut [Row], kind: SceneKind, points: &[Point2]) {
+    let fast = Method::fast(kind);
+    for i in 0..rows.len() {
+        let spec = &rows[i].run.spec;
+        if spec.method == fast {
+            continue;
+        }
+        let twin = rows.iter().position(|r| {
+            let d = &r.run.spec;
+            d.method == fast
+                && d.dt == spec.dt
+                && d.resolution == spec.resolution
+                && d.tolerance == spec.tolerance
+        });
+        if let Some(j) = twin {
+            rows[i].to_default = error_against(&rows[i].run.samples, &rows[j].run.samples, points);
+        }
     }
 }
 
@@ -479,10 +536,7 @@ fn self_convergence(
     kind: SceneKind,
     points: &[Point2],
 ) -> (Option<f64>, Vec<(f64, f64)>) {
-    let fast = match kind {
-        SceneKind::Ribbon => Method::GaussNewton,
-        SceneKind::Paper => Method::Paper,
-    };
+    let fast = Method::fast(kind);
     let mut sweep: Vec<&Row> = rows
         .iter()
         .filter(|r| r.run.spec.method == fast && r.run.spec.sweep == Sweep::TimeStep)
@@ -498,17 +552,19 @@ fn self_convergence(
     (log_log_slope(&differences), differences)
 }
 
-/// A default scene's notes for summary.md: why its duration is shorter, and why its
-/// reference does not converge in dt (None where empty or not a default scene).
-fn scene_notes(name: &str) -> (Option<String>, Option<String>) {
+/// A default scene's notes: why its duration is shorter, why its reference does not
+/// converge in dt, what was measured about a rising curve (None where empty or not a
+/// default scene).
+fn scene_notes(name: &str) -> [Option<String>; 3] {
     let known = DEFAULT_SCENES.iter().find(|s| s.name == name);
-    let why = known
-        .filter(|s| !s.why.is_empty())
-        .map(|s| s.why.to_string());
-    let reference_note = known
-        .filter(|s| !s.reference_note.is_empty())
-        .map(|s| s.reference_note.to_string());
-    (why, reference_note)
+    let note = |f: fn(&ReportScene) -> &'static str| {
+        known.map(f).filter(|n| !n.is_empty()).map(str::to_string)
+    };
+    [
+        note(|s| s.why),
+        note(|s| s.reference_note),
+        note(|s| s.rise_note),
+    ]
 }
 
 /// Run one scene's reference, its 2 dt and 4 dt checks and its sweeps, and compare
@@ -539,9 +595,10 @@ fn compare_scene(
     let mut reference = Row {
         run: reference,
         error: None,
+        to_default: None,
     };
     reference.run.samples = Vec::new();
-    let (duration_note, reference_note) = scene_notes(&name);
+    let [duration_note, reference_note, rise_note] = scene_notes(&name);
     Ok(SceneReport {
         name,
         plan,
@@ -551,6 +608,7 @@ fn compare_scene(
         reference_halving,
         duration_note,
         reference_note,
+        rise_note,
         rows,
         points_total: points.len(),
         self_convergence_order,
@@ -582,9 +640,10 @@ fn run_exact_scenes(
     Ok(exact_reports)
 }
 
-/// Write report.csv, a plot per scene, exact.csv and the exact scenes' plots, then
-/// summary.md with the exact scenes' section appended. `(started, cpu_started)`: the
-/// report's start (wall clock) and the process CPU time then, s.
+/// Write report.csv, a plot per scene (PNG and SVG), exact.csv and the exact scenes'
+/// plots, summary.md with the exact scenes' section appended, and index.html.
+/// `(started, cpu_started)`: the report's start (wall clock) and the process CPU time
+/// then, s.
 fn write_outputs(
     opts: &ReportOptions,
     command: &str,
@@ -593,22 +652,26 @@ fn write_outputs(
     (started, cpu_started): (Instant, f64),
 ) -> Result<(), ReportError> {
     output::write_csv(&opts.out.join("report.csv"), reports)?;
+    let mut scene_svgs = Vec::new();
     for s in reports {
-        output::write_plot(&opts.out.join(format!("{}.png", s.name)), s)?;
+        let fig = figures::scene_figure(s);
+        scene_svgs.push(crate::plot::write_figure(&opts.out, &s.name, &fig)?);
     }
     exact_output::write_exact_csv(&opts.out.join("exact.csv"), exact_reports)?;
+    let mut exact_svgs = Vec::new();
     for s in exact_reports {
-        exact_output::write_exact_plots(&opts.out, s)?;
+        let (cost, conv) = figures::exact_figures(s);
+        exact_svgs.push((
+            crate::plot::write_figure(&opts.out, &s.name, &cost)?,
+            crate::plot::write_figure(&opts.out, &format!("{}_order", s.name), &conv)?,
+        ));
     }
-    let summary = opts.out.join("summary.md");
-    output::write_summary(
-        &summary,
-        reports,
-        opts.quick,
-        command,
+    let (wall_s, cpu_s) = (
         started.elapsed().as_secs_f64(),
         exec::process_cpu_s() - cpu_started,
-    )?;
+    );
+    let summary = opts.out.join("summary.md");
+    output::write_summary(&summary, reports, opts.quick, command, wall_s, cpu_s)?;
     if !exact_reports.is_empty() {
         let mut md =
             std::fs::read_to_string(&summary).map_err(report_error::io("cannot read", &summary))?;
@@ -616,7 +679,19 @@ fn write_outputs(
         md.push_str(&exact_output::exact_summary(exact_reports)?);
         std::fs::write(&summary, md).map_err(report_error::io("cannot write", &summary))?;
     }
-    Ok(())
+    html::write_index(
+        &opts.out.join("index.html"),
+        &html::Page {
+            command,
+            quick: opts.quick,
+            wall_s,
+            cpu_s,
+            scenes: reports,
+            scene_svgs: &scene_svgs,
+            exact: exact_reports,
+            exact_svgs: &exact_svgs,
+        },
+    )
 }
 
 #[cfg(test)]
@@ -627,7 +702,7 @@ mod tests {
     #[test]
     fn scene_notes_are_sentences_without_their_period() {
         for s in DEFAULT_SCENES {
-            for note in [s.why, s.reference_note] {
+            for note in [s.why, s.reference_note, s.rise_note] {
                 assert!(!note.ends_with('.') && note.trim() == note, "{}", s.name);
             }
         }

@@ -1,17 +1,17 @@
-//! The report's files: `report.csv`, `<scene>.png` work-precision plots, `summary.md`.
-//! An edge (writes files); the numbers come from [`super::errors`].
+//! The report's tables: `report.csv` and `summary.md` (the plots are
+//! [`super::figures`], the page index.html [`super::html`]). An edge (writes files);
+//! the numbers come from [`super::errors`].
 
 use std::fmt::Write as _;
 use std::path::Path;
 
-use plotters::prelude::*;
+use plotters::style::RGBColor;
 
 use super::errors::{
     best_within, error_from_halvings, halving_order, log_log_slope, pareto_front, RunError,
 };
 use super::exec::RunOutput;
 use super::plan::{Method, SceneKind, ScenePlan, Sweep};
-use super::plot::{write_log_log, LogLogPlot, Series};
 use super::report_error::{io, ReportError};
 
 /// One row of the CSV: a run and its error against the reference (None for the
@@ -20,6 +20,10 @@ use super::report_error::{io, ReportError};
 pub struct Row {
     pub run: RunOutput,
     pub error: Option<RunError>,
+    /// Distance to the default solver's run at the same dt, resolution and tolerance
+    /// (None for the default's own runs and where it has none): a method that differs
+    /// from it by more than the default's own error ends its steps on another state.
+    pub to_default: Option<RunError>,
 }
 
 /// Everything measured on one scene.
@@ -39,6 +43,9 @@ pub struct SceneReport {
     pub duration_note: Option<String>,
     /// Why the reference's halvings do not converge in dt, where that was measured.
     pub reference_note: Option<String>,
+    /// What was measured about a curve that is not monotone in dt (index.html), where
+    /// that was investigated beyond the report's own numbers.
+    pub rise_note: Option<String>,
     pub rows: Vec<Row>,
     /// Material points compared at each sample time.
     pub points_total: usize,
@@ -51,16 +58,13 @@ pub struct SceneReport {
 }
 
 impl SceneReport {
-    /// The method whose dt sweep gives the order in time.
-    fn fast_method(&self) -> Method {
-        match self.plan.defaults.kind {
-            SceneKind::Ribbon => Method::GaussNewton,
-            SceneKind::Paper => Method::Paper,
-        }
+    /// The method whose dt sweep gives the order in time (the default solver).
+    pub(crate) fn fast_method(&self) -> Method {
+        Method::fast(self.plan.defaults.kind)
     }
 
     /// (dt, RMS error over time) of `method`'s dt sweep, coarse to fine.
-    fn dt_sweep(&self, method: Method) -> Vec<(f64, f64)> {
+    pub(crate) fn dt_sweep(&self, method: Method) -> Vec<(f64, f64)> {
         let mut v: Vec<(f64, f64)> = self
             .rows
             .iter()
@@ -72,19 +76,19 @@ impl SceneReport {
     }
 
     /// Slope of ln(error against the reference) over ln(dt), the fast method.
-    fn order_against_reference(&self) -> Option<f64> {
+    pub(crate) fn order_against_reference(&self) -> Option<f64> {
         log_log_slope(&self.dt_sweep(self.fast_method()))
     }
 
     /// The reference's estimated time error: RMS over time of its distance to the same
     /// run at twice its dt (for a first-order method e(2h) - e(h) ~ e(h)), m.
-    fn reference_error_estimate(&self) -> Option<f64> {
+    pub(crate) fn reference_error_estimate(&self) -> Option<f64> {
         self.reference_check.error.map(|e| e.rms_over_time)
     }
 
     /// Local order of the reference's own halvings ([`halving_order`]): its 2 dt run's
     /// distance to it against the 4 dt run's distance to the 2 dt run.
-    fn reference_order(&self) -> Option<f64> {
+    pub(crate) fn reference_order(&self) -> Option<f64> {
         halving_order(
             self.reference_error_estimate()?,
             self.reference_halving?.rms_over_time,
@@ -94,12 +98,12 @@ impl SceneReport {
     /// The reference's time error implied by its halvings, m ([`error_from_halvings`]):
     /// None when they do not converge (the reference's error is then not bounded by
     /// this report).
-    fn reference_error_bound(&self) -> Option<f64> {
+    pub(crate) fn reference_error_bound(&self) -> Option<f64> {
         error_from_halvings(self.reference_error_estimate()?, self.reference_order())
     }
 
     /// The reference and its 2 dt and 4 dt checks.
-    fn reference_rows(&self) -> [&Row; 3] {
+    pub(crate) fn reference_rows(&self) -> [&Row; 3] {
         [
             &self.reference,
             &self.reference_check,
@@ -107,7 +111,7 @@ impl SceneReport {
         ]
     }
 
-    fn methods(&self) -> Vec<Method> {
+    pub(crate) fn methods(&self) -> Vec<Method> {
         let mut m: Vec<Method> = self.rows.iter().map(|r| r.run.spec.method).collect();
         m.sort();
         m.dedup();
@@ -115,7 +119,7 @@ impl SceneReport {
     }
 }
 
-pub const CSV_HEADER: &str = "scene,method,sweep,dt_s,resolution,tolerance,steps,error_rms_m,error_end_m,points_compared,isometry_error_max,constraint_violation_max_m,wall_s,wall_per_simulated_s,cpu_s,cpu_per_simulated_s,step_ms_median,step_cpu_ms_median,iterations_median,unconverged_steps,stuck_steps,finite";
+pub const CSV_HEADER: &str = "scene,method,sweep,dt_s,resolution,tolerance,steps,error_rms_m,error_end_m,to_default_rms_m,points_compared,isometry_error_max,constraint_violation_max_m,wall_s,wall_per_simulated_s,cpu_s,cpu_per_simulated_s,step_ms_median,step_cpu_ms_median,iterations_median,unconverged_steps,stuck_steps,finite";
 
 pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> Result<(), ReportError> {
     let mut out = String::from(CSV_HEADER);
@@ -131,9 +135,12 @@ pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> Result<(), ReportError>
                 ),
                 None => (String::new(), String::new(), String::new()),
             };
+            let to_default = row
+                .to_default
+                .map_or(String::new(), |e| format!("{:.6e}", e.rms_over_time));
             writeln!(
                 out,
-                "{},{},{},{},{},{:e},{},{},{},{},{:.6e},{:.6e},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{},{},{}",
+                "{},{},{},{},{},{:e},{},{},{},{to_default},{},{:.6e},{:.6e},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{},{},{},{}",
                 s.name,
                 r.spec.method.name(),
                 r.spec.sweep.name(),
@@ -162,70 +169,16 @@ pub fn write_csv(path: &Path, scenes: &[SceneReport]) -> Result<(), ReportError>
     std::fs::write(path, out).map_err(io("cannot write", path))
 }
 
-pub(super) fn color(method: Method) -> RGBColor {
+/// A method's colour in every plot.
+pub(crate) fn color(method: Method) -> RGBColor {
     match method {
-        Method::GaussNewton => RGBColor(31, 119, 180),
+        Method::Chain => RGBColor(31, 119, 180),
+        Method::GaussNewton => RGBColor(140, 86, 75),
         Method::Lbfgsb => RGBColor(255, 127, 14),
         Method::Lumped => RGBColor(44, 160, 44),
         Method::ConformingFem => RGBColor(214, 39, 40),
         Method::Paper => RGBColor(148, 103, 189),
     }
-}
-
-/// Log-log error (RMS over time) against run time (process CPU time), one line per
-/// method (its dt sweep), the other sweeps as hollow markers; a dashed line at the
-/// reference's estimated own error ([`SceneReport::reference_error_bound`], or its 2 dt
-/// distance as a lower bound when its halvings do not converge).
-pub fn write_plot(path: &Path, s: &SceneReport) -> Result<(), ReportError> {
-    let (reference_error, reference_label) = match s.reference_error_bound() {
-        Some(b) if s.reference_order().is_some_and(|p| p < 0.8) => (
-            Some(b),
-            "reference's own error (from its 2 dt and 4 dt runs)",
-        ),
-        Some(b) => (Some(b), "reference's own error (vs its 2 dt run)"),
-        None => (
-            s.reference_error_estimate(),
-            "reference's own error: lower bound (not converged)",
-        ),
-    };
-    let points = |method: Method, dt_sweep: bool| -> Vec<(f64, f64)> {
-        s.rows
-            .iter()
-            .filter(|r| {
-                r.run.spec.method == method && (r.run.spec.sweep == Sweep::TimeStep) == dt_sweep
-            })
-            .filter_map(|r| r.error.map(|e| (r.run.cpu_s, e.rms_over_time)))
-            .collect()
-    };
-    let mut series = Vec::new();
-    for method in s.methods() {
-        let color = color(method);
-        series.push(Series {
-            label: Some(format!("{} (dt sweep)", method.name())),
-            color,
-            points: points(method, true),
-            line: true,
-        });
-        series.push(Series {
-            label: None,
-            color,
-            points: points(method, false),
-            line: false,
-        });
-    }
-    let title = format!("{}: error vs run time", s.name);
-    write_log_log(
-        path,
-        &LogLogPlot {
-            title: &title,
-            x_desc: "run time (process CPU time), s",
-            y_desc: "RMS error over time, m",
-            series,
-            level: reference_error
-                .filter(|e| *e > 0.0 && e.is_finite())
-                .map(|e| (e, reference_label)),
-        },
-    )
 }
 
 fn sci(v: f64) -> String {
@@ -317,8 +270,9 @@ fn summary_header(
          are resampled, never compared by vertex index), at fixed sample times; `error_rms` is sqrt(mean over \
          sample times of the squared distance), `error_end` the distance at the last \
          sample time. Every run and its columns are in `report.csv`; the plots are \
-         `<scene>.png` (lines: each method's dt sweep; hollow markers: its resolution \
-         and tolerance sweeps; dashed: the reference's own estimated error).\n"
+         `<scene>.png` and `<scene>.svg` (lines: each method's dt sweep; hollow markers: \
+         the default solver's resolution and tolerance sweeps; shaded: below the \
+         reference's own estimated error); `index.html` shows them on one page.\n"
     )?;
     let threaded: usize = scenes.iter().map(|s| multithreaded_runs(s).len()).sum();
     writeln!(
@@ -344,8 +298,12 @@ fn summary_header(
     )?;
     writeln!(
         md,
-        "Methods: `gauss_newton` (ribbon, ours, full kinetic), `lbfgsb` (ribbon, the \
-         paper's solver), `gauss_newton_lumped` (ribbon, mass lumped on the centerline), \
+        "Methods: `chain` (ribbon, the default solver: our projected Newton method, its \
+         Newton system solved along the chain in O(n), full kinetic model), \
+         `gauss_newton` (the same method on the dense matrix: chain's iterates to \
+         round-off at its cost; column `to_default_rms_m` of report.csv measures the \
+         distance), `lbfgsb` (ribbon, the paper's solver), `chain_lumped` (ribbon, the \
+         default solver with the mass lumped on the centerline), \
          `conforming_fem` (the conventional baseline of Pan et al. table 1: a triangle \
          mesh n x 10, Green-strain stretching with stiffness 1e8 N, discrete-shell \
          bending with the ribbon's alpha, handles eliminated as hard constraints; see \

@@ -27,11 +27,9 @@ pub enum ReportError {
         #[source]
         source: std::io::Error,
     },
-    /// plotters failed to draw (its errors are not `Send`, so only their text is kept).
-    #[error("{0}")]
-    Plot(String),
+    /// A plot could not be drawn or written.
     #[error(transparent)]
-    Png(#[from] png::EncodingError),
+    Plot(#[from] crate::plot::PlotError),
     #[error(transparent)]
     Format(#[from] std::fmt::Error),
     #[error("cannot start the report's thread")]

@@ -42,6 +42,7 @@ mod endpoints;
 mod grasp;
 mod inputs;
 mod latency;
+mod robot;
 
 use drawing::CameraThreads;
 use endpoints::Endpoints;
@@ -103,6 +104,8 @@ pub struct SimNode {
     tf_handles: Vec<(usize, String)>,
     /// Per TF handle: whether its last lookup failed (said once, and when it recovers).
     tf_failing: Vec<bool>,
+    /// The robot links' TF frames whose last lookup failed (said once each).
+    robot_failing: std::collections::BTreeSet<String>,
     /// s of simulated time between two published markers (None: every tick), and when
     /// the last went out.
     markers_period: Option<f64>,
@@ -267,6 +270,7 @@ impl SimNode {
         Ok(SimNode {
             io,
             tf_failing: vec![false; tf_handles.len()],
+            robot_failing: Default::default(),
             tf_handles,
             markers_period: (markers_rate > 0.0).then(|| 1.0 / markers_rate),
             last_markers: None,
@@ -340,6 +344,7 @@ impl SimNode {
             }
             // edge-triggered sources: drain all of them whatever woke us
             self.drain_graph();
+            self.drain_robot_description();
             self.drain_inputs();
             self.drain_services(&mut next_tick);
             self.drain_cameras();
@@ -411,6 +416,7 @@ impl SimNode {
     /// One step now; `trigger` is when the tick started or the lock-step input came.
     fn tick(&mut self, trigger: Instant) {
         self.offer_tf_targets();
+        self.offer_link_poses();
         self.command(Command::Step, Some(trigger));
     }
 

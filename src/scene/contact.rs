@@ -126,16 +126,16 @@ impl Default for ContactFile {
     }
 }
 
-/// The contact stage of a scene, or `None` when it declares neither colliders nor a
-/// `contact:` section.
+/// The contact stage of a scene, or `None` when it declares neither colliders, nor a
+/// `contact:` section, nor robot colliders (`robot`: their links become the stage's
+/// kinematic colliders at run time).
 pub(super) fn build_stage(
-    collider_files: &[ColliderFile],
-    contact: Option<&ContactFile>,
+    (collider_files, contact, robot): (&[ColliderFile], Option<&ContactFile>, bool),
     ck: &Check,
     file: &Path,
     world: &World,
 ) -> Result<Option<ContactStage>, SceneError> {
-    if collider_files.is_empty() && contact.is_none() {
+    if collider_files.is_empty() && contact.is_none() && !robot {
         return Ok(None);
     }
     let defaults = ContactFile::default();

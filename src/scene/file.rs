@@ -11,6 +11,7 @@ use super::contact::{build_stage, ColliderFile, ContactFile};
 use super::handle_file::{parse_handle, ForceFile, HandleFile};
 use super::paper_file::{prepare_paper, PaperFile, PaperScene, PreparedPaper};
 use super::ribbon_file::{ribbon_entries, ribbon_params, RibbonFile};
+use super::robot_file::RobotCollidersFile;
 use super::{Outputs, Scene, SceneError};
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::ribbon::{
@@ -66,10 +67,15 @@ pub struct SceneFile {
     /// Rigid obstacles (see [`ColliderFile`]). Default none.
     #[serde(default)]
     pub colliders: Vec<ColliderFile>,
-    /// Contact settings. A contact stage is built when the scene has colliders or this
-    /// section (ribbon-ribbon and self contact only); otherwise nothing is built.
+    /// Contact settings. A contact stage is built when the scene has colliders, robot
+    /// colliders or this section (ribbon-ribbon and self contact only); otherwise
+    /// nothing is built.
     #[serde(default)]
     pub contact: Option<ContactFile>,
+    /// A robot's links as colliders, from its URDF on a topic and its TF frames (see
+    /// [`RobotCollidersFile`]). Default none.
+    #[serde(default)]
+    pub robot_colliders: Option<RobotCollidersFile>,
     /// Handles (grippers).
     #[serde(default)]
     pub handles: Vec<HandleFile>,
@@ -88,8 +94,10 @@ pub struct SceneFile {
 #[serde(deny_unknown_fields)]
 pub struct SolverFile {
     /// `chain` (ours, default: projected Newton with the Newton system solved along the
-    /// chain in O(n)), `gauss_newton` (the same method on a dense matrix, O(n^3) per
-    /// iteration: a baseline) or `lbfgsb` (the paper's).
+    /// chain in O(n)), `trust_region` (ours: a trust-region projected Newton method on
+    /// the same O(n) chain model, the end crease held exactly), `gauss_newton` (the
+    /// damped method on a dense matrix, O(n^3) per iteration: a baseline) or `lbfgsb`
+    /// (the paper's).
     #[serde(default = "d_solver_kind")]
     pub kind: String,
     /// Inner stop: projected gradient reduced by this factor (dimensionless). 1e-6.
@@ -278,11 +286,18 @@ impl SceneFile {
             objects.push((name.clone(), sim));
         }
         let mut world = World::new(objects, handles, dt);
-        if let Some(stage) = build_stage(&self.colliders, self.contact.as_ref(), &ck, file, &world)?
-        {
+        let robot = self
+            .robot_colliders
+            .as_ref()
+            .map(|r| r.check(&ck, file))
+            .transpose()?;
+        let sections = (&self.colliders[..], self.contact.as_ref(), robot.is_some());
+        if let Some(stage) = build_stage(sections, &ck, file, &world)? {
             world = world.with_contact(stage);
         }
-        Ok(self.into_scene(file, duration, world, topics))
+        let mut scene = self.into_scene(file, duration, world, topics);
+        scene.robot = robot;
+        Ok(scene)
     }
 
     /// The scene's objects in order: its ribbons (`ribbon:` or `ribbons:`) or one
@@ -293,6 +308,12 @@ impl SceneFile {
                 return Err(ck.fail(
                     "paper",
                     "a scene holds either ribbons (`ribbon:` or `ribbons:`) or one `paper:` sheet, not both",
+                ));
+            }
+            if self.robot_colliders.is_some() {
+                return Err(ck.fail(
+                    "robot_colliders",
+                    "a robot's links collide with ribbons (the contact stage); a paper sheet does not take them",
                 ));
             }
             return Ok(vec![("paper".into(), ObjectEntry::Paper(paper))]);
@@ -436,9 +457,14 @@ impl SceneFile {
 
     fn solver_settings(&self, ck: &Check) -> Result<SolverSettings, SceneError> {
         let s = &self.solver;
-        let kind = match ck.choice("solver.kind", &s.kind, &["gauss_newton", "lbfgsb", "chain"])? {
+        let kind = match ck.choice(
+            "solver.kind",
+            &s.kind,
+            &["gauss_newton", "lbfgsb", "chain", "trust_region"],
+        )? {
             "lbfgsb" => SolverKind::Lbfgsb,
             "chain" => SolverKind::Chain,
+            "trust_region" => SolverKind::TrustRegion,
             _ => SolverKind::GaussNewton,
         };
         let tolerance = ck.positive("solver.tolerance", s.tolerance)?;
@@ -449,7 +475,7 @@ impl SceneFile {
             ));
         }
         let max_iterations = s.max_iterations.unwrap_or(match kind {
-            SolverKind::GaussNewton | SolverKind::Chain => 200,
+            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => 200,
             SolverKind::Lbfgsb => 5000,
         });
         if max_iterations == 0 {
@@ -517,6 +543,7 @@ impl SceneFile {
             },
             handle_tf_frames: self.handles.iter().map(|h| h.tf_frame.clone()).collect(),
             cameras: Vec::new(),
+            robot: None,
             source: self,
         }
     }

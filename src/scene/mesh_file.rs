@@ -183,5 +183,31 @@ mod tests {
         let (vb, tb) = parse_stl(&bin).unwrap();
         assert_eq!(vb.len(), 4);
         assert_eq!(tb.len(), 2);
+        // a binary file cut short is neither binary (size) nor ASCII (`solid`)
+        let cut = &bin[..bin.len() - 7];
+        assert!(parse_stl(cut).unwrap_err().contains("neither binary STL"));
+        // an ASCII file whose facets are cut short
+        let short = "solid t\nvertex 0 0 0\nvertex 1 0 0\nendsolid t\n";
+        assert!(parse_stl(short.as_bytes())
+            .unwrap_err()
+            .contains("not a whole number of facets"));
+    }
+
+    #[test]
+    fn bad_files_are_errors_that_name_them() {
+        let dir = std::env::temp_dir().join(format!("mesh_file_test_{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let nan = dir.join("nan.obj");
+        std::fs::write(&nan, "v 0 0 nan\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+        let e = load_mesh(&nan).unwrap_err();
+        assert!(
+            e.contains("nan.obj") && e.contains("vertex 0 is not finite"),
+            "{e}"
+        );
+        let e = load_mesh(&dir.join("absent.stl")).unwrap_err();
+        assert!(e.contains("cannot read") && e.contains("absent.stl"), "{e}");
+        let dae = dir.join("x.dae");
+        std::fs::write(&dae, "<COLLADA/>").unwrap();
+        assert!(load_mesh(&dae).unwrap_err().contains("unknown mesh format"));
     }
 }

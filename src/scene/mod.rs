@@ -13,6 +13,8 @@ mod mesh_file;
 mod overrides;
 mod paper_file;
 mod ribbon_file;
+mod robot_file;
+pub mod urdf;
 
 use std::path::{Path, PathBuf};
 
@@ -22,6 +24,7 @@ pub use file::{OutputsFile, SceneFile};
 pub use mesh_file::load_mesh;
 pub use overrides::apply_override;
 pub use paper_file::{CreaseFile, PaperFile};
+pub use robot_file::{RobotColliders, RobotCollidersFile};
 
 use crate::sim::World;
 
@@ -68,6 +71,9 @@ pub struct Scene {
     pub handle_tf_frames: Vec<Option<String>>,
     /// The simulated RGB-D cameras (`cameras:`), in file order.
     pub cameras: Vec<SceneCamera>,
+    /// A robot's links as colliders (`robot_colliders:`): where its description comes
+    /// from and what to take of it. None: the scene has none.
+    pub robot: Option<RobotColliders>,
     /// The scene as parsed after overrides, for provenance (stats, bags).
     pub source: SceneFile,
 }

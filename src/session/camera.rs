@@ -15,6 +15,7 @@
 use std::collections::VecDeque;
 
 use crate::camera::{self, Snapshot};
+use crate::contact::Collider;
 use crate::geometry::Pose;
 use crate::scene::{CameraMount, Scene, SceneCamera};
 use crate::wire::cdr::CdrError;
@@ -54,6 +55,9 @@ pub struct Capture {
     pub world_from_optical: Pose,
     /// What it sees (None: no row of the session needs the pixels, only camera_info).
     pub snapshot: Option<Snapshot>,
+    /// The world's colliders, when they changed since this camera's previous capture (a
+    /// robot's links arrived or changed): its renderer is made anew with them.
+    pub colliders: Option<Vec<Collider>>,
 }
 
 impl Capture {
@@ -77,6 +81,8 @@ pub struct Cameras {
     draws: Vec<bool>,
     /// Snapshots handed back after drawing, reused by the next captures.
     spare: Vec<Snapshot>,
+    /// Per camera: the colliders its renderer has (the world's at its last capture).
+    colliders: Vec<Vec<Collider>>,
 }
 
 impl Cameras {
@@ -96,6 +102,7 @@ impl Cameras {
             pending: vec![VecDeque::new(); n],
             draws: (0..n).map(|c| has(c, true)).collect(),
             spare: Vec::new(),
+            colliders: vec![camera::world_colliders(&scene.world).to_vec(); n],
         }
     }
 
@@ -149,6 +156,11 @@ impl Cameras {
             s.capture(&scene.world);
             s
         });
+        let now = camera::world_colliders(&scene.world);
+        let colliders = (snapshot.is_some() && self.colliders[camera] != now).then(|| {
+            self.colliders[camera] = now.to_vec();
+            self.colliders[camera].clone()
+        });
         self.pending[camera].push_back(Capture {
             camera,
             frame,
@@ -156,6 +168,7 @@ impl Cameras {
             step: scene.world.steps_taken(),
             world_from_optical: *world_from_optical,
             snapshot,
+            colliders,
         });
         Some(frame)
     }
@@ -210,7 +223,8 @@ pub fn camera_frame(
 }
 
 /// Draw `capture` of camera `cam` with `renderer` (when it carries a snapshot: the
-/// noise of its tick in a scene seeded with `seed`) and encode its messages for `rows`
+/// noise of its tick in a scene seeded with `seed`; the renderer made anew first when
+/// the colliders changed) and encode its messages for `rows`
 /// (see [`camera_frame`]). Draws on the calling thread's rayon pool: the bytes do not
 /// depend on its size.
 pub fn draw_frame(
@@ -219,6 +233,9 @@ pub fn draw_frame(
     rows: &[OutputRow],
     capture: &Capture,
 ) -> Result<Frame, CdrError> {
+    if let Some(colliders) = &capture.colliders {
+        *renderer = camera::Renderer::new(cam.camera, colliders);
+    }
     let key = capture.noise_key(cam, seed);
     let drawn =
         (capture.snapshot.as_ref()).map(|s| renderer.render(s, &capture.world_from_optical, &key));
@@ -442,6 +459,69 @@ mod tests {
             &["cameras.0.width=320", "cameras.0.height=240", "seed=1"],
         );
         assert_ne!(one, drawn(&other, &t.rows, 1));
+    }
+
+    #[test]
+    fn colliders_that_arrive_later_are_drawn() {
+        // a robot link (a ball in front of the camera) enters the world after start-up
+        let mut s = scene(
+            "ribbon_gripper_push",
+            &["cameras.0.width=160", "cameras.0.height=120"],
+        );
+        let t = table(&s, true);
+        let mut cams = Cameras::new(&s, &t.rows);
+        let cam = s.cameras[0].clone();
+        let pose = fixed_pose(&cam).unwrap();
+        let mut r = renderer(&s, &cam);
+        cams.on_state(&s);
+        cams.capture(&s, 0, &pose).unwrap();
+        let first = cams.take(0).unwrap();
+        assert_eq!(
+            first.colliders, None,
+            "the colliders the renderer was made with"
+        );
+        draw_frame(&mut r, (&cam, s.source.seed), &t.rows, &first).unwrap();
+        let link = Collider {
+            shape: crate::contact::ColliderShape::Ball { radius: 0.1 },
+            pose: Pose::identity(),
+            friction: 0.0,
+            attached_to: Some(0),
+        };
+        let at = Pose::translation(0.5, -0.5, 0.5);
+        s.world
+            .set_kinematic_colliders(vec![link], vec![at])
+            .unwrap();
+        let targets = vec![None; s.world.handles().len()];
+        while cams.due(0).is_none() {
+            s.world.step(&targets);
+            cams.on_state(&s);
+        }
+        cams.capture(&s, 0, &pose).unwrap();
+        let second = cams.take(0).unwrap();
+        let now = camera::world_colliders(&s.world).to_vec();
+        assert_eq!(second.colliders.as_ref(), Some(&now));
+        let drawn = draw_frame(&mut r, (&cam, s.source.seed), &t.rows, &second).unwrap();
+        // what a renderer made with the ball sees, not what the first one would
+        let mut fresh = renderer(&s, &cam);
+        let unchanged = Capture {
+            colliders: None,
+            ..second.clone()
+        };
+        assert_eq!(
+            drawn,
+            draw_frame(&mut fresh, (&cam, s.source.seed), &t.rows, &unchanged).unwrap()
+        );
+        let mut stale = renderer(
+            &scene(
+                "ribbon_gripper_push",
+                &["cameras.0.width=160", "cameras.0.height=120"],
+            ),
+            &cam,
+        );
+        assert_ne!(
+            drawn,
+            draw_frame(&mut stale, (&cam, s.source.seed), &t.rows, &unchanged).unwrap()
+        );
     }
 
     #[test]

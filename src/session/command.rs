@@ -7,9 +7,10 @@
 
 use crate::geometry::{Point2, Pose};
 use crate::sim::Hold;
-use crate::wire::msgs::{PoseStamped, SimCommand, Time};
+use crate::wire::msgs::{PoseStamped, SimCommand, Time, TransformStamped};
 
 use super::params::ParamValue;
+use super::robot::LoadedDescription;
 
 /// One external action on the simulation.
 #[derive(Clone, Debug, PartialEq)]
@@ -31,6 +32,25 @@ pub enum Command {
     TfLookupFailed {
         handle: usize,
         what: PoseStamped,
+        arrival_ns: u64,
+    },
+    /// A robot description (URDF) arrived on the `robot_colliders` topic at
+    /// `arrival_ns`: `urdf` as received (what a bag keeps), `loaded` what the edge that
+    /// received it made of it (`scene::urdf::RobotDescription::load`: the links' shapes,
+    /// with mesh files read; or why it is not a URDF). Its links replace the robot's
+    /// colliders before the next step.
+    RobotDescription {
+        urdf: String,
+        loaded: LoadedDescription,
+        arrival_ns: u64,
+    },
+    /// The robot's links looked up in TF for the coming step (the TF tree is not
+    /// recorded, so the lookups' outcomes are): a transform from the scene frame to each
+    /// link's TF frame (`child_frame_id`), stamped with the lookup time; an empty
+    /// `header.frame_id` (identity transform) is a failed lookup, and that link stays
+    /// where it is.
+    LinkPoses {
+        transforms: Vec<TransformStamped>,
         arrival_ns: u64,
     },
     /// One simulation step with the newest targets (a tick, a lock-step input, `~/step`).
@@ -76,15 +96,19 @@ pub struct UnknownCommand(pub String);
 
 impl Command {
     /// The message a bag keeps for this command on `~/commands`, stamped with the
-    /// simulated time `stamp` it was applied at. None for poses and failed TF lookups:
-    /// they are recorded on their handle's topics.
+    /// simulated time `stamp` it was applied at. None for poses and failed TF lookups
+    /// (recorded on their handle's topics), robot descriptions (on their topic) and link
+    /// poses (on `~/robot_link_poses`).
     pub fn to_msg(&self, stamp: Time, names: &Names) -> Option<SimCommand> {
         let mut m = SimCommand {
             stamp,
             ..SimCommand::default()
         };
         match self {
-            Command::Pose { .. } | Command::TfLookupFailed { .. } => return None,
+            Command::Pose { .. }
+            | Command::TfLookupFailed { .. }
+            | Command::RobotDescription { .. }
+            | Command::LinkPoses { .. } => return None,
             Command::Step => m.kind = SimCommand::STEP,
             Command::Reset => m.kind = SimCommand::RESET,
             Command::SetPaused(p) => {

@@ -94,18 +94,29 @@ fn markers(
 }
 
 /// One marker per collider, at its current pose (attached colliders follow their
-/// handle's target): the ground as a thin square of `style.ground_size`, boxes,
-/// spheres, capsules (a cylinder and its two end spheres) and triangle meshes.
+/// handle's target, a robot's links their TF frames): the ground as a thin square of
+/// `style.ground_size`, boxes, spheres, capsules (a cylinder and its two end spheres)
+/// and triangle meshes. With `robot_colliders:` the set changes at run time: a
+/// DELETEALL of the namespace comes first, so links that left are not drawn on.
 pub fn colliders(p: &Produce, _: Scope) -> Option<MarkerArray> {
     let (scene, header) = (p.scene, p.header());
     let world = &scene.world;
     let colliders = world.contact_stage()?.colliders();
-    if colliders.is_empty() {
+    let robot = scene.robot.is_some();
+    if colliders.is_empty() && !robot {
         return None;
     }
     let style = p.style;
     let targets = world.current_targets();
-    let mut markers = Vec::with_capacity(colliders.len() + 1);
+    let mut markers = Vec::with_capacity(colliders.len() + 2);
+    if robot {
+        markers.push(Marker {
+            header: header.clone(),
+            ns: "colliders".into(),
+            action: Marker::DELETEALL,
+            ..Marker::default()
+        });
+    }
     for (i, c) in colliders.iter().enumerate() {
         let world_from_collider = c.world_pose(targets);
         let mut m = Marker {

@@ -18,6 +18,7 @@ pub mod names;
 pub mod outputs;
 pub mod params;
 pub mod produce;
+pub mod robot;
 pub mod sensor;
 mod state;
 mod status;

@@ -45,6 +45,12 @@ pub struct NodeNames {
     /// Where a recording keeps the commands the node applied
     /// (developable_sim/msg/SimCommand; bags only, nothing is published there).
     pub commands: String,
+    /// The robot description topic (`robot_colliders.topic`; empty without
+    /// `robot_colliders:`).
+    pub robot_description: String,
+    /// Where a recording keeps the robot links' TF lookups (tf2_msgs/msg/TFMessage; bags
+    /// only).
+    pub robot_link_poses: String,
     /// The rcl_interfaces parameter services.
     pub parameters: ParameterServices,
 }
@@ -109,6 +115,11 @@ impl NodeNames {
             set_paused: resolve("~/set_paused")?,
             step: resolve("~/step")?,
             commands: resolve("~/commands")?,
+            robot_description: match &scene.robot {
+                Some(r) => resolve(&r.topic)?,
+                None => String::new(),
+            },
+            robot_link_poses: resolve("~/robot_link_poses")?,
             grasp: resolve("~/grasp")?,
             release: resolve("~/release")?,
             handle_grasp: scene

@@ -248,7 +248,8 @@ pub const OUTPUTS: &[OutputKind] = &[
                 .world
                 .contact_stage()
                 .is_some_and(|c| !c.colliders().is_empty());
-            Want::both(s.outputs.markers && has)
+            // a robot's links arrive at run time
+            Want::both(s.outputs.markers && (has || s.robot.is_some()))
         },
         producer: &Typed::<MarkerArray>(markers::colliders),
     },

@@ -16,6 +16,7 @@ use super::input::{HandleInput, InputPolicy, Rejection};
 use super::outputs::{Frame, OutputTable};
 use super::params::ParamValue;
 use super::produce::{Counters, Produce};
+use super::robot::RobotLinks;
 use super::style::MarkerStyle;
 
 /// What applying a command did.
@@ -27,6 +28,9 @@ pub enum Applied {
     TfLookupFailed,
     /// A new state: after a step, or the initial state after a reset.
     NewState,
+    /// A robot description or the links' poses were taken (Err: why the description or
+    /// the links could not be used; the robot stays as it was).
+    Robot(Result<(), String>),
     /// Paused or resumed; `changed`: the flag differs from before.
     Paused { changed: bool },
     /// A parameter took effect in the session, or concerns only the node (its pacing,
@@ -64,6 +68,8 @@ pub struct Session {
     pub counters: Counters,
     pub paused: bool,
     inputs: Vec<HandleInput>,
+    /// The robot's links in the world (`robot_colliders:`).
+    robot: RobotLinks,
     /// Per handle: when it last grasped or released (simulated time; zero: the scene's
     /// own hold) and whether that is not in a frame yet.
     grasp_changed: Vec<Time>,
@@ -99,6 +105,7 @@ impl Session {
             },
             paused: false,
             inputs: vec![HandleInput::default(); handles],
+            robot: RobotLinks::default(),
             grasp_changed: vec![Time::default(); handles],
             grasp_dirty: vec![false; handles],
             last_step: None,
@@ -121,6 +128,16 @@ impl Session {
                     input.rejected_tf_lookup += 1;
                 }
                 Applied::TfLookupFailed
+            }
+            Command::RobotDescription { loaded, .. } => {
+                let friction = self.robot_friction();
+                let world = &mut self.scene.world;
+                Applied::Robot(self.robot.set_description(loaded, world, friction))
+            }
+            Command::LinkPoses { transforms, .. } => {
+                let friction = self.robot_friction();
+                let world = &mut self.scene.world;
+                Applied::Robot(self.robot.set_poses(transforms, world, friction))
             }
             Command::Step => {
                 self.step();
@@ -185,6 +202,16 @@ impl Session {
             | Applied::Release(Ok(true)) => Some(self.frame(Content::Statuses)),
             _ => None,
         }
+    }
+
+    /// The robot's links in the world (`robot_colliders:`).
+    pub fn robot(&self) -> &RobotLinks {
+        &self.robot
+    }
+
+    /// Coulomb μ of the robot's links (`robot_colliders.friction`).
+    fn robot_friction(&self) -> f64 {
+        self.scene.robot.as_ref().map_or(0.0, |r| r.friction)
     }
 
     /// The parameters that change the session; the others concern the node only.

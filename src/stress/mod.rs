@@ -37,6 +37,10 @@ use std::time::Instant;
 
 use serde::Serialize;
 
+mod output;
+
+pub use output::markdown;
+
 use crate::runner::{self, StepObserver};
 use crate::scene::{self, Scene};
 use crate::sim::{StepReport, World};
@@ -391,6 +395,51 @@ pub struct CaseResult {
     pub reason: String,
     /// Wall time of the run, s.
     pub wall_s: f64,
+    /// E(t) - E(0) against its bound over the run (at most [`SERIES_POINTS`] samples;
+    /// where steps are dropped, the one nearest the bound in each run of steps is kept).
+    pub energy_series: Vec<EnergySample>,
+}
+
+/// Most samples of a run's energy over time kept in [`CaseResult::energy_series`].
+pub const SERIES_POINTS: usize = 250;
+
+/// The energy and its bound after one step.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct EnergySample {
+    /// Simulated time, s.
+    pub t_s: f64,
+    /// E(t) - E(0), J.
+    pub rise_j: f64,
+    /// W(t) + tol(t), J: the run fails where `rise_j` exceeds it.
+    pub allowance_j: f64,
+}
+
+/// `series` thinned to at most `max` samples: in each of `max` runs of consecutive
+/// steps the sample nearest its bound (largest rise - allowance; a NaN counts as
+/// nearest), and always the last one.
+fn thin(series: &[EnergySample], max: usize) -> Vec<EnergySample> {
+    if series.len() <= max || max < 2 {
+        return series.to_vec();
+    }
+    let chunk = series.len().div_ceil(max - 1);
+    let margin = |s: &EnergySample| {
+        let m = s.rise_j - s.allowance_j;
+        if m.is_nan() {
+            f64::INFINITY
+        } else {
+            m
+        }
+    };
+    let mut out: Vec<EnergySample> = series[..series.len() - 1]
+        .chunks(chunk)
+        .filter_map(|c| {
+            c.iter()
+                .max_by(|a, b| margin(a).total_cmp(&margin(b)))
+                .copied()
+        })
+        .collect();
+    out.extend(series.last().copied());
+    out
 }
 
 /// The energy bound, checked after every step.
@@ -403,6 +452,8 @@ struct EnergyWatch<'a> {
     work: f64,
     rise_max: f64,
     ratio_max: f64,
+    /// Every step's E(t) - E(0) and allowance.
+    series: Vec<EnergySample>,
     hook: Option<&'a mut dyn FnMut(&mut StepReport)>,
 }
 
@@ -430,6 +481,7 @@ impl<'a> EnergyWatch<'a> {
             work: 0.0,
             rise_max: f64::NEG_INFINITY,
             ratio_max: f64::NEG_INFINITY,
+            series: Vec::new(),
             hook,
         }
     }
@@ -461,6 +513,11 @@ impl StepObserver for EnergyWatch<'_> {
             f64::INFINITY
         };
         self.ratio_max = self.ratio_max.max(ratio);
+        self.series.push(EnergySample {
+            t_s: report.time,
+            rise_j: rise,
+            allowance_j: allowance,
+        });
         Ok(())
     }
 }
@@ -519,6 +576,9 @@ pub enum StressError {
     },
     #[error(transparent)]
     Json(#[from] serde_json::Error),
+    /// A plot of index.html could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] crate::plot::PlotError),
 }
 
 /// The override that moves a single-object scene (`source`) by `offset`, m, or why
@@ -610,6 +670,7 @@ pub fn run_case_with(
         pass: reasons.is_empty(),
         reason: reasons.join("; "),
         wall_s,
+        energy_series: thin(&watch.series, SERIES_POINTS),
     })
 }
 
@@ -728,7 +789,8 @@ pub struct StressReport {
 }
 
 /// Run every case selected by `options` at each of its time steps, print one line
-/// per run, and write `out/stress.md` and `out/stress.json`.
+/// per run, and write `out/stress.md`, `out/stress.json` and `out/index.html` (each
+/// case's energy over time against its bound).
 pub fn run_suite(
     config: &Path,
     out: &Path,
@@ -792,85 +854,8 @@ pub fn run_suite(
     };
     write(&json, serde_json::to_string_pretty(&report)?)?;
     write(&out.join("stress.md"), markdown(&report))?;
+    write(&out.join("index.html"), output::index(&report)?)?;
     Ok(report)
-}
-
-/// The pass/fail table and how to read it.
-pub fn markdown(report: &StressReport) -> String {
-    let mut s = String::new();
-    s.push_str(&format!(
-        "# Stress suite{}\n\n{} of {} runs passed, {:.1} s wall time.\n\n",
-        if report.quick { " (--quick)" } else { "" },
-        report.passed,
-        report.results.len(),
-        report.wall_s
-    ));
-    s.push_str(
-        "Pass: every state finite; at every step E(t) - E(0) <= W(t) + tol(t), with E the total \
-         energy (kinetic + elastic + gravity + external; gravity's work is in E as its \
-         potential), W(t) the summed work bound of handles and point forces (|F| |dx| per step: \
-         the force at the end of the step times the displacement of the point it acts on) and \
-         tol(t) = ",
-    );
-    s.push_str(&format!(
-        "r (S(0) + W(t)) + {:e} J with S(0) the kinetic + elastic energy at t = 0 (all \
-         relative to the initial state: moving the scene changes nothing) and r = {} for ribbons \
-         and {} for paper (its remeshing and isometry projection move S_P between FEM steps with \
-         no energy balance); at most {} % of the steps unconverged (iteration limit) and none \
-         rejected (non-finite result, previous state kept), unless the case's allowance says \
-         otherwise (listed below with its reason); over_stretch: the reported violation reaches \
-         (1.5 m - l)/2 = 0.25 m.\n\n",
-        report.energy_absolute_tolerance_j,
-        report.energy_relative_tolerance,
-        report.paper_energy_relative_tolerance,
-        report.unconverged_fraction * 100.0
-    ));
-    s.push_str("| case | dt (s) | steps | finite | E rise max (J) | W bound (J) | rise / allowance | violation max (m) | paper: largest edge strain, any frame; edges over 1 % at the end | unconverged | rejected | result |\n");
-    s.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|\n");
-    for r in &report.results {
-        let strain = match (r.strain_max_pct, r.strained_edges_pct) {
-            (Some(most), Some(share)) => format!("{most:.2} %; {share:.1} %"),
-            _ => "-".to_string(),
-        };
-        s.push_str(&format!(
-            "| {} | {} | {} | {} | {:.3e} | {:.3e} | {:.3} | {:.3e} | {} | {} | {} | {} |\n",
-            r.case,
-            r.dt,
-            r.steps,
-            if r.finite { "yes" } else { "**no**" },
-            r.energy_rise_max,
-            r.work_bound,
-            r.energy_ratio_max,
-            r.constraint_violation_max,
-            strain,
-            r.unconverged_steps,
-            r.rejected_steps,
-            if r.pass {
-                "pass".to_string()
-            } else {
-                format!("**FAIL**: {}", r.reason)
-            }
-        ));
-    }
-    s.push_str("\nCases:\n\n");
-    for c in cases() {
-        let a = c.allowance;
-        let allowance = if a == DEFAULT_ALLOWANCE {
-            String::new()
-        } else {
-            format!(
-                "; allowed {} % unconverged, {} rejected: {}",
-                a.unconverged_fraction * 100.0,
-                a.rejected_steps,
-                a.reason
-            )
-        };
-        s.push_str(&format!(
-            "- `{}`: {} (`config/{}`){allowance}\n",
-            c.name, c.description, c.scene
-        ));
-    }
-    s
 }
 
 #[cfg(test)]
@@ -888,6 +873,24 @@ mod tests {
             .into_iter()
             .next()
             .expect("at least one stress case")
+    }
+
+    /// Thinning keeps the last sample and, in each run of steps, the one nearest the
+    /// bound: a spike above it is never dropped.
+    #[test]
+    fn thinning_keeps_the_sample_nearest_the_bound() {
+        let series: Vec<EnergySample> = (0..1000)
+            .map(|k| EnergySample {
+                t_s: k as f64 * 1e-3,
+                rise_j: if k == 537 { 2.0 } else { 0.0 },
+                allowance_j: 1.0,
+            })
+            .collect();
+        let thinned = thin(&series, SERIES_POINTS);
+        assert!(thinned.len() <= SERIES_POINTS, "{}", thinned.len());
+        assert!(thinned.iter().any(|s| s.rise_j == 2.0));
+        assert_eq!(thinned.last(), series.last());
+        assert_eq!(thin(&series[..10], SERIES_POINTS).len(), 10);
     }
 
     #[test]

@@ -176,6 +176,22 @@ pub struct TransformStamped {
     pub transform: Transform,
 }
 
+// ---------------------------------------------------------------- std_msgs
+
+/// `std_msgs/msg/String`: a robot description (URDF) as `robot_state_publisher`
+/// publishes it on `/robot_description`. (Named `String` to serde, as the definition
+/// checks expect: the Rust name would shadow `std::string::String` here.)
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename = "String")]
+pub struct StringMsg {
+    pub data: String,
+}
+ros_message!(
+    StringMsg,
+    "std_msgs/msg/String",
+    "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
+);
+
 // ---------------------------------------------------------------- tf2_msgs
 
 /// `tf2_msgs/msg/TFMessage`: what `/tf` and `/tf_static` carry.
@@ -250,6 +266,8 @@ impl Marker {
     pub const TRIANGLE_LIST: i32 = 11;
     // `action`
     pub const ADD: i32 = 0;
+    /// Deletes every marker of the namespace (`ns`).
+    pub const DELETEALL: i32 = 3;
 }
 
 /// `visualization_msgs/msg/MarkerArray`.

@@ -46,7 +46,8 @@ impl Qos {
         reliable: true,
         transient_local: false,
     };
-    /// A latched state (a handle's grasp): reliable, keep last 1, transient local (a
+    /// A latched state (a handle's grasp; a robot description on `/robot_description`
+    /// as `robot_state_publisher` latches it): reliable, keep last 1, transient local (a
     /// late joiner gets the current state).
     pub const LATCHED: Qos = Qos {
         depth: 1,

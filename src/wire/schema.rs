@@ -55,6 +55,10 @@ pub const DEFINITIONS: &[(&str, &str)] = &[
         include_str!("interfaces/std_msgs/ColorRGBA.msg"),
     ),
     (
+        "std_msgs/msg/String",
+        include_str!("interfaces/std_msgs/String.msg"),
+    ),
+    (
         "geometry_msgs/msg/Point",
         include_str!("interfaces/geometry_msgs/Point.msg"),
     ),

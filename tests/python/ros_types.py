@@ -392,6 +392,13 @@ class PointCloud2(IdlStruct, typename="sensor_msgs::msg::dds_::PointCloud2_"):
     is_dense: bool = False
 
 
+@dataclass
+class String(IdlStruct, typename="std_msgs::msg::dds_::String_"):
+    """std_msgs/msg/String (a robot description's URDF)."""
+
+    data: str = ""
+
+
 # rcl_interfaces (parameter services), on the rmw_cyclonedds service wire format
 
 

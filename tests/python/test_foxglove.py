@@ -2,8 +2,10 @@
 `websockets` speaking the Foxglove WebSocket protocol v1 (JSON serverInfo/advertise, a
 JSON subscribe, binary message frames: opcode 0x01, uint32 subscription id, uint64 log
 time, payload), the payload decoded by mcap_ros2's decoder from the advertised ros2msg
-schema text alone, as Foxglove decodes it. The Foxglove SDK negotiates that protocol as
-`foxglove.sdk.v1` (the ws-protocol's `foxglove.websocket.v1` under its new name)."""
+schema text alone, as Foxglove decodes it. The protocol has two names: `foxglove.sdk.v1`
+(the Foxglove SDK's, which the Foxglove app asks for) and `foxglove.websocket.v1` (the
+ws-protocol specification's, which Lichtblick, Foxglove Studio before the rename and the
+ws-protocol client libraries ask for); the node's patched SDK accepts both."""
 
 from __future__ import annotations
 
@@ -55,7 +57,7 @@ def parse_frame(frame: bytes) -> tuple[int, int, bytes]:
     return sub, log_time, frame[13:]
 
 
-def connect_and_advertise(port: int, timeout: float = 20.0):
+def connect_and_advertise(port: int, timeout: float = 20.0, subprotocol: str = SUBPROTOCOL):
     """Connect (retrying until the node listens) and collect the advertised channels."""
     deadline = time.monotonic() + timeout
     while True:
@@ -63,7 +65,7 @@ def connect_and_advertise(port: int, timeout: float = 20.0):
             # no message size limit (a camera frame's cloud is 4.9 MB), as Foxglove
             ws = connect(
                 f"ws://127.0.0.1:{port}",
-                subprotocols=[SUBPROTOCOL],
+                subprotocols=[subprotocol],
                 open_timeout=5,
                 legacy=True,
                 max_size=None,
@@ -73,7 +75,8 @@ def connect_and_advertise(port: int, timeout: float = 20.0):
             if time.monotonic() > deadline:
                 raise
             time.sleep(0.1)
-    assert ws.subprotocol == SUBPROTOCOL
+    # the server answers with the name the client asked for (a client refuses any other)
+    assert ws.subprotocol == subprotocol
     info = json.loads(ws.recv(timeout=10))
     assert info["op"] == "serverInfo", info
     channels = {}
@@ -283,10 +286,11 @@ def test_foxglove_port_parameter_starts_the_server_and_a_bad_bind_is_refused(
     ws, _, channels = connect_and_advertise(port)
     ws.close()
     assert "/ribbon/markers" in channels
-    # the SDK negotiates the protocol by its new name only (documented)
-    with pytest.raises(InvalidStatus) as refused:
-        connect(f"ws://127.0.0.1:{port}", subprotocols=["foxglove.websocket.v1"], open_timeout=5)
-    assert refused.value.response.status_code == 400
+    # a subprotocol that is not Foxglove protocol v1 under either name is refused
+    for unknown in ("foxglove.websocket.v2", "foxglove.websocket"):
+        with pytest.raises(InvalidStatus) as refused:
+            connect(f"ws://127.0.0.1:{port}", subprotocols=[unknown], open_timeout=5)
+        assert refused.value.response.status_code == 400
     # the port is taken now: a second node says so and exits
     busy = start_node(domain_id, GRIPPER, "--foxglove", str(port), wait=False, name="busy")
     assert busy.wait_exit(30) != 0
@@ -301,6 +305,44 @@ def test_foxglove_port_parameter_starts_the_server_and_a_bad_bind_is_refused(
     )
     assert high.wait_exit(20) != 0
     assert "`foxglove_port`: must be a TCP port 0..=65535, got 70000" in high.log(), high.log()
+
+
+def first_markers(ws, channel: dict, timeout: float = 20.0):
+    """Subscribe to `channel` and decode the first message that arrives on it."""
+    ws.send(json.dumps({"op": "subscribe", "subscriptions": [{"id": 3, "channelId": channel["id"]}]}))
+    decode = decoder_for(channel)
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            frame = ws.recv(timeout=1.0)
+        except TimeoutError:
+            continue
+        if isinstance(frame, str):
+            continue
+        sub, _, payload = parse_frame(frame)
+        assert sub == 3
+        return decode(payload)
+    raise AssertionError(f"no message on {channel['topic']} in {timeout} s")
+
+
+@pytest.mark.parametrize("subprotocol", ["foxglove.websocket.v1", "foxglove.sdk.v1"])
+def test_clients_asking_for_either_name_of_protocol_v1_receive_the_markers(
+    start_node, domain_id, subprotocol
+):
+    """Lichtblick, Foxglove Studio before the rename and the ws-protocol client libraries
+    ask for `foxglove.websocket.v1`, the Foxglove app for `foxglove.sdk.v1`: both are
+    answered with their own name and stream the markers channel."""
+    port = free_port()
+    start_node(domain_id, GRIPPER, "--foxglove", str(port))
+    ws, info, channels = connect_and_advertise(port, subprotocol=subprotocol)
+    assert info["op"] == "serverInfo"
+    markers_ch = channels["/ribbon/markers"]
+    assert markers_ch["schemaName"] == "visualization_msgs/msg/MarkerArray"
+    ma = first_markers(ws, markers_ch)
+    ws.close()
+    surface = next(m for m in ma.markers if m.ns == "ribbon/surface")
+    assert surface.type == 11 and len(surface.points) == 6 * 50
+    assert all(math.isfinite(p.x + p.y + p.z) for p in surface.points)
 
 
 def raw_ws_client(port: int, rcvbuf: int = 4096) -> socket.socket:

@@ -1,7 +1,11 @@
 //! Rigid colliders: the ground plane, boxes, spheres, capsules and triangle meshes.
 //!
-//! A collider is static or carried by a handle (a gripper body pushing the ribbon).
-//! Detection against it has two parts:
+//! A collider is static or carried: by a handle (a gripper body pushing the ribbon),
+//! or by a kinematic body whose pose the caller sets before each step (a robot link
+//! following TF, `sim::World::set_kinematic_colliders`). Either way its motion over a
+//! step goes from its carrier's pose at the start to the one at the end, which gives it
+//! a velocity (friction) and a swept volume (continuous detection). Detection against
+//! it has two parts:
 //!
 //! - every ribbon vertex against the *solid* (half-space, box, sphere, capsule) with
 //!   parry's point projection (signed distance) and, for the continuous part, a ray
@@ -46,16 +50,19 @@ pub enum ColliderShape {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Collider {
     pub shape: ColliderShape,
-    /// `world_from_collider`, or `gripper_from_collider` when `attached_to` is set.
+    /// `world_from_collider`, or `carrier_from_collider` when `attached_to` is set.
     pub pose: Pose,
     /// Coulomb friction coefficient μ against ribbons (dimensionless, >= 0).
     pub friction: f64,
-    /// Index of the handle whose target pose (`world_from_gripper`) carries the collider.
+    /// Index of the carrier pose that carries the collider: the world's carriers are its
+    /// handles' targets (`world_from_gripper`), then its kinematic bodies' poses
+    /// (`world_from_body`; see `sim::World::current_targets`).
     pub attached_to: Option<usize>,
 }
 
 impl Collider {
-    /// `world_from_collider` given the world's handle targets.
+    /// `world_from_collider` given the world's carrier poses (handle targets, then
+    /// kinematic bodies).
     pub fn world_pose(&self, targets: &[Pose]) -> Pose {
         match self.attached_to.and_then(|h| targets.get(h)) {
             Some(gripper) => gripper * self.pose,

@@ -30,6 +30,13 @@ pub enum SolverKind {
     /// (`ribbon::objective::chain`, docs/ribbon_chain_solver.md); a loop closure's
     /// coupling of the two ends by a Woodbury step on top of the sweep.
     Chain,
+    /// Ours: a trust-region projected Newton method (TRON / LANCELOT family) on the same
+    /// O(n) chain model: the end crease |c_{n-1}| <= Δc_max held exactly (a slab, no
+    /// augmented-Lagrangian term), an l-infinity region in the unknowns' own units, a
+    /// generalized Cauchy point, undamped chain sweeps on the free set and directions
+    /// of negative curvature where they meet it (`optim::trust_region`,
+    /// docs/ribbon_chain_solver.md).
+    TrustRegion,
 }
 
 /// How a clamp weights the creases next to it.

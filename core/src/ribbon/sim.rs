@@ -166,6 +166,7 @@ fn initial_terms(
         equalities,
         multipliers,
         end_crease_multipliers: [0.0, 0.0],
+        end_crease_exact: false,
         penalty: params.solver.penalty,
         crease_bound: params.crease_bound(),
     }
@@ -244,6 +245,14 @@ impl RibbonSim {
     }
     pub fn strip(&self) -> &Strip {
         &self.strip
+    }
+    /// Forget what the step solver carries from step to step (the Newton solvers'
+    /// damping, the trust region's radius): the next step solves as a newly built
+    /// ribbon's solver would from this state. For comparing solver kinds from one state
+    /// (tests/ribbon_chain_solver.rs); a clone keeps that history instead, so that it
+    /// continues bit for bit.
+    pub fn forget_solver_history(&mut self) {
+        self.solver = StepSolver::default();
     }
     pub fn mesh(&self) -> &SurfaceMesh {
         &self.mesh
@@ -752,6 +761,7 @@ impl ObjectSim for RibbonSim {
             super::SolverKind::GaussNewton => "gauss_newton",
             super::SolverKind::Lbfgsb => "lbfgsb",
             super::SolverKind::Chain => "chain",
+            super::SolverKind::TrustRegion => "trust_region",
         }
     }
     /// One implicit-Euler step, timed as one [`Phase::Simulation`].

@@ -21,7 +21,9 @@ use super::objective::{GradientMode, Layout, Objective, RimHistory, StepTerms, W
 use super::params::{SolverKind, SolverSettings};
 use super::reconstruct::Strip;
 use crate::geometry::Pose;
-use crate::optim::{BoxProblem, Dense, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton};
+use crate::optim::{
+    BoxProblem, Dense, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton, Slab, TrustRegion,
+};
 
 /// Relative objective decrease that ends an inner solve, (f_k - f_k+1)/max(|f|, 1):
 /// the resampling operator R is piecewise linear in c (eq. 4), so the gradient jumps
@@ -64,6 +66,7 @@ pub struct StepSolver {
     pub workspace: Workspace,
     newton: ProjectedNewton<Dense>,
     chain: ProjectedNewton<ChainMatrix>,
+    trust: TrustRegion<ChainMatrix>,
     /// L-BFGS-B workspace and the dimension it was built for.
     lbfgsb: Option<(usize, Lbfgsb)>,
     z: Vec<f64>,
@@ -77,8 +80,16 @@ pub struct StepSolver {
 
 impl Clone for StepSolver {
     fn clone(&self) -> Self {
-        // Buffers only: a fresh solver behaves identically.
-        StepSolver::default()
+        // Buffers, except what the solvers carry from step to step (the Newton
+        // solvers' damping, the trust region's radius and shift): a clone steps on
+        // exactly as the original (a World copied mid-run continues bit for bit,
+        // tests/world_clone.rs).
+        StepSolver {
+            newton: self.newton.fresh_with_history(),
+            chain: self.chain.fresh_with_history(),
+            trust: self.trust.fresh_with_history(),
+            ..StepSolver::default()
+        }
     }
 }
 
@@ -249,6 +260,15 @@ impl BoxProblem for ZChain<'_, '_, '_> {
             .objective
             .chain_model(problem.workspace, &mut h.model);
     }
+    /// The trust region's units: 1 for crease differences (crease-direction units),
+    /// bending angles and the base rotation (rad); the strip's length l for the base
+    /// translation (m), which moves the far end as far as a base rotation of 1 rad.
+    fn radius_units(&self, out: &mut [f64]) {
+        out.fill(1.0);
+        if self.0.objective.layout.floating {
+            out[3..6].fill(self.0.objective.strip.length);
+        }
+    }
 }
 
 /// What one round's multiplier update (algorithm 2) gives: the new multipliers and the
@@ -310,8 +330,13 @@ fn multiplier_update(
         (terms.end_crease_multipliers[0] + mu * (bound - c_last)).min(0.0),
         (terms.end_crease_multipliers[1] + mu * (bound + c_last)).min(0.0),
     ];
-    let end_active =
-        end.iter().any(|&l| l < 0.0) || terms.end_crease_multipliers.iter().any(|&l| l < 0.0);
+    let end_active = !terms.end_crease_exact
+        && (end.iter().any(|&l| l < 0.0) || terms.end_crease_multipliers.iter().any(|&l| l < 0.0));
+    let end = if terms.end_crease_exact {
+        [0.0; 2]
+    } else {
+        end
+    };
     MultiplierUpdate {
         multipliers: updates,
         end_crease_multipliers: end,
@@ -368,9 +393,18 @@ impl StepSolver {
         let mut pg0: Option<f64> = None;
         // Adaptive penalty (ours; the paper's solver keeps the scene's fixed mu): mu
         // carries over from the last step, relaxed at its end (below).
-        let adaptive = matches!(settings.kind, SolverKind::GaussNewton | SolverKind::Chain);
+        let adaptive = matches!(
+            settings.kind,
+            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion
+        );
         if !adaptive {
             objective_terms.penalty = settings.penalty;
+        }
+        // The trust-region solver holds the end crease exactly (a slab), so it has no
+        // augmented-Lagrangian term, and no multiplier, there.
+        objective_terms.end_crease_exact = settings.kind == SolverKind::TrustRegion;
+        if objective_terms.end_crease_exact {
+            objective_terms.end_crease_multipliers = [0.0, 0.0];
         }
         let mut last_residual = f64::INFINITY;
         let mut grew = false;
@@ -484,7 +518,7 @@ impl StepSolver {
             second_order: false,
         };
         let result = match settings.kind {
-            SolverKind::GaussNewton | SolverKind::Chain => {
+            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => {
                 // relative gradient tolerance against the first round's start (the
                 // solver measures it at its first evaluation)
                 let opts = NewtonOptions {
@@ -500,7 +534,22 @@ impl StepSolver {
                     reuse_factorization: outer > 0,
                 };
                 problem.second_order = true;
-                let r = if settings.kind == SolverKind::Chain {
+                let n = objective.layout.segments;
+                let r = if settings.kind == SolverKind::TrustRegion {
+                    // |c_{n-1}| = |Σ_k z_k| <= Δc_max, held exactly
+                    let slab = (n >= 2).then(|| Slab {
+                        range: objective.layout.c(1)..objective.layout.c(n - 1) + 1,
+                        bound: objective.terms.crease_bound,
+                    });
+                    self.trust.minimize(
+                        &mut ZChain(&mut problem),
+                        &mut self.z,
+                        &self.lower,
+                        &self.upper,
+                        slab,
+                        &opts,
+                    )
+                } else if settings.kind == SolverKind::Chain {
                     self.chain.minimize(
                         &mut ZChain(&mut problem),
                         &mut self.z,

@@ -1,6 +1,6 @@
 use rayon::prelude::*;
 
-use crate::contact::{BodyInput, ContactReport, ContactStage};
+use crate::contact::{BodyInput, Collider, ContactError, ContactReport, ContactStage};
 use crate::geometry::{Point3, Pose, SurfaceMesh};
 
 use super::handle::{HandleSpec, ScriptedChange};
@@ -37,6 +37,8 @@ struct ContactState {
     previous: Vec<Vec<Point3>>,
     predicted: Vec<Vec<Point3>>,
     corrected: Vec<Vec<Point3>>,
+    /// The stage's first colliders, the scene's; kinematic colliders follow them.
+    scene_colliders: usize,
 }
 
 /// All objects of a scene, their handles and the clock.
@@ -55,8 +57,12 @@ pub struct World {
     time: f64,
     steps: u64,
     contact: Option<ContactState>,
-    /// Handle targets at the end of the last step (the start of the next one).
+    /// Carrier poses at the end of the last step (the start of the next one): the
+    /// handles' targets, then the kinematic bodies' poses.
     pub(super) last_targets: Vec<Pose>,
+    /// The kinematic bodies' poses at the end of the next step
+    /// ([`World::set_kinematic_pose`]).
+    kinematic_next: Vec<Pose>,
 }
 
 impl World {
@@ -80,6 +86,7 @@ impl World {
             steps: 0,
             contact: None,
             last_targets,
+            kinematic_next: Vec::new(),
         }
     }
 
@@ -97,6 +104,7 @@ impl World {
         );
         let empty = vec![Vec::new(); objects.len()];
         self.contact = Some(ContactState {
+            scene_colliders: stage.colliders().len(),
             stage,
             objects,
             previous: empty.clone(),
@@ -106,12 +114,75 @@ impl World {
         self
     }
 
+    /// Replace the kinematic colliders: rigid bodies the caller moves by setting their
+    /// poses before each step (a robot's links following TF). `poses[b]` is body b's
+    /// `world_from_body` now (bodies start at rest); `colliders[i].attached_to =
+    /// Some(b)` puts collider i on body b, its `pose` relative to the body. The
+    /// contact stage is rebuilt with the scene's colliders first, then these (the
+    /// world's carrier index of body b is `handles().len() + b`). Errors: no contact
+    /// stage, a collider on no body or a body out of range, a pose that is not finite,
+    /// or a stage that cannot be built (the world is then unchanged).
+    pub fn set_kinematic_colliders(
+        &mut self,
+        colliders: Vec<Collider>,
+        poses: Vec<Pose>,
+    ) -> Result<(), ContactError> {
+        let handles = self.handles.len();
+        let contact = self.contact.as_mut().ok_or_else(|| {
+            ContactError::Invalid("kinematic colliders need a contact stage".into())
+        })?;
+        if let Some(b) = poses.iter().position(|p| !pose_is_finite(p)) {
+            return Err(ContactError::Invalid(format!(
+                "kinematic body {b}: its pose is not finite"
+            )));
+        }
+        let mut all = contact.stage.colliders()[..contact.scene_colliders].to_vec();
+        for (i, mut c) in colliders.into_iter().enumerate() {
+            match c.attached_to {
+                Some(b) if b < poses.len() => c.attached_to = Some(handles + b),
+                _ => {
+                    return Err(ContactError::Invalid(format!(
+                        "kinematic collider {i}: on body {:?}, the world has {} bodies",
+                        c.attached_to,
+                        poses.len()
+                    )))
+                }
+            }
+            all.push(c);
+        }
+        contact.stage = contact.stage.with_colliders(all)?;
+        self.last_targets.truncate(handles);
+        self.last_targets.extend_from_slice(&poses);
+        self.kinematic_next = poses;
+        Ok(())
+    }
+
+    /// Kinematic body `body`'s pose (`world_from_body`) at the end of the next step:
+    /// over that step its colliders move there from where they are, and friction takes
+    /// their velocity from the two poses. A pose that is not finite is ignored (the
+    /// body stays), as is a body out of range.
+    pub fn set_kinematic_pose(&mut self, body: usize, pose: Pose) {
+        if let Some(next) = self.kinematic_next.get_mut(body) {
+            if pose_is_finite(&pose) {
+                *next = pose;
+            }
+        }
+    }
+
+    /// The kinematic bodies' poses (`world_from_body`) at the end of the last step.
+    pub fn kinematic_poses(&self) -> &[Pose] {
+        &self.last_targets[self.handles.len()..]
+    }
+
     /// The contact stage, if the scene has one.
     pub fn contact_stage(&self) -> Option<&ContactStage> {
         self.contact.as_ref().map(|c| &c.stage)
     }
 
-    /// Handle targets (`world_from_gripper`) at the end of the last step.
+    /// Carrier poses at the end of the last step: the handle targets
+    /// (`world_from_gripper`, one per handle, in order), then the kinematic bodies'
+    /// poses ([`World::set_kinematic_colliders`]). Colliders index it
+    /// ([`Collider::world_pose`]).
     pub fn current_targets(&self) -> &[Pose] {
         &self.last_targets
     }
@@ -195,6 +266,10 @@ impl World {
                 }
             })
             .collect();
+        let n_handles = self.handles.len();
+        // the carriers at the end of the step: the handles, then the kinematic bodies
+        let mut resolved = resolved;
+        resolved.extend_from_slice(&self.kinematic_next);
         let dt = self.dt;
         let handles = &self.handles;
         // Every object's optimization in parallel: each is independent and sequential
@@ -209,7 +284,7 @@ impl World {
                     time: t_next,
                     index,
                     handles,
-                    targets: &resolved,
+                    targets: &resolved[..n_handles],
                     clock,
                 })
             })
@@ -261,10 +336,13 @@ impl World {
         self.script_next.iter_mut().for_each(|k| *k = 0);
         self.time = 0.0;
         self.steps = 0;
+        // the kinematic bodies stay where they are (a robot is not reset with the world)
+        let kinematic = self.last_targets.split_off(self.handles.len());
         self.last_targets = self
             .handles
             .iter()
             .map(|h| h.trajectory.pose_at(0.0))
+            .chain(kinematic)
             .collect();
     }
 }

@@ -15,7 +15,7 @@ use crate::ros::reply::Flushed;
 use crate::ros::services::Services;
 use crate::session::names::NodeNames;
 use crate::session::OutputTable;
-use crate::wire::msgs::PoseStamped;
+use crate::wire::msgs::{PoseStamped, StringMsg};
 use crate::wire::qos::Qos;
 
 /// Poll tokens: handle subscriptions use their handle index, then these.
@@ -34,6 +34,8 @@ pub(super) struct Endpoints {
     /// TF in (a scene with handles), an external clock.
     pub(super) tf_in: Option<TfIn>,
     pub(super) clock_in: Option<ClockIn>,
+    /// The robot description (`robot_colliders:`; reliable, transient local).
+    pub(super) robot_description: Option<Subscription<StringMsg>>,
     pub(super) services: Services,
     node: Option<Node>,
     spinner: Option<std::thread::JoinHandle<()>>,
@@ -98,6 +100,26 @@ fn handle_subscriptions(
     Ok(subs)
 }
 
+/// A subscription to a latched topic (reliable, transient local, keep last 1: a robot
+/// description published before the node started still arrives).
+fn latched_subscription(
+    node: &mut Node,
+    topic: &str,
+    poll: &Poll,
+    token: Token,
+) -> Result<Subscription<StringMsg>, NodeError> {
+    let name = Name::parse(topic).map_err(dds("topic name"))?;
+    let t = node
+        .create_topic(&name, topic_type::<StringMsg>(), &qos(Qos::LATCHED))
+        .map_err(dds("robot description topic"))?;
+    let mut sub = node
+        .create_subscription::<StringMsg>(&t, Some(qos(Qos::LATCHED)))
+        .map_err(dds("robot description subscription"))?;
+    poll.registry()
+        .register(&mut sub, token, Interest::READABLE)?;
+    Ok(sub)
+}
+
 impl Endpoints {
     /// Send the held service replies whose clients can receive them (see `reply`).
     pub(super) fn flush_replies(&mut self, now: Instant) -> Flushed {
@@ -124,8 +146,9 @@ impl Endpoints {
         let waker = Arc::new(Waker::new(poll.registry(), WAKE)?);
         let subs = handle_subscriptions(&mut node, names, tf_handles, &poll)?;
         // TF in for every scene with handles (TF-driven handles, and poses in another
-        // frame of the tree) or with a camera carried by a TF frame
-        let tf_in = (!names.handles.is_empty() || tf_cameras)
+        // frame of the tree), a robot's links, or a camera carried by a TF frame
+        let robot = !names.robot_description.is_empty();
+        let tf_in = (!names.handles.is_empty() || robot || tf_cameras)
             .then(|| {
                 let lag = Duration::from_secs_f64(tf_max_lag);
                 TfIn::new(
@@ -140,6 +163,12 @@ impl Endpoints {
             .transpose()?;
         let clock_in = use_sim_time
             .then(|| ClockIn::new(&mut node, &names.clock, &poll, GRAPH_TOKEN_BASE + 2))
+            .transpose()?;
+        let robot_description = robot
+            .then(|| {
+                let token = Token(GRAPH_TOKEN_BASE + 3);
+                latched_subscription(&mut node, &names.robot_description, &poll, token)
+            })
             .transpose()?;
         let pubs = outputs
             .rows
@@ -166,6 +195,7 @@ impl Endpoints {
             pubs,
             tf_in,
             clock_in,
+            robot_description,
             services,
             node: Some(node),
             spinner: Some(spinner),
@@ -184,6 +214,7 @@ impl Drop for Endpoints {
         self.pubs.clear();
         self.tf_in = None;
         self.clock_in = None;
+        self.robot_description = None;
         drop(self.node.take());
         if let Some(s) = self.spinner.take() {
             let _ = s.join();

@@ -188,6 +188,13 @@ impl Clone for ContactStage {
 }
 
 impl ContactStage {
+    /// The same stage (bodies, settings) with other colliders: a robot's links that
+    /// arrived or changed. Builds the stage anew (meshes, leaves, factorizations).
+    pub fn with_colliders(&self, colliders: Vec<Collider>) -> Result<Self, super::ContactError> {
+        let topologies = self.bodies.iter().map(|b| b.topology.clone()).collect();
+        ContactStage::new(self.settings, topologies, colliders)
+    }
+
     pub fn settings(&self) -> &ContactSettings {
         &self.settings
     }
@@ -307,8 +314,8 @@ impl ContactStage {
     }
 
     /// Resolve one step. `inputs[i]` are body i's meshes; `targets0` / `targets1` the
-    /// handle targets at the start and the end of the step (they carry attached
-    /// colliders). Writes the collision-free positions into `corrected[i]` (mesh-vertex
+    /// carrier poses (handle targets, then kinematic bodies) at the start and the end of
+    /// the step (they carry attached colliders). Writes the collision-free positions into `corrected[i]` (mesh-vertex
     /// order).
     pub fn resolve(
         &mut self,

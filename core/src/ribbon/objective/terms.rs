@@ -85,6 +85,9 @@ pub struct StepTerms {
     pub multipliers: Vec<Vec<f64>>,
     /// Multipliers (<= 0) of the two end-crease inequalities Δc_max -+ c_{n-1} >= 0.
     pub end_crease_multipliers: [f64; 2],
+    /// Whether the solver holds |c_{n-1}| <= Δc_max exactly (the trust-region solver's
+    /// slab): then the end crease has no augmented-Lagrangian term.
+    pub end_crease_exact: bool,
     /// Augmented-Lagrangian penalty μ.
     pub penalty: f64,
     /// Δc_max of eq. (1).
@@ -429,6 +432,9 @@ impl Objective<'_> {
     /// Lagrangian term mu/2 min(C + λ/μ, 0)^2 is active.
     pub(super) fn end_crease_shifts(&self, c_last: f64) -> [(f64, f64); 2] {
         let t = self.terms;
+        if t.end_crease_exact {
+            return [(-1.0, 0.0), (1.0, 0.0)];
+        }
         [
             (-1.0, t.end_crease_multipliers[0]),
             (1.0, t.end_crease_multipliers[1]),

@@ -79,6 +79,7 @@ pub(super) fn problem(
         equalities,
         multipliers,
         end_crease_multipliers: [-0.3, 0.0],
+        end_crease_exact: false,
         penalty: 50.0,
         crease_bound: 0.95 * 2.0 / (0.08 * n as f64),
     };
@@ -548,4 +549,85 @@ fn chain_solve_is_the_dense_solve() {
             "only {compared} positive definite cases (floating {floating}, {closure:?})"
         );
     }
+}
+
+#[test]
+fn chain_product_and_negative_curvature_are_the_dense_ones() {
+    // H v of the chain model (two sweeps, O(n)) is the dense H_z v, and where the
+    // factorization fails, the direction it returns has exactly the curvature it
+    // reports, <= 0, under the same shift: open ribbons and both loop closures, fixed
+    // and floating base
+    let closures = [
+        None,
+        Some(LoopKind::Orientable),
+        Some(LoopKind::NonOrientable),
+    ];
+    let mut directions = 0;
+    for (i, (floating, closure)) in [false, true]
+        .into_iter()
+        .flat_map(|f| closures.map(|c| (f, c)))
+        .enumerate()
+    {
+        let n = 9 + i % 2;
+        let (strip, mut terms, history, mut q, base) =
+            problem(n, floating, KineticModel::Full, 50 + i as u64);
+        with_closure(&mut terms, closure, 51);
+        if floating {
+            q[0..3].copy_from_slice(&[0.3, -0.1, 0.2]);
+        }
+        let obj = Objective::new(strip, floating, &terms, &history, base);
+        let mut ws = Workspace::default();
+        let mut hq = DMatrix::zeros(q.len(), q.len());
+        obj.evaluate(&q, &mut ws, None, Some(&mut hq));
+        let a = substitution(&obj.layout);
+        let hz = a.transpose() * &hq * &a;
+        let mut model = chain::ChainModel::default();
+        obj.chain_model(&mut ws, &mut model);
+        let nq = q.len();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(17 + i as u64);
+        for _ in 0..3 {
+            let v: Vec<f64> = (0..nq).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let expected = &hz * nalgebra::DVector::from_column_slice(&v);
+            let mut out = vec![f64::NAN; nq];
+            model.multiply(&v, &mut out);
+            let scale = expected.amax();
+            for j in 0..nq {
+                // the two sums differ in order only: round-off of a few eps |H| |v|
+                assert!(
+                    (out[j] - expected[j]).abs() <= 1e-12 * scale.max(hz.amax()),
+                    "(H v)[{j}]: chain {} vs dense {} (floating {floating}, {closure:?})",
+                    out[j],
+                    expected[j]
+                );
+            }
+        }
+        // a shift that makes the matrix indefinite: minus a fraction of its largest
+        // diagonal entry, with some unknowns held
+        let held = [obj.layout.psi(2), obj.layout.c(4)];
+        let free: Vec<bool> = (0..nq).map(|j| !held.contains(&j)).collect();
+        for fraction in [0.01, 0.1, 0.5] {
+            let shift: Vec<f64> = (0..nq).map(|_| -fraction * hz.amax()).collect();
+            if model.factor(&free, &shift) {
+                continue;
+            }
+            let mut d = vec![f64::NAN; nq];
+            let Some(curvature) = model.negative_curvature(&mut d) else {
+                assert!(closure.is_some(), "no direction from an open chain's sweep");
+                continue;
+            };
+            directions += 1;
+            assert!(curvature <= 0.0, "{curvature}");
+            for &j in &held {
+                assert_eq!(d[j], 0.0, "a held unknown moves");
+            }
+            let dv = nalgebra::DVector::from_column_slice(&d);
+            let dense =
+                dv.dot(&(&hz * &dv)) + d.iter().zip(&shift).map(|(x, s)| s * x * x).sum::<f64>();
+            assert!(
+                (dense - curvature).abs() <= 1e-9 * hz.amax() * dv.norm_squared(),
+                "d^T (H + S) d: dense {dense} vs sweep {curvature} (floating {floating}, {closure:?})"
+            );
+        }
+    }
+    assert!(directions >= 6, "only {directions} directions compared");
 }
