@@ -228,6 +228,7 @@ fn run_command(a: RunArgs) -> anyhow::Result<()> {
                 .map_err(|e: String| anyhow::anyhow!("--record-compression: {e}"))?;
             let options = BagOptions {
                 compression,
+                record_cameras: a.record_cameras,
                 ..BagOptions::default()
             };
             Some(RunRecorder::create(&loaded, dir, options)?)

@@ -7,7 +7,7 @@ use std::io::{Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use developable_sim::record::bag::{BagOptions, BagWriter};
-use developable_sim::record::read::{mcap_files, reindex, scan, BagEvent, BagMessage, McapStream};
+use developable_sim::record::read::{reindex, scan, BagMessage};
 use developable_sim::record::recorder::RunRecorder;
 use developable_sim::record::replay::{replay, ReplayOptions, ReplayReport, TopicReport};
 use developable_sim::wire::cdr;
@@ -16,7 +16,7 @@ use developable_sim::wire::qos::Qos;
 use developable_sim::{runner, scene};
 
 mod common;
-use common::{metadata, scratch, TORSION};
+use common::{metadata, rewrite, scratch, TORSION};
 
 /// Record `duration` s of the torsion scene headless into `dir/bag`.
 fn record(dir: &Path, duration: f64, options: BagOptions) -> PathBuf {
@@ -243,45 +243,6 @@ fn bags_are_never_written_over_and_unwritable_folders_fail_clearly() {
         .to_string();
     assert!(e.contains("cannot create it"), "{e}");
     assert!(e.contains(&under_a_file.display().to_string()), "{e}");
-}
-
-/// Copy the bag `src` into `dst` message by message through the project's reader and
-/// writer; `edit` sees each message and returns its new payload, or None to drop it.
-fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&BagMessage) -> Option<Vec<u8>>) {
-    let mut out = BagWriter::create(dst, BagOptions::default()).unwrap();
-    let mut ids = std::collections::BTreeMap::new();
-    for file in mcap_files(src).unwrap() {
-        let mut stream = McapStream::open(&file).unwrap();
-        while let Some(event) = stream.next() {
-            match event.unwrap() {
-                BagEvent::Metadata { name, values } => out.write_metadata(&name, values).unwrap(),
-                BagEvent::Message(m) => {
-                    // the same type, hash and schema as the source's channel
-                    let ch = stream.channel(m.channel).unwrap().clone();
-                    let id = *ids.entry(m.topic.clone()).or_insert_with(|| {
-                        let hash = ch
-                            .metadata
-                            .get("topic_type_hash")
-                            .cloned()
-                            .unwrap_or_default();
-                        let schema = String::from_utf8(ch.schema.clone()).unwrap();
-                        out.add_topic_of(
-                            &m.topic,
-                            (&ch.type_name, &hash, &|| schema.clone()),
-                            Qos::DATA,
-                        )
-                        .unwrap()
-                    });
-                    if let Some(data) = edit(&m) {
-                        out.write_raw(id, m.log_time, m.publish_time, &data)
-                            .unwrap();
-                    }
-                }
-            }
-        }
-        assert!(stream.truncated.is_none());
-    }
-    out.close().unwrap();
 }
 
 /// `developable_sim replay BAG` exits with `code` and says `verdict` on stdout.

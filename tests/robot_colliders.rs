@@ -181,6 +181,7 @@ fn recorded_session(bag: &std::path::Path) -> (Session, SessionRecorder) {
     let run = RunOutputs {
         own_clock: true,
         recording: true,
+        record_cameras: false,
     };
     let table = OutputTable::for_scene(&scene, &names, run).unwrap();
     assert!(table.rows.iter().any(|r| r.kind.name == "colliders"));

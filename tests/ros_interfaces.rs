@@ -194,6 +194,34 @@ fn every_message_struct_matches_its_msg_definition() {
         &mut seen,
     );
     root(
+        to_value(&Image {
+            data: vec![1],
+            ..Default::default()
+        })
+        .unwrap(),
+        Image::TYPE,
+        &mut seen,
+    );
+    root(
+        to_value(&CameraInfo {
+            d: vec![0.0],
+            ..Default::default()
+        })
+        .unwrap(),
+        CameraInfo::TYPE,
+        &mut seen,
+    );
+    root(
+        to_value(&PointCloud2 {
+            fields: vec![PointField::default()],
+            data: vec![1],
+            ..Default::default()
+        })
+        .unwrap(),
+        PointCloud2::TYPE,
+        &mut seen,
+    );
+    root(
         to_value(&StringMsg {
             data: "<robot/>".into(),
         })

@@ -237,6 +237,7 @@ fn the_node_status_counts_unconverged_steps() {
     let run = RunOutputs {
         own_clock: true,
         recording: false,
+        record_cameras: false,
     };
     let table = OutputTable::for_scene(&s, &names, run).unwrap();
     let status_row = table.find("status", developable_sim::session::Scope::Object(0));

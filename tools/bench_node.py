@@ -13,6 +13,12 @@ benchmark, not a test: it prints numbers, it does not assert them).
 3. lockstep: `--lockstep gripper`, one pose at a time: the same two figures.
 4. stream: 1 kHz poses on each of two handles for --stream-seconds (default 60):
    per-10-s windows of resident memory and latency (growth check).
+5. camera: tick start -> markers of the default scene with its 15 Hz camera against the
+   same scene with `--set cameras=[]`, in --camera-pairs pairs of --camera-seconds runs
+   (the two in turn, the ratio pair by pair), without and then with a subscriber to the
+   camera's images and cloud (which makes DDS send 7 MB a frame; the subscriber reads
+   the headers only, so it costs little CPU of its own); the camera's frames drawn,
+   skipped and its drawing time.
 
 The node binary: $DEVELOPABLE_SIM_BIN or target/release/developable_sim.
 """
@@ -167,12 +173,88 @@ def bench_stream(work, seconds):
     return s
 
 
+def camera_subscriber(domain):
+    """A participant reading the camera's images and cloud (headers only), with a
+    socket receive buffer for 4.9 MB clouds; returns (ros, readers)."""
+    buf = '<CycloneDDS><Domain><Internal><SocketReceiveBufferSize min="4MB"/></Internal></Domain></CycloneDDS>'
+    uri = os.environ.get("CYCLONEDDS_URI")
+    os.environ["CYCLONEDDS_URI"] = f"{uri},{buf}" if uri else buf
+    try:
+        ros = Ros(domain)
+    finally:
+        if uri is None:
+            del os.environ["CYCLONEDDS_URI"]
+        else:
+            os.environ["CYCLONEDDS_URI"] = uri
+    from conftest import _cdr1
+    from cyclonedds.core import Policy
+
+    qos = _cdr1(Policy.Reliability.BestEffort, Policy.History.KeepLast(1), Policy.Durability.Volatile)
+    readers = [
+        ros.reader("/camera/color/image_raw", rt.ImageHead, qos),
+        ros.reader("/camera/aligned_depth_to_color/image_raw", rt.ImageHead, qos),
+        ros.reader("/camera/depth/color/points", rt.PointCloud2Head, qos),
+    ]
+    return ros, readers
+
+
+def camera_run(work, seconds, camera, subscribe):
+    d = random.randint(1, 200)
+    args = [str(GRIPPER)] + ([] if camera else ["--set", "cameras=[]"])
+    node = Node(d, args, work)
+    ros, readers, got = None, [], 0
+    if subscribe:
+        ros, readers = camera_subscriber(d)
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        for r in readers:
+            got += sum(1 for x in r.take(N=8) if hasattr(x, "header"))
+        time.sleep(0.01)
+    s = node.finish()
+    if ros is not None:
+        ros.close()
+    s["_received"] = got
+    return s
+
+
+def bench_camera(work, seconds, pairs):
+    for subscribe in (False, True):
+        print(f"[camera] {pairs} pairs of {seconds} s runs, camera on / off, "
+              f"{'a subscriber to the images and cloud' if subscribe else 'no subscriber'}; "
+              f"load average {os.getloadavg()[0]:.2f}")
+        medians, p99s = [], []
+        for k in range(pairs):
+            runs = {}
+            for camera in ((True, False) if k % 2 == 0 else (False, True)):
+                runs[camera] = camera_run(work, seconds, camera, subscribe)
+            on, off = runs[True], runs[False]
+            m = on["tick_to_markers"]["median_ms"] / off["tick_to_markers"]["median_ms"]
+            p = on["tick_to_markers"]["p99_ms"] / off["tick_to_markers"]["p99_ms"]
+            medians.append(m)
+            p99s.append(p)
+            print(
+                f"  pair {k + 1}: tick -> markers median {on['tick_to_markers']['median_ms']:.3f} / "
+                f"{off['tick_to_markers']['median_ms']:.3f} ms (x{m:.3f}), p99 "
+                f"{on['tick_to_markers']['p99_ms']:.3f} / {off['tick_to_markers']['p99_ms']:.3f} ms "
+                f"(x{p:.3f}); overruns {on['overrun_ticks']} / {off['overrun_ticks']}; camera "
+                f"{on['camera_frames']} drawn, {on['camera_frames_skipped']} skipped, drawing "
+                f"{fmt(on['camera_draw'])}; received {on['_received']}"
+            )
+        print(
+            f"  ratio camera on / off, median of the pairs: tick -> markers median "
+            f"x{statistics.median(medians):.3f}, p99 x{statistics.median(p99s):.3f}; "
+            f"load average {os.getloadavg()[0]:.2f}"
+        )
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("--only", choices=["tick", "realtime", "lockstep", "stream"])
+    ap.add_argument("--only", choices=["tick", "realtime", "lockstep", "stream", "camera"])
     ap.add_argument("--tick-seconds", type=float, default=20.0)
     ap.add_argument("--poses", type=int, default=300)
     ap.add_argument("--stream-seconds", type=float, default=60.0)
+    ap.add_argument("--camera-seconds", type=float, default=10.0)
+    ap.add_argument("--camera-pairs", type=int, default=3)
     a = ap.parse_args()
     with tempfile.TemporaryDirectory() as work:
         if a.only in (None, "tick"):
@@ -183,6 +265,8 @@ def main():
             bench_input(work, a.poses, lockstep=True)
         if a.only in (None, "stream"):
             bench_stream(work, a.stream_seconds)
+        if a.only in (None, "camera"):
+            bench_camera(work, a.camera_seconds, a.camera_pairs)
 
 
 if __name__ == "__main__":

@@ -1,8 +1,8 @@
 //! The node's start-up banner: its name, domain, scene, pacing, and every topic and
 //! service it reads and writes, one line each (the caller prints them on stderr).
 
-use crate::ros::node::{Lockstep, NodeConfig, Pacing};
-use crate::session::{OutputTable, RunOutputs};
+use crate::ros::node::{run_outputs, Lockstep, NodeConfig, Pacing};
+use crate::session::OutputTable;
 
 /// The banner's lines, prefixed `[developable_sim]`.
 pub fn banner(config: &NodeConfig) -> Vec<String> {
@@ -29,10 +29,7 @@ pub fn banner(config: &NodeConfig) -> Vec<String> {
         ));
     }
     // the outputs table as the node builds it (`SimNode::new`)
-    let run = RunOutputs {
-        own_clock: !config.use_sim_time,
-        recording: config.record.is_some(),
-    };
+    let run = run_outputs(config);
     if let Ok(table) = OutputTable::for_scene(scene, names, run) {
         for row in table.rows.iter().filter(|r| r.want.published) {
             lines.push(format!(

@@ -218,7 +218,8 @@ pub fn lockstep(
 }
 
 /// The bag folder (`--record [DIR]` > `record` > none) with its options
-/// (`record_compression`, `record_flush_period` in s).
+/// (`record_compression`, `record_flush_period` in s, `--record-cameras` or
+/// `record_cameras`).
 pub fn record(args: &NodeArgs, p: &Params) -> Result<Option<(PathBuf, BagOptions)>, ParamsError> {
     let compression: Compression = p
         .string("record_compression")
@@ -235,6 +236,7 @@ pub fn record(args: &NodeArgs, p: &Params) -> Result<Option<(PathBuf, BagOptions
         let options = BagOptions {
             compression,
             flush_period: Duration::from_secs_f64(flush),
+            record_cameras: args.record_cameras || p.bool("record_cameras").unwrap_or(false),
             ..BagOptions::default()
         };
         (dir, options)

@@ -20,8 +20,10 @@ use serde::{Deserialize, Serialize};
 use super::bag::{BagOptions, BagWriter, TopicId};
 use super::metadata::Qos;
 use super::RecordError;
+use crate::camera::Renderer;
 use crate::runner::StepObserver;
 use crate::scene::Scene;
+use crate::session::camera::{draw_frame, fixed_pose, renderer};
 use crate::session::command::Names;
 use crate::session::input::InputPolicy;
 use crate::session::names::NodeNames;
@@ -46,7 +48,7 @@ pub const FORMAT: u32 = 2;
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RecordedOutput {
     pub kind: String,
-    /// `global`, `object` or `handle`.
+    /// `global`, `object`, `handle`, `object_handle` or `camera`.
     pub scope: String,
     /// The object's or handle's index (0 for global; the object's for object_handle).
     #[serde(default)]
@@ -64,6 +66,7 @@ impl RecordedOutput {
             Scope::Object(o) => ("object", o, 0),
             Scope::Handle(h) => ("handle", h, 0),
             Scope::ObjectHandle(o, h) => ("object_handle", o, h),
+            Scope::Camera(c) => ("camera", c, 0),
         };
         RecordedOutput {
             kind: row.kind.name.to_string(),
@@ -83,6 +86,7 @@ impl RecordedOutput {
             "object" => Scope::Object(self.index),
             "handle" => Scope::Handle(self.index),
             "object_handle" => Scope::ObjectHandle(self.index, self.handle),
+            "camera" => Scope::Camera(self.index),
             s => return Err(format!("unknown scope `{s}` of output `{}`", self.kind)),
         };
         Ok(OutputRow {
@@ -235,6 +239,7 @@ pub struct SessionRecorder {
     /// The scene's handle and object names (commands name them).
     handle_names: Vec<String>,
     object_names: Vec<String>,
+    camera_names: Vec<String>,
     /// Per row of the session's outputs table: its bag topic (None: not recorded).
     outputs: Vec<Option<TopicId>>,
     last_ns: u64,
@@ -293,6 +298,12 @@ impl SessionRecorder {
                 .map(|h| h.name.clone())
                 .collect(),
             object_names: session.scene.world.object_names().to_vec(),
+            camera_names: session
+                .scene
+                .cameras
+                .iter()
+                .map(|c| c.name.clone())
+                .collect(),
             outputs,
             last_ns: 0,
         })
@@ -362,6 +373,7 @@ impl SessionRecorder {
         Names {
             handles: &self.handle_names,
             objects: &self.object_names,
+            cameras: &self.camera_names,
         }
     }
 
@@ -446,6 +458,8 @@ pub struct RunRecorder {
     recorder: Option<SessionRecorder>,
     /// Simulated time of the state the next step starts from.
     stamp: Time,
+    /// Per camera: its renderer, made at its first frame.
+    renderers: Vec<Option<Renderer>>,
 }
 
 impl RunRecorder {
@@ -469,17 +483,56 @@ impl RunRecorder {
         let run = RunOutputs {
             own_clock: true,
             recording: true,
+            record_cameras: options.record_cameras,
         };
         let table =
             OutputTable::for_scene(scene, &names, run).map_err(|e| bag_error(e.to_string()))?;
         let mut session = Session::new(scene.clone(), policy, names.handles.clone(), table);
         let mut recorder = SessionRecorder::create(dir, options, &session, &names)?;
         recorder.record_frame(&session.frame(Content::All)?)?;
-        Ok(RunRecorder {
+        let mut run = RunRecorder {
             stamp: session.stamp(),
+            renderers: vec![None; scene.cameras.len()],
             session,
             recorder: Some(recorder),
-        })
+        };
+        run.capture_cameras(scene)?;
+        Ok(run)
+    }
+
+    /// Capture, draw (on this thread's rayon pool) and record the frame of every camera
+    /// due at the state of `scene`, as the node does when its cameras keep up. A camera
+    /// carried by a TF frame has no TF in a headless run: its ticks are skipped (and
+    /// counted in the statuses).
+    fn capture_cameras(&mut self, scene: &Scene) -> Result<(), RecordError> {
+        for (c, cam) in scene.cameras.iter().enumerate() {
+            let Some(recorder) = self.recorder.as_mut() else {
+                return Ok(());
+            };
+            let Some(pose) = fixed_pose(cam) else {
+                continue;
+            };
+            if self.session.cameras.due(c).is_none() {
+                continue;
+            }
+            let command = Command::Capture {
+                camera: c,
+                world_from_optical: pose,
+            };
+            recorder.record_command(&command, self.stamp)?;
+            self.session.capture_of(scene, c, &pose);
+            let Some(capture) = self.session.cameras.take(c) else {
+                continue;
+            };
+            let renderer = self.renderers[c].get_or_insert_with(|| renderer(scene, cam));
+            let rows = &self.session.table.rows;
+            let frame = draw_frame(renderer, (cam, scene.source.seed), rows, &capture)?;
+            recorder.record_frame(&frame)?;
+            if let Some(s) = capture.snapshot {
+                self.session.cameras.recycle(s);
+            }
+        }
+        Ok(())
     }
 
     /// Finish the bag; returns the number of messages recorded.
@@ -502,6 +555,7 @@ impl StepObserver for RunRecorder {
         // the runner's scene, not a copy: cloning the world each step cost a deep copy
         // of every object (meshes, histories, the contact stage)
         let before = std::mem::replace(&mut self.stamp, Time::from_secs(report.time));
+        self.session.note_state_of(scene);
         let frame = self
             .session
             .frame_of(scene, Some(report), step_ms * 1e-3, Content::All)?;
@@ -509,6 +563,6 @@ impl StepObserver for RunRecorder {
             r.record_command(&Command::Step, before)?;
             r.record_frame(&frame)?;
         }
-        Ok(())
+        self.capture_cameras(scene)
     }
 }

@@ -19,6 +19,8 @@ use serde::Serialize;
 use super::read::{mcap_files, BagEvent, BagMessage, McapStream, REINDEX_LIBRARY_SUFFIX};
 use super::recorder::{RecordedOutput, SessionInfo, SESSION_RECORD};
 use super::RecordError;
+use crate::camera::Renderer;
+use crate::session::camera::{draw_frame, renderer};
 use crate::session::command::Names;
 use crate::session::input::InputPolicy;
 use crate::session::outputs::OutputRow;
@@ -197,6 +199,8 @@ struct Replayed {
     /// Recorded under an external clock and no time origin set yet (see
     /// `SessionInfo::waits_for_clock`).
     waiting_for_clock: bool,
+    /// Per camera: the frames drawn again (see [`CameraReplay`]).
+    cameras: Vec<CameraReplay>,
 }
 
 impl Replayed {
@@ -214,6 +218,7 @@ impl Replayed {
         let frame = session
             .frame(Content::All)
             .map_err(|e| bag_error(dir, e.to_string()))?;
+        let session_cameras = session.scene.cameras.len();
         Ok(Replayed {
             session,
             routes,
@@ -223,6 +228,7 @@ impl Replayed {
             per_topic: BTreeMap::new(),
             seen: std::collections::BTreeSet::new(),
             waiting_for_clock: info.waits_for_clock,
+            cameras: vec![CameraReplay::default(); session_cameras],
         })
     }
 
@@ -257,9 +263,13 @@ impl Replayed {
                 let msg: SimCommand = decode(dir, m)?;
                 let world = &self.session.scene.world;
                 let handles: Vec<String> = world.handles().iter().map(|h| h.name.clone()).collect();
+                let cameras: Vec<String> = (self.session.scene.cameras.iter())
+                    .map(|c| c.name.clone())
+                    .collect();
                 let names = Names {
                     handles: &handles,
                     objects: world.object_names(),
+                    cameras: &cameras,
                 };
                 Command::from_msg(&msg, &names)
                     .map_err(|e| bag_error(dir, format!("{}: {e}", m.topic)))?
@@ -389,6 +399,9 @@ impl Replayed {
         _report: &mut ReplayReport,
     ) -> Result<(), RecordError> {
         let kind = self.session.table.rows[row].kind;
+        if let Scope::Camera(c) = self.session.table.rows[row].scope {
+            return self.camera_output(dir, m, row, c);
+        }
         let step = self.frame_step;
         let computed = self.frame.messages.get(row).cloned().flatten();
         let entry = topic_entry(&mut self.per_topic, &m.topic, &m.type_name);
@@ -420,14 +433,132 @@ impl Replayed {
         Ok(())
     }
 
+    /// Compare the recorded output `m` (row `row` of camera `camera`) with the replay's
+    /// frame: the current one, or the next captured frame drawn again when this row of
+    /// the current one was seen already (a frame's messages are recorded together).
+    fn camera_output(
+        &mut self,
+        dir: &Path,
+        m: &BagMessage,
+        row: usize,
+        camera: usize,
+    ) -> Result<(), RecordError> {
+        let next = match &self.cameras[camera].current {
+            Some(f) => f.seen.contains(&row),
+            None => true,
+        };
+        if next {
+            self.count_missing_camera(camera);
+            self.cameras[camera].current = self.draw_next(camera)?;
+        }
+        let kind = self.session.table.rows[row].kind;
+        let entry = topic_entry(&mut self.per_topic, &m.topic, &m.type_name);
+        entry.compared += 1;
+        let Some(current) = self.cameras[camera].current.as_mut() else {
+            entry.differing += 1;
+            entry
+                .structural
+                .get_or_insert_with(|| "recorded, no frame captured by the replay".into());
+            if entry.first_difference.is_empty() {
+                entry.first_difference = "recorded, not captured by the replay".into();
+            }
+            return Ok(());
+        };
+        current.seen.insert(row);
+        let step = current.step;
+        let Some(computed) = current.frame.messages.get(row).cloned().flatten() else {
+            entry.differing += 1;
+            entry.structural.get_or_insert_with(|| {
+                format!("step {step}: recorded but not produced by the replay")
+            });
+            return Ok(());
+        };
+        if computed[..] == m.data[..] {
+            return Ok(());
+        }
+        let value = |bytes: &[u8]| kind.producer.value(bytes).map_err(|e| bag_error(dir, e));
+        tally(entry, step, &value(&m.data)?, &value(&computed)?);
+        Ok(())
+    }
+
+    /// The next frame camera `camera` captured, drawn again (when a recorded row carries
+    /// pixels) and encoded; None when the replay captured no more.
+    fn draw_next(&mut self, camera: usize) -> Result<Option<CameraFrame>, RecordError> {
+        let Some(capture) = self.session.cameras.take(camera) else {
+            return Ok(None);
+        };
+        let scene = &self.session.scene;
+        let cam = &scene.cameras[camera];
+        let r = self.cameras[camera]
+            .renderer
+            .get_or_insert_with(|| renderer(scene, cam));
+        let rows = &self.session.table.rows;
+        let frame = draw_frame(r, (cam, scene.source.seed), rows, &capture)?;
+        if let Some(s) = capture.snapshot {
+            self.session.cameras.recycle(s);
+        }
+        Ok(Some(CameraFrame {
+            frame,
+            seen: std::collections::BTreeSet::new(),
+            step: capture.step,
+        }))
+    }
+
+    /// Count, per topic, the messages of camera `camera`'s current frame that the bag
+    /// did not record.
+    fn count_missing_camera(&mut self, camera: usize) {
+        let Some(current) = self.cameras[camera].current.take() else {
+            return;
+        };
+        for (k, row) in self.session.table.rows.iter().enumerate() {
+            if current.seen.contains(&k)
+                || current.frame.messages.get(k).is_none_or(|m| m.is_none())
+            {
+                continue;
+            }
+            let entry = topic_entry(&mut self.per_topic, &row.topic, row.type_name());
+            entry.missing += 1;
+            if entry.first_difference.is_empty() {
+                entry.first_difference =
+                    format!("step {}: drawn by the replay, not in the bag", current.step);
+            }
+        }
+    }
+
     /// The comparison per topic, the last state's missing outputs counted unless the bag
-    /// was `truncated` in it.
+    /// was `truncated` in it (the frames captured but not recorded too: the node
+    /// records every frame it captured before it closes the bag).
     fn finish(mut self, truncated: bool) -> Vec<TopicReport> {
         if !truncated && !self.waiting_for_clock {
             self.count_missing();
+            for c in 0..self.cameras.len() {
+                self.count_missing_camera(c);
+                while let Ok(Some(next)) = self.draw_next(c) {
+                    self.cameras[c].current = Some(next);
+                    self.count_missing_camera(c);
+                }
+            }
         }
         self.per_topic.into_values().collect()
     }
+}
+
+/// A camera's frames in a replay.
+#[derive(Clone, Default)]
+struct CameraReplay {
+    /// Made at the first frame drawn again.
+    renderer: Option<Renderer>,
+    /// The frame the bag's messages are compared with.
+    current: Option<CameraFrame>,
+}
+
+/// A camera frame drawn again and the rows of it the bag recorded so far.
+#[derive(Clone)]
+struct CameraFrame {
+    frame: Frame,
+    seen: std::collections::BTreeSet<usize>,
+    /// Steps taken to the captured state.
+    step: u64,
 }
 
 /// The CDR payload of the recorded message `m`, decoded.
@@ -512,6 +643,7 @@ fn check_scopes(
         Scope::Object(o) => o >= objects,
         Scope::Handle(h) => h >= handles,
         Scope::ObjectHandle(o, h) => o >= objects || h >= handles,
+        Scope::Camera(c) => c >= scene.cameras.len(),
     });
     let recorded_objects = rows.iter().filter(|r| r.kind.name == "status").count();
     if handles != info.handle_topics.len() || out_of_range || recorded_objects != objects {

@@ -35,7 +35,9 @@ use crate::session::{
 };
 use crate::sim::ReachWatch;
 
+mod camera;
 mod control;
+mod drawing;
 mod endpoints;
 mod grasp;
 mod inputs;
@@ -45,6 +47,7 @@ mod robot;
 mod sim_state;
 mod simulation;
 
+use drawing::CameraThreads;
 use endpoints::Endpoints;
 use latency::Latency;
 use realtime::{RealTimeWatch, Target};
@@ -139,6 +142,9 @@ pub struct SimNode {
     realtime: RealTimeWatch,
     /// The simulation_interfaces services' state (stopped, quitting, pending steps).
     sim_if: SimInterfaces,
+    /// The cameras' drawing threads, and each frame's drawing time, ms.
+    cameras: CameraThreads,
+    camera_draw_ms: Vec<f64>,
 }
 
 /// Lock-step on a handle steps once per pose accepted on its topic. A handle that
@@ -180,6 +186,15 @@ fn start_foxglove(
         out.port()
     );
     Ok(Some(out))
+}
+
+/// What the node's settings decide about outputs beyond the scene file.
+pub fn run_outputs(cfg: &NodeConfig) -> RunOutputs {
+    RunOutputs {
+        own_clock: !cfg.use_sim_time,
+        recording: cfg.record.is_some(),
+        record_cameras: cfg.record.as_ref().is_some_and(|(_, o)| o.record_cameras),
+    }
 }
 
 /// The statistics' run mode, e.g. `real_time x1`, `lockstep:service`.
@@ -225,19 +240,22 @@ impl SimNode {
             .collect();
         // the outputs the scene and the node's settings ask for; recorded-only rows
         // (statuses not published) only when recording
-        let run = RunOutputs {
-            own_clock: !cfg.use_sim_time,
-            recording: cfg.record.is_some(),
-        };
+        let run = run_outputs(&cfg);
         let table = OutputTable::for_scene(&cfg.scene, &cfg.names, run)
             .map_err(|e| NodeError::Config(e.to_string()))?;
+        let tf_cameras = cfg
+            .scene
+            .cameras
+            .iter()
+            .any(|c| matches!(c.mount, crate::scene::CameraMount::TfFrame(_)));
         let io = Endpoints::open(
             cfg.domain_id,
             &cfg.names,
             &table,
             (cfg.use_sim_time, cfg.tf_max_lag, cfg.max_clock_jump),
-            &tf_handles,
+            (&tf_handles, tf_cameras),
         )?;
+        let cameras = CameraThreads::start(&cfg.scene, &table.rows, &io.waker)?;
         let (params, markers_rate) = param_table(&cfg);
         let foxglove = start_foxglove(&cfg, &table)?;
         let names = cfg.names;
@@ -285,6 +303,8 @@ impl SimNode {
             latency: Latency::new(),
             realtime: RealTimeWatch::default(),
             sim_if: SimInterfaces::default(),
+            cameras,
+            camera_draw_ms: Vec::new(),
         })
     }
 
@@ -315,6 +335,7 @@ impl SimNode {
         // under use_sim_time the first /clock sample sets the time: nothing goes out
         // before it (see `emit`)
         self.emit_current(Content::All, None);
+        self.capture_cameras();
         let mut next_tick = Instant::now() + self.period();
         let mut events = Events::with_capacity(64);
         // under use_sim_time the external clock drives the steps
@@ -345,6 +366,7 @@ impl SimNode {
             self.drain_robot_description();
             self.drain_inputs();
             self.drain_services(&mut next_tick);
+            self.drain_cameras();
             if stop.load(Ordering::SeqCst) || self.done() {
                 break;
             }
@@ -392,6 +414,9 @@ impl SimNode {
             Some(Ok(frame)) => self.emit(&frame, trigger),
             Some(Err(e)) => self.encode_failed(&e),
             None => {}
+        }
+        if applied == Applied::NewState {
+            self.capture_cameras();
         }
         applied
     }
@@ -560,7 +585,10 @@ impl SimNode {
             std::thread::sleep(crate::ros::reply::RECHECK);
             self.flush_replies();
         }
+        self.finish_cameras();
         let mut stats = std::mem::take(&mut self.stats);
+        stats.camera_frames_skipped = self.session.counters.camera_frames_skipped;
+        stats.camera_draw = crate::ros::node_stats::LatencyStats::of(&self.camera_draw_ms);
         stats.sim_time = self.session.scene.world.time();
         self.latency.finish(&mut stats);
         stats.overrun_ticks = self.session.counters.overrun_ticks;

@@ -70,6 +70,13 @@ pub struct NodeStats {
     pub tick_beyond_step: LatencyStats,
     /// Pose taken from DDS -> markers of the first step that used it published.
     pub input_to_markers: LatencyStats,
+    /// Camera frames drawn and published (all cameras).
+    pub camera_frames: u64,
+    /// Camera ticks skipped: the camera was still drawing its previous frame.
+    pub camera_frames_skipped: u64,
+    /// Per camera frame: wall time on its camera's thread, drawing and encoding the five
+    /// messages.
+    pub camera_draw: LatencyStats,
     /// Per 10 s of wall time.
     pub windows: Vec<Window>,
     /// Messages recorded per topic.

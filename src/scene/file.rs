@@ -185,6 +185,11 @@ pub struct OutputsFile {
     /// gripper. Default true.
     #[serde(default = "d_true")]
     pub wrench: bool,
+    /// `/<object>/points` (sensor_msgs/msg/PointCloud2, every step): the object's mesh
+    /// vertices in the scene frame with their material coordinates, fields x y z u v
+    /// (float32; m): the ground truth a tracker is scored against. Default false.
+    #[serde(default)]
+    pub points: bool,
     /// Hz, at most this many markers messages per second per object (the mesh is the
     /// largest output). Default: every tick.
     #[serde(default)]
@@ -200,6 +205,7 @@ impl Default for OutputsFile {
             tf: false,
             grasp_state: true,
             wrench: true,
+            points: false,
             markers_rate: None,
         }
     }
@@ -530,6 +536,7 @@ impl SceneFile {
                 tf: self.outputs.tf,
                 grasp_state: self.outputs.grasp_state,
                 wrench: self.outputs.wrench,
+                points: self.outputs.points,
                 markers_rate: self.outputs.markers_rate,
             },
             handle_tf_frames: self.handles.iter().map(|h| h.tf_frame.clone()).collect(),

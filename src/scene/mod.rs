@@ -91,6 +91,8 @@ pub struct Outputs {
     pub grasp_state: bool,
     /// What each handle feels on `/<object>/<handle>/wrench`.
     pub wrench: bool,
+    /// Each object's mesh vertices (ground truth) on `/<object>/points`.
+    pub points: bool,
     /// Hz, the most markers messages per second per object (None: every tick).
     pub markers_rate: Option<f64>,
 }

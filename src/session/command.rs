@@ -5,7 +5,7 @@
 //! [`super::Session::apply`]; `replay` reads the same commands back from a bag and
 //! applies them with the same function, so a replay does what the node did.
 
-use crate::geometry::Point2;
+use crate::geometry::{Point2, Pose};
 use crate::sim::Hold;
 use crate::wire::msgs::{PoseStamped, SimCommand, Time, TransformStamped};
 
@@ -81,12 +81,21 @@ pub enum Command {
     },
     /// Handle `handle` lets go.
     Release { handle: usize },
+    /// Camera `camera` (index in the scene) captures the frame of its tick due at the
+    /// current state, drawn from `world_from_optical` (m; a TF-carried camera's pose as
+    /// looked up). The node captures when the camera is done drawing its previous frame;
+    /// a due tick without a capture is skipped (see `session::camera`).
+    Capture {
+        camera: usize,
+        world_from_optical: Pose,
+    },
 }
 
 /// The names a recorded grasp or release refers to by index.
 pub struct Names<'a> {
     pub handles: &'a [String],
     pub objects: &'a [String],
+    pub cameras: &'a [String],
 }
 
 /// A [`SimCommand`] that is not a command of this build (a newer bag, or damage).
@@ -170,6 +179,14 @@ impl Command {
                 m.kind = SimCommand::RELEASE;
                 m.handle = names.handles.get(*handle)?.clone();
             }
+            Command::Capture {
+                camera,
+                world_from_optical,
+            } => {
+                m.kind = SimCommand::CAPTURE;
+                m.camera = names.cameras.get(*camera)?.clone();
+                m.pose = crate::wire::convert::pose(world_from_optical);
+            }
         }
         Some(m)
     }
@@ -227,6 +244,10 @@ impl Command {
             SimCommand::RELEASE => Command::Release {
                 handle: index(names.handles, &m.handle, "handle")?,
             },
+            SimCommand::CAPTURE => Command::Capture {
+                camera: index(names.cameras, &m.camera, "camera")?,
+                world_from_optical: crate::wire::convert::from_pose(&m.pose),
+            },
             k => return Err(UnknownCommand(format!("kind {k}"))),
         })
     }
@@ -280,9 +301,11 @@ mod tests {
             ["left".to_string(), "right".to_string()],
             ["ribbon".to_string()],
         );
+        let cameras = ["camera".to_string()];
         let names = Names {
             handles: &handles,
             objects: &objects,
+            cameras: &cameras,
         };
         let grasps = [
             Command::Grasp {
@@ -304,6 +327,13 @@ mod tests {
                 hold: Some(Hold::Full),
             },
             Command::Release { handle: 1 },
+            Command::Capture {
+                camera: 0,
+                world_from_optical: Pose::new(
+                    crate::geometry::Vector3::new(0.5, -0.8, 0.6),
+                    crate::geometry::Vector3::new(-1.9, 0.1, 0.3),
+                ),
+            },
         ];
         for c in commands.into_iter().chain(grasps) {
             let m = c.to_msg(stamp, &names).expect("a ~/commands command");
@@ -317,6 +347,7 @@ mod tests {
         let fewer = Names {
             handles: &handles[..1],
             objects: &objects,
+            cameras: &cameras,
         };
         assert!(Command::from_msg(&m, &fewer).is_err());
     }
@@ -332,6 +363,7 @@ mod tests {
         let names = Names {
             handles: &[],
             objects: &[],
+            cameras: &[],
         };
         assert_eq!(pose.to_msg(Time::default(), &names), None);
         let unknown = SimCommand {

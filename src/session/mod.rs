@@ -8,6 +8,7 @@
 //! the node (`ros`), the recorder and `replay` (`record`) and Foxglove drive a
 //! [`Session`] the same way, so a replay reproduces what the node did.
 
+pub mod camera;
 pub mod command;
 pub mod frames;
 pub mod grasping;
@@ -18,6 +19,7 @@ pub mod outputs;
 pub mod params;
 pub mod produce;
 pub mod robot;
+pub mod sensor;
 pub mod sim_clock;
 mod state;
 mod status;

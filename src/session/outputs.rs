@@ -15,14 +15,15 @@ use crate::scene::Scene;
 use crate::wire::cdr::{self, CdrError};
 use crate::wire::introspect::{to_value, Value};
 use crate::wire::msgs::{
-    Clock, GraspState, MarkerArray, RosMessage, SimStatus, SingularPoints, TFMessage, Time,
-    WrenchStamped,
+    CameraInfo, Clock, GraspState, Image, MarkerArray, PointCloud2, RosMessage, SimStatus,
+    SingularPoints, TFMessage, Time, WrenchStamped,
 };
 use crate::wire::qos::Qos;
 
 use super::names::{NameError, NodeNames};
 use super::produce::Produce;
 pub use super::produce::Scope;
+use super::sensor::{self as cam, CameraView};
 use super::{frames, markers, status};
 
 /// How many rows an output kind has.
@@ -36,6 +37,9 @@ pub enum ScopeKind {
     PerHandle,
     /// One per object and handle (`{object}` and `{handle}` in its topic).
     PerObjectHandle,
+    /// One per camera (`{camera}` in its topic): made from the camera's drawn frames
+    /// beside the tick (`session::camera`), not from a state.
+    PerCamera,
 }
 
 /// Whether a row is published (DDS, Foxglove) and whether it is recorded in bags.
@@ -62,6 +66,10 @@ pub struct RunOutputs {
     pub own_clock: bool,
     /// The run records a bag: rows recorded but not published are made only then.
     pub recording: bool,
+    /// The bag records the cameras' images and clouds too (`--record-cameras`; they are
+    /// big: 6.4 MB a 640 x 480 frame). Their camera_info is always recorded: the
+    /// ledger of the frames drawn.
+    pub record_cameras: bool,
 }
 
 /// The message type of an output and how a producer's message becomes CDR bytes.
@@ -78,6 +86,15 @@ pub trait Producer: Sync + std::fmt::Debug {
     /// A message of this type, decoded into a field-by-field value (replay compares
     /// recorded and recomputed messages this way).
     fn value(&self, cdr: &[u8]) -> Result<Value, String>;
+    /// A camera row's message for a drawn frame, CDR-encoded (None: not a camera row,
+    /// or the frame was not drawn and the message carries pixels).
+    fn camera(&self, _view: &CameraView) -> Option<Result<Bytes, CdrError>> {
+        None
+    }
+    /// Whether a camera row's message carries the pixels (its frames must be drawn).
+    fn draws(&self) -> bool {
+        false
+    }
 }
 
 /// A producer function of messages `M`.
@@ -105,6 +122,50 @@ impl<M: RosMessage> Producer for Typed<M> {
     fn value(&self, bytes: &[u8]) -> Result<Value, String> {
         let m: M = cdr::decode(bytes).map_err(|e| format!("{}: {e}", M::TYPE))?;
         to_value(&m).map_err(|e| format!("{}: {e}", M::TYPE))
+    }
+}
+
+/// A camera row's message made from a drawn frame, CDR-encoded (None: not made).
+pub type MakeCameraMessage = fn(&CameraView) -> Option<Result<Vec<u8>, CdrError>>;
+
+/// The producer of a camera row: a message of type `M` from a [`CameraView`], encoded
+/// (the frame's rows are made beside the tick, not from a state: [`Producer::produce`]
+/// makes nothing).
+pub struct Drawn<M: 'static> {
+    /// The message carries the pixels (a capture must copy what the camera sees).
+    pub draws: bool,
+    pub make: MakeCameraMessage,
+    pub message: std::marker::PhantomData<fn() -> M>,
+}
+
+impl<M> std::fmt::Debug for Drawn<M> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "Drawn<{}>", std::any::type_name::<M>())
+    }
+}
+
+impl<M: RosMessage> Producer for Drawn<M> {
+    fn type_name(&self) -> &'static str {
+        M::TYPE
+    }
+    fn type_hash(&self) -> &'static str {
+        M::HASH
+    }
+    fn schema(&self) -> String {
+        M::schema()
+    }
+    fn produce(&self, _: &Produce, _: Scope) -> Option<Result<Bytes, CdrError>> {
+        None
+    }
+    fn value(&self, bytes: &[u8]) -> Result<Value, String> {
+        let m: M = cdr::decode(bytes).map_err(|e| format!("{}: {e}", M::TYPE))?;
+        to_value(&m).map_err(|e| format!("{}: {e}", M::TYPE))
+    }
+    fn camera(&self, view: &CameraView) -> Option<Result<Bytes, CdrError>> {
+        (self.make)(view).map(|r| r.map(Bytes::from))
+    }
+    fn draws(&self) -> bool {
+        self.draws
     }
 }
 
@@ -219,7 +280,106 @@ pub const OUTPUTS: &[OutputKind] = &[
         want: |s, _, _| Want::both(s.outputs.wrench),
         producer: &Typed::<WrenchStamped>(status::wrench),
     },
+    OutputKind {
+        name: "points",
+        scope: ScopeKind::PerObject,
+        topic: "{object}/points",
+        qos: Qos::DATA,
+        throttled: false,
+        on_change: false,
+        want: |s, _, _| Want::both(s.outputs.points),
+        producer: &Typed::<PointCloud2>(cam::mesh_points),
+    },
+    OutputKind {
+        name: "camera_frames",
+        scope: ScopeKind::Global,
+        topic: "/tf_static",
+        qos: Qos::TF_STATIC,
+        throttled: false,
+        on_change: true,
+        want: |s, _, _| Want::both(!s.cameras.is_empty()),
+        producer: &Typed::<TFMessage>(cam::optical_frames),
+    },
+    // the RealSense topics, one identical header.stamp on a frame's five messages
+    OutputKind {
+        name: "camera_color",
+        scope: ScopeKind::PerCamera,
+        topic: "{camera}/color/image_raw",
+        qos: Qos::CAMERA,
+        throttled: false,
+        on_change: false,
+        want: camera_pixels,
+        producer: &Drawn::<Image> {
+            draws: true,
+            make: cam::color,
+            message: std::marker::PhantomData,
+        },
+    },
+    OutputKind {
+        name: "camera_color_info",
+        scope: ScopeKind::PerCamera,
+        topic: "{camera}/color/camera_info",
+        qos: Qos::CAMERA,
+        throttled: false,
+        on_change: false,
+        want: |_, _, _| Want::both(true),
+        producer: &Drawn::<CameraInfo> {
+            draws: false,
+            make: cam::camera_info,
+            message: std::marker::PhantomData,
+        },
+    },
+    OutputKind {
+        name: "camera_depth",
+        scope: ScopeKind::PerCamera,
+        topic: "{camera}/aligned_depth_to_color/image_raw",
+        qos: Qos::CAMERA,
+        throttled: false,
+        on_change: false,
+        want: camera_pixels,
+        producer: &Drawn::<Image> {
+            draws: true,
+            make: cam::depth,
+            message: std::marker::PhantomData,
+        },
+    },
+    OutputKind {
+        name: "camera_depth_info",
+        scope: ScopeKind::PerCamera,
+        topic: "{camera}/aligned_depth_to_color/camera_info",
+        qos: Qos::CAMERA,
+        throttled: false,
+        on_change: false,
+        want: |_, _, _| Want::both(true),
+        producer: &Drawn::<CameraInfo> {
+            draws: false,
+            make: cam::camera_info,
+            message: std::marker::PhantomData,
+        },
+    },
+    OutputKind {
+        name: "camera_points",
+        scope: ScopeKind::PerCamera,
+        topic: "{camera}/depth/color/points",
+        qos: Qos::CAMERA,
+        throttled: false,
+        on_change: false,
+        want: camera_pixels,
+        producer: &Drawn::<PointCloud2> {
+            draws: true,
+            make: cam::cloud,
+            message: std::marker::PhantomData,
+        },
+    },
 ];
+
+/// A camera's images and cloud: always published, recorded with `--record-cameras`.
+fn camera_pixels(_: &Scene, run: RunOutputs, _: Scope) -> Want {
+    Want {
+        published: true,
+        recorded: run.record_cameras,
+    }
+}
 
 /// The kind named `name` (as bags record it).
 pub fn kind_named(name: &str) -> Option<&'static OutputKind> {
@@ -300,6 +460,7 @@ fn scopes(scene: &Scene, kind: ScopeKind) -> Vec<Scope> {
                 .flat_map(|o| (0..handles).map(move |h| Scope::ObjectHandle(o, h)))
                 .collect()
         }
+        ScopeKind::PerCamera => (0..scene.cameras.len()).map(Scope::Camera).collect(),
     }
 }
 
@@ -311,6 +472,10 @@ fn topic_of(scene: &Scene, kind: &OutputKind, scope: Scope) -> String {
         Scope::Object(o) => (Some(o), None),
         Scope::Handle(h) => (world.handles().get(h).map(|s| s.object), Some(h)),
         Scope::ObjectHandle(o, h) => (Some(o), Some(h)),
+        Scope::Camera(c) => {
+            let name = scene.cameras.get(c).map_or("", |cam| cam.name.as_str());
+            return kind.topic.replace("{camera}", name);
+        }
     };
     let mut topic = kind.topic.to_string();
     if let Some(o) = object.and_then(|o| world.object_names().get(o)) {

@@ -78,6 +78,13 @@ pub const DECLARED: &[Declared] = &[
         doc: "MCAP chunk compression: none or lz4.",
     },
     Declared {
+        name: "record_cameras",
+        ty: ParamType::Bool,
+        default: "false",
+        doc: "Record the cameras' images and clouds too (big: 6.4 MB a 640 x 480 frame); \
+              their camera_info is recorded regardless.",
+    },
+    Declared {
         name: "record_flush_period",
         ty: ParamType::Double,
         default: "1.0",

@@ -17,6 +17,8 @@ pub enum Scope {
     Handle(usize),
     /// A handle on an object (what handle `.1` feels from object `.0`).
     ObjectHandle(usize, usize),
+    /// A camera of the scene (index in its `cameras:`).
+    Camera(usize),
 }
 
 /// The session's counters that statuses report (all since start-up unless said).
@@ -26,6 +28,9 @@ pub struct Counters {
     pub episode: u32,
     /// Real-time ticks skipped because the simulation could not keep up.
     pub overrun_ticks: u64,
+    /// Camera ticks whose frame was not captured: the camera was still drawing the
+    /// previous one (all cameras; see `session::camera`).
+    pub camera_frames_skipped: u64,
     /// Publications the node failed to send (all topics; the node counts them).
     pub dropped_publications: u64,
     /// Per object: steps whose solver stopped on an iteration limit.

@@ -10,6 +10,7 @@ use crate::sim::{GraspAt, GraspError, Grasped, StepReport};
 use crate::wire::cdr::CdrError;
 use crate::wire::msgs::{PoseStamped, Time};
 
+use super::camera::Cameras;
 use super::command::Command;
 use super::input::{HandleInput, InputPolicy, Rejection};
 use super::outputs::{Frame, OutputTable};
@@ -42,6 +43,9 @@ pub enum Applied {
     Grasp(Result<Grasped, GraspError>),
     /// A release happened (true), found the handle open (false), or was refused.
     Release(Result<bool, GraspError>),
+    /// Camera `camera` captured the frame of tick `frame` (None: no tick of it was due,
+    /// nothing captured).
+    Captured { camera: usize, frame: Option<u64> },
 }
 
 /// Which rows a frame makes.
@@ -78,6 +82,8 @@ pub struct Session {
     /// The step that made the current state and its wall time, s (None: step 0).
     last_step: Option<(StepReport, f64)>,
     targets: Vec<Option<Pose>>,
+    /// The cameras' due ticks and captured frames.
+    pub cameras: Cameras,
 }
 
 impl Session {
@@ -89,6 +95,8 @@ impl Session {
     ) -> Session {
         let handles = scene.world.handles().len();
         let objects = scene.world.objects().len();
+        let mut cameras = Cameras::new(&scene, &table.rows);
+        cameras.on_state(&scene);
         Session {
             scene,
             policy,
@@ -108,6 +116,7 @@ impl Session {
             grasp_dirty: vec![false; handles],
             last_step: None,
             targets: vec![None; handles],
+            cameras,
         }
     }
 
@@ -183,6 +192,15 @@ impl Session {
                 }
                 Applied::Release(r)
             }
+            Command::Capture {
+                camera,
+                world_from_optical,
+            } => Applied::Captured {
+                camera: *camera,
+                frame: self
+                    .cameras
+                    .capture(&self.scene, *camera, world_from_optical),
+            },
         }
     }
 
@@ -263,6 +281,7 @@ impl Session {
             self.counters.rejected_steps[i] += u64::from(o.kept_previous_state);
         }
         self.last_step = Some((report.clone(), elapsed));
+        self.counters.camera_frames_skipped += self.cameras.on_state(&self.scene);
         (report, elapsed)
     }
 
@@ -270,6 +289,8 @@ impl Session {
     /// pose arrives (stamps are accepted afresh); counters are kept.
     fn reset(&mut self) {
         self.scene.world.reset();
+        self.counters.camera_frames_skipped += self.cameras.restart();
+        self.counters.camera_frames_skipped += self.cameras.on_state(&self.scene);
         for i in &mut self.inputs {
             i.clear_target();
         }
@@ -315,6 +336,23 @@ impl Session {
         let frame = self.make_frame(scene, report, step_duration, content)?;
         self.grasp_dirty.iter_mut().for_each(|d| *d = false);
         Ok(frame)
+    }
+
+    /// A new state of another copy of this session's scene (`run --record`, see
+    /// [`Session::frame_of`]): its camera ticks fall due.
+    pub fn note_state_of(&mut self, scene: &Scene) {
+        self.counters.camera_frames_skipped += self.cameras.on_state(scene);
+    }
+
+    /// [`Command::Capture`] applied to another copy of this session's scene (see
+    /// [`Session::note_state_of`]); returns the tick captured.
+    pub fn capture_of(
+        &mut self,
+        scene: &Scene,
+        camera: usize,
+        world_from_optical: &Pose,
+    ) -> Option<u64> {
+        self.cameras.capture(scene, camera, world_from_optical)
     }
 
     /// The frame of the state of `scene` (see [`Session::frame_of`]).

@@ -65,6 +65,7 @@ pub fn status(p: &Produce, scope: Scope) -> Option<SimStatus> {
         step_duration: p.step_duration,
         overrun_ticks: c.overrun_ticks,
         dropped_publications: c.dropped_publications,
+        camera_frames_skipped: c.camera_frames_skipped,
         unconverged_steps: c.unconverged_steps[object],
         rejected_steps: c.rejected_steps[object],
         real_time_factor: c.real_time_factor,

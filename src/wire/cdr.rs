@@ -23,7 +23,13 @@ const CDR_LE_HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Encode `msg` with the CDR_LE encapsulation header.
 pub fn encode<M: Serialize>(msg: &M) -> Result<Vec<u8>, CdrError> {
-    let mut out = Vec::with_capacity(256);
+    encode_sized(msg, 256)
+}
+
+/// [`encode`] into a buffer of `capacity` bytes to start with (the size of a large
+/// message, so its bytes are written once, with no regrowth).
+pub fn encode_sized<M: Serialize>(msg: &M, capacity: usize) -> Result<Vec<u8>, CdrError> {
+    let mut out = Vec::with_capacity(capacity);
     out.extend_from_slice(&CDR_LE_HEADER);
     cdr_encoding::to_writer::<M, LittleEndian, _>(&mut out, msg)?;
     Ok(out)

@@ -31,6 +31,16 @@ pub fn pose(p: &SimPose) -> Pose {
     }
 }
 
+/// A `geometry_msgs/Pose` that [`pose`] wrote, back as the rigid transform it came
+/// from, bit for bit (the quaternion is taken as it is, not normalized again).
+pub fn from_pose(p: &Pose) -> SimPose {
+    let o = &p.orientation;
+    SimPose::from_parts(
+        nalgebra::Translation3::new(p.position.x, p.position.y, p.position.z),
+        nalgebra::UnitQuaternion::new_unchecked(nalgebra::Quaternion::new(o.w, o.x, o.y, o.z)),
+    )
+}
+
 /// A pose as a transform message's translation and rotation.
 pub fn to_transform(p: &SimPose) -> Transform {
     let q = p.rotation.quaternion();
@@ -46,5 +56,23 @@ pub fn to_transform(p: &SimPose) -> Transform {
             z: q.k,
             w: q.w,
         },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pose_comes_back_bit_for_bit() {
+        let p = SimPose::new(
+            nalgebra::Vector3::new(0.45, -0.95, 0.35),
+            nalgebra::Vector3::new(1.3, -0.2, 0.7),
+        );
+        let back = from_pose(&pose(&p));
+        assert_eq!(back.translation.vector, p.translation.vector);
+        assert_eq!(back.rotation.coords, p.rotation.coords);
+        // normalizing again would not always be the identity: the exact way is needed
+        assert_ne!(back, SimPose::identity());
     }
 }

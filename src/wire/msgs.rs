@@ -33,6 +33,11 @@ macro_rules! ros_message {
 }
 pub(crate) use ros_message;
 
+// sensor_msgs of the camera (Image, CameraInfo, PointCloud2): after the macro they use
+#[path = "sensor_msgs.rs"]
+mod sensor_msgs;
+pub use sensor_msgs::*;
+
 // ---------------------------------------------------------------- builtin_interfaces
 
 /// `builtin_interfaces/msg/Time`.
@@ -433,6 +438,7 @@ pub struct SimStatus {
     pub strained_edges_pct: f64,
     pub overrun_ticks: u64,
     pub dropped_publications: u64,
+    pub camera_frames_skipped: u64,
     pub rejected_inputs: u64,
     pub unconverged_steps: u64,
     pub rejected_steps: u64,
@@ -443,7 +449,7 @@ pub struct SimStatus {
 ros_message!(
     SimStatus,
     "developable_sim/msg/SimStatus",
-    "RIHS01_09a455efef7e2c9eb451f54ae8f13d4a47dcb51263ec111a98451d29aa2a11a4"
+    "RIHS01_cab41c30751597604145f7f1a0a6c633ef6046ef54ddac8bc5866c99be527ce3"
 );
 
 /// `developable_sim/msg/SimCommand`: one external action on the simulation as the node
@@ -464,11 +470,13 @@ pub struct SimCommand {
     pub object: String,
     pub material_point: [f64; 2],
     pub hold: String,
+    pub camera: String,
+    pub pose: Pose,
 }
 ros_message!(
     SimCommand,
     "developable_sim/msg/SimCommand",
-    "RIHS01_f96d3e592944db8d7ea6a83fbd99c2a17e14a92f0363a06439e4157771e7b26d"
+    "RIHS01_80a5bb5e88ada42a59b8c9ef7236b85803b1a27644869d7bc542365d7d6fb8c6"
 );
 
 impl SimCommand {
@@ -480,6 +488,7 @@ impl SimCommand {
     pub const RELEASE: u8 = 6;
     pub const RESET_AT: u8 = 7;
     pub const TIME_ORIGIN: u8 = 8;
+    pub const CAPTURE: u8 = 9;
     pub const PARAMETER_BOOL: u8 = 1;
     pub const PARAMETER_INTEGER: u8 = 2;
     pub const PARAMETER_DOUBLE: u8 = 3;

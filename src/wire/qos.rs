@@ -20,6 +20,14 @@ impl Qos {
         reliable: false,
         transient_local: false,
     };
+    /// Camera images, camera info and clouds: best effort, keep last 1, volatile (ROS's
+    /// sensor-data profile with depth 1, as the RealSense driver offers them; a reader
+    /// that falls behind gets the newest frame).
+    pub const CAMERA: Qos = Qos {
+        depth: 1,
+        reliable: false,
+        transient_local: false,
+    };
     /// `/clock`: best effort, keep last 1.
     pub const CLOCK: Qos = Qos {
         depth: 1,

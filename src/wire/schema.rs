@@ -83,6 +83,26 @@ pub const DEFINITIONS: &[(&str, &str)] = &[
         include_str!("interfaces/sensor_msgs/CompressedImage.msg"),
     ),
     (
+        "sensor_msgs/msg/Image",
+        include_str!("interfaces/sensor_msgs/Image.msg"),
+    ),
+    (
+        "sensor_msgs/msg/CameraInfo",
+        include_str!("interfaces/sensor_msgs/CameraInfo.msg"),
+    ),
+    (
+        "sensor_msgs/msg/RegionOfInterest",
+        include_str!("interfaces/sensor_msgs/RegionOfInterest.msg"),
+    ),
+    (
+        "sensor_msgs/msg/PointCloud2",
+        include_str!("interfaces/sensor_msgs/PointCloud2.msg"),
+    ),
+    (
+        "sensor_msgs/msg/PointField",
+        include_str!("interfaces/sensor_msgs/PointField.msg"),
+    ),
+    (
         "visualization_msgs/msg/UVCoordinate",
         include_str!("interfaces/visualization_msgs/UVCoordinate.msg"),
     ),

@@ -1,6 +1,6 @@
 //! Helpers the integration tests share (one way to do a thing): the scenes in
 //! `config/scenes`, loading and running one headless, a fresh scratch folder per test,
-//! a bag's metadata, the lowest point of a mesh.
+//! a bag's metadata and a bag rewritten with edits, the lowest point of a mesh.
 //!
 //! Every file in `tests/` is a crate of its own that compiles this module with
 //! `mod common;` and uses only part of it; the rest would warn as dead code in that
@@ -10,10 +10,13 @@
 use std::path::{Path, PathBuf};
 
 use developable_sim::geometry::SurfaceMesh;
+use developable_sim::record::bag::{BagOptions, BagWriter};
 use developable_sim::record::metadata::MetadataFile;
+use developable_sim::record::read::{mcap_files, BagEvent, BagMessage, McapStream};
 use developable_sim::runner;
 use developable_sim::scene::{self, Scene};
 use developable_sim::stats::RunStats;
+use developable_sim::wire::qos::Qos;
 
 /// The extreme-torsion ribbon: short, no contact, what the CLI and bag tests drive.
 pub const TORSION: &str = concat!(
@@ -66,4 +69,43 @@ pub fn lowest_z(mesh: &SurfaceMesh) -> f64 {
         .iter()
         .map(|v| v.z)
         .fold(f64::INFINITY, f64::min)
+}
+
+/// Copy the bag `src` into `dst` message by message through the project's reader and
+/// writer; `edit` sees each message and returns its new payload, or None to drop it.
+pub fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&BagMessage) -> Option<Vec<u8>>) {
+    let mut out = BagWriter::create(dst, BagOptions::default()).unwrap();
+    let mut ids = std::collections::BTreeMap::new();
+    for file in mcap_files(src).unwrap() {
+        let mut stream = McapStream::open(&file).unwrap();
+        while let Some(event) = stream.next() {
+            match event.unwrap() {
+                BagEvent::Metadata { name, values } => out.write_metadata(&name, values).unwrap(),
+                BagEvent::Message(m) => {
+                    // the same type, hash and schema as the source's channel
+                    let ch = stream.channel(m.channel).unwrap().clone();
+                    let id = *ids.entry(m.topic.clone()).or_insert_with(|| {
+                        let hash = ch
+                            .metadata
+                            .get("topic_type_hash")
+                            .cloned()
+                            .unwrap_or_default();
+                        let schema = String::from_utf8(ch.schema.clone()).unwrap();
+                        out.add_topic_of(
+                            &m.topic,
+                            (&ch.type_name, &hash, &|| schema.clone()),
+                            Qos::DATA,
+                        )
+                        .unwrap()
+                    });
+                    if let Some(data) = edit(&m) {
+                        out.write_raw(id, m.log_time, m.publish_time, &data)
+                            .unwrap();
+                    }
+                }
+            }
+        }
+        assert!(stream.truncated.is_none());
+    }
+    out.close().unwrap();
 }

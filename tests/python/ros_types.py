@@ -197,6 +197,7 @@ class SimStatus(IdlStruct, typename="developable_sim::msg::dds_::SimStatus_"):
     strained_edges_pct: t.float64 = 0.0
     overrun_ticks: t.uint64 = 0
     dropped_publications: t.uint64 = 0
+    camera_frames_skipped: t.uint64 = 0
     rejected_inputs: t.uint64 = 0
     unconverged_steps: t.uint64 = 0
     rejected_steps: t.uint64 = 0
@@ -213,6 +214,21 @@ class MarkerArrayHead(IdlStruct, typename="visualization_msgs::msg::dds_::Marker
     measure itself, not the node."""
 
     count: t.uint32 = 0
+    header: Header = field(default_factory=Header)
+
+
+@dataclass
+class ImageHead(IdlStruct, typename="sensor_msgs::msg::dds_::Image_"):
+    """The head of an Image on the wire (the pixels are not decoded), as MarkerArrayHead:
+    a reader that counts camera frames without spending the CPU it measures."""
+
+    header: Header = field(default_factory=Header)
+
+
+@dataclass
+class PointCloud2Head(IdlStruct, typename="sensor_msgs::msg::dds_::PointCloud2_"):
+    """The head of a PointCloud2 on the wire (see ImageHead)."""
+
     header: Header = field(default_factory=Header)
 
 
@@ -316,6 +332,66 @@ class TransformStamped(IdlStruct, typename="geometry_msgs::msg::dds_::TransformS
 @dataclass
 class TFMessage(IdlStruct, typename="tf2_msgs::msg::dds_::TFMessage_"):
     transforms: t.sequence[TransformStamped] = field(default_factory=list)
+
+
+# sensor_msgs of the camera (`data` decodes to a list of ints: numpy takes it from
+# there).
+
+
+@dataclass
+class Image(IdlStruct, typename="sensor_msgs::msg::dds_::Image_"):
+    header: Header = field(default_factory=Header)
+    height: t.uint32 = 0
+    width: t.uint32 = 0
+    encoding: str = ""
+    is_bigendian: t.uint8 = 0
+    step: t.uint32 = 0
+    data: t.sequence[t.uint8] = field(default_factory=list)
+
+
+@dataclass
+class RegionOfInterest(IdlStruct, typename="sensor_msgs::msg::dds_::RegionOfInterest_"):
+    x_offset: t.uint32 = 0
+    y_offset: t.uint32 = 0
+    height: t.uint32 = 0
+    width: t.uint32 = 0
+    do_rectify: bool = False
+
+
+@dataclass
+class CameraInfo(IdlStruct, typename="sensor_msgs::msg::dds_::CameraInfo_"):
+    header: Header = field(default_factory=Header)
+    height: t.uint32 = 0
+    width: t.uint32 = 0
+    distortion_model: str = ""
+    d: t.sequence[t.float64] = field(default_factory=list)
+    k: t.array[t.float64, 9] = field(default_factory=lambda: [0.0] * 9)
+    r: t.array[t.float64, 9] = field(default_factory=lambda: [0.0] * 9)
+    p: t.array[t.float64, 12] = field(default_factory=lambda: [0.0] * 12)
+    binning_x: t.uint32 = 0
+    binning_y: t.uint32 = 0
+    roi: RegionOfInterest = field(default_factory=RegionOfInterest)
+
+
+@dataclass
+class PointField(IdlStruct, typename="sensor_msgs::msg::dds_::PointField_"):
+    name: str = ""
+    offset: t.uint32 = 0
+    datatype: t.uint8 = 0
+    count: t.uint32 = 0
+
+
+@dataclass
+class PointCloud2(IdlStruct, typename="sensor_msgs::msg::dds_::PointCloud2_"):
+    header: Header = field(default_factory=Header)
+    height: t.uint32 = 0
+    width: t.uint32 = 0
+    fields: t.sequence[PointField] = field(default_factory=list)
+    is_bigendian: bool = False
+    point_step: t.uint32 = 0
+    row_step: t.uint32 = 0
+    data: t.sequence[t.uint8] = field(default_factory=list)
+    is_dense: bool = False
 
 
 @dataclass

@@ -62,8 +62,13 @@ def connect_and_advertise(port: int, timeout: float = 20.0, subprotocol: str = S
     deadline = time.monotonic() + timeout
     while True:
         try:
+            # no message size limit (a camera frame's cloud is 4.9 MB), as Foxglove
             ws = connect(
-                f"ws://127.0.0.1:{port}", subprotocols=[subprotocol], open_timeout=5, legacy=True
+                f"ws://127.0.0.1:{port}",
+                subprotocols=[subprotocol],
+                open_timeout=5,
+                legacy=True,
+                max_size=None,
             )
             break
         except OSError:
@@ -110,7 +115,8 @@ def test_foxglove_client_decodes_the_live_mesh_and_sees_it_follow_a_handle(
     assert f"ws://127.0.0.1:{port}" in node.log()
     ws, info, channels = connect_and_advertise(port)
     # exactly the node's outputs (gripper: no colliders, no TF; its handle's grasp
-    # state and wrench), under their ROS names
+    # state and wrench; its camera's five RealSense topics and optical frame), under
+    # their ROS names
     assert set(channels) == {
         "/ribbon/markers",
         "/ribbon/status",
@@ -118,6 +124,12 @@ def test_foxglove_client_decodes_the_live_mesh_and_sees_it_follow_a_handle(
         "/clock",
         "/handles/gripper/state",
         "/ribbon/gripper/wrench",
+        "/tf_static",
+        "/camera/color/image_raw",
+        "/camera/color/camera_info",
+        "/camera/aligned_depth_to_color/image_raw",
+        "/camera/aligned_depth_to_color/camera_info",
+        "/camera/depth/color/points",
     }
     assert channels["/ribbon/gripper/wrench"]["schemaName"] == "geometry_msgs/msg/WrenchStamped"
     markers_ch = channels["/ribbon/markers"]
@@ -192,6 +204,59 @@ def test_foxglove_client_decodes_the_live_mesh_and_sees_it_follow_a_handle(
     assert node.stop() == 0
     # the same schema text the bag carries (one implementation, not two)
     assert bag_schemas(bag)["visualization_msgs/msg/MarkerArray"] == text.encode()
+
+
+def test_the_camera_images_and_cloud_stream_with_the_bags_schemas(start_node, domain_id, tmp_path):
+    """Foxglove's Image and PointCloud2 panels read the camera: its channels carry the
+    bags' schema text, and a frame decodes from that text alone with one stamp."""
+    port = free_port()
+    bag = tmp_path / "bag"
+    node = start_node(
+        domain_id, GRIPPER, "--foxglove", str(port), "--record", str(bag), "--record-cameras"
+    )
+    ws, _, channels = connect_and_advertise(port)
+    topics = {
+        "/camera/color/image_raw": "sensor_msgs/msg/Image",
+        "/camera/aligned_depth_to_color/image_raw": "sensor_msgs/msg/Image",
+        "/camera/color/camera_info": "sensor_msgs/msg/CameraInfo",
+        "/camera/depth/color/points": "sensor_msgs/msg/PointCloud2",
+    }
+    subs = []
+    for k, (topic, schema) in enumerate(topics.items()):
+        ch = channels[topic]
+        assert (ch["schemaName"], ch["schemaEncoding"], ch["encoding"]) == (schema, "ros2msg", "cdr")
+        subs.append({"id": 20 + k, "channelId": ch["id"]})
+    assert channels["/tf_static"]["schemaName"] == "tf2_msgs/msg/TFMessage"
+    decoders = {20 + k: decoder_for(channels[t]) for k, t in enumerate(topics)}
+    ws.send(json.dumps({"op": "subscribe", "subscriptions": subs}))
+    got: dict = {}
+    deadline = time.monotonic() + 20.0
+    while time.monotonic() < deadline:
+        try:
+            frame = ws.recv(timeout=0.5)
+        except TimeoutError:
+            continue
+        if isinstance(frame, str):
+            continue
+        sub, _, payload = parse_frame(frame)
+        m = decoders[sub](payload)
+        stamp = (m.header.stamp.sec, m.header.stamp.nanosec)
+        got.setdefault(stamp, {})[sub] = m
+        if len(got[stamp]) == 4:
+            break
+    ws.close()
+    complete = [f for f in got.values() if len(f) == 4]
+    assert complete, {s: sorted(f) for s, f in got.items()}
+    f = complete[0]
+    color, depth, info, cloud = f[20], f[21], f[22], f[23]
+    assert (color.encoding, color.width, color.height, len(color.data)) == ("rgb8", 640, 480, 640 * 480 * 3)
+    assert (depth.encoding, len(depth.data)) == ("32FC1", 640 * 480 * 4)
+    assert (info.width, info.height, info.header.frame_id) == (640, 480, "camera_color_optical_frame")
+    assert (cloud.width, cloud.height, [p.name for p in cloud.fields]) == (640, 480, ["x", "y", "z", "rgb"])
+    assert node.stop() == 0
+    schemas = bag_schemas(bag)
+    for topic, schema in topics.items():
+        assert schemas[schema] == channels[topic]["schema"].encode()
 
 
 def test_outputs_tf_and_colliders_are_advertised_when_the_node_publishes_them(

@@ -30,26 +30,64 @@ def typestore():
     return store
 
 
-@pytest.fixture(scope="module")
-def recorded(tmp_path_factory):
-    """A headless run of the torsion scene recorded the way the node records (singular
-    points appear: every sequence type is non-empty)."""
+# Two recordings: the torsion scene (singular points appear: every sequence type is
+# non-empty) and the pushed ribbon with its camera's images and cloud and the ground
+# truth (sensor_msgs, a capture command; a small image keeps it quick).
+RUNS = {
+    "torsion": ["ribbon_extreme_torsion.yaml"],
+    "camera": [
+        "ribbon_gripper_push.yaml",
+        "--duration",
+        "0.1",
+        "--record-cameras",
+        "--set",
+        "outputs.points=true",
+        "--set",
+        "cameras.0.width=160",
+        "--set",
+        "cameras.0.height=120",
+    ],
+}
+TYPES = {
+    "torsion": {
+        "developable_sim/msg/SimStatus",
+        "developable_sim/msg/SingularPoints",
+        "visualization_msgs/msg/MarkerArray",
+        "rosgraph_msgs/msg/Clock",
+        "developable_sim/msg/SimCommand",
+        "developable_sim/msg/GraspState",
+        "geometry_msgs/msg/WrenchStamped",
+    },
+    # (its gripper carries the finger: no wrench on the ribbon)
+    "camera": {
+        "developable_sim/msg/SimStatus",
+        "developable_sim/msg/SingularPoints",
+        "visualization_msgs/msg/MarkerArray",
+        "rosgraph_msgs/msg/Clock",
+        "developable_sim/msg/SimCommand",
+        "developable_sim/msg/GraspState",
+        "tf2_msgs/msg/TFMessage",
+        "sensor_msgs/msg/Image",
+        "sensor_msgs/msg/CameraInfo",
+        "sensor_msgs/msg/PointCloud2",
+    },
+}
+
+
+@pytest.fixture(scope="module", params=sorted(RUNS))
+def recorded(request, tmp_path_factory):
+    """A headless run recorded the way the node records: (run name, bag)."""
+    scene, *args = RUNS[request.param]
     bag = tmp_path_factory.mktemp("interfaces") / "bag"
     r = subprocess.run(
-        [
-            str(BIN),
-            "run",
-            str(SCENES / "ribbon_extreme_torsion.yaml"),
-            "--record",
-            str(bag),
-        ],
+        [str(BIN), "run", str(SCENES / scene), "--record", str(bag), *args],
         cwd=ROOT,
         capture_output=True,
         text=True,
         timeout=300,
     )
     assert r.returncode == 0, r.stdout + r.stderr
-    return bag
+    return request.param, bag
 
 
 def messages(bag: Path):
@@ -60,9 +98,10 @@ def messages(bag: Path):
 
 
 def test_every_recorded_message_round_trips_through_the_msg_definitions(recorded, typestore):
+    run, bag = recorded
     seen = set()
-    nonempty_points = 0
-    for schema, channel, message in messages(recorded):
+    nonempty_points = captures = 0
+    for schema, channel, message in messages(bag):
         typ = schema.name
         msg = typestore.deserialize_cdr(message.data, typ)
         again = bytes(typestore.serialize_cdr(msg, typ))
@@ -70,19 +109,18 @@ def test_every_recorded_message_round_trips_through_the_msg_definitions(recorded
         seen.add(typ)
         if typ == "developable_sim/msg/SingularPoints" and msg.points:
             nonempty_points += 1
-    assert seen == {
-        "developable_sim/msg/SimStatus",
-        "developable_sim/msg/SingularPoints",
-        "visualization_msgs/msg/MarkerArray",
-        "rosgraph_msgs/msg/Clock",
-        "developable_sim/msg/SimCommand",
-        "developable_sim/msg/GraspState",
-        "geometry_msgs/msg/WrenchStamped",
-    }
-    assert nonempty_points > 0
+        if typ == "developable_sim/msg/SimCommand" and msg.kind == msg.CAPTURE:
+            assert msg.camera == "camera", msg
+            captures += 1
+    assert seen == TYPES[run]
+    if run == "torsion":
+        assert nonempty_points > 0
+    else:
+        assert captures == 2  # 0.1 s at 15 Hz: ticks 0 and 1
 
 
 def test_schemas_carry_every_dependency_in_rosbag2_form(recorded, typestore):
+    _, recorded = recorded
     with open(next(recorded.glob("*.mcap")), "rb") as fh:
         reader = make_reader(fh)
         assert reader.get_header().profile == "ros2"
@@ -107,6 +145,7 @@ def test_schemas_carry_every_dependency_in_rosbag2_form(recorded, typestore):
 
 
 def test_channel_metadata_and_metadata_yaml(recorded, typestore):
+    _, recorded = recorded
     with open(next(recorded.glob("*.mcap")), "rb") as fh:
         summary = make_reader(fh).get_summary()
     schemas = summary.schemas

@@ -139,16 +139,16 @@ impl Endpoints {
         names: &NodeNames,
         outputs: &OutputTable,
         (use_sim_time, tf_max_lag, max_clock_jump): (bool, f64, f64),
-        tf_handles: &[(usize, String)],
+        (tf_handles, tf_cameras): (&[(usize, String)], bool),
     ) -> Result<Self, NodeError> {
         let (context, node_name, mut node, spinner) = start_node(domain_id, names)?;
         let poll = Poll::new()?;
         let waker = Arc::new(Waker::new(poll.registry(), WAKE)?);
         let subs = handle_subscriptions(&mut node, names, tf_handles, &poll)?;
         // TF in for every scene with handles (TF-driven handles, and poses in another
-        // frame of the tree) or a robot's links
+        // frame of the tree), a robot's links, or a camera carried by a TF frame
         let robot = !names.robot_description.is_empty();
-        let tf_in = (!names.handles.is_empty() || robot)
+        let tf_in = (!names.handles.is_empty() || robot || tf_cameras)
             .then(|| {
                 let lag = Duration::from_secs_f64(tf_max_lag);
                 TfIn::new(
