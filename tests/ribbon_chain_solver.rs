@@ -218,7 +218,7 @@ fn the_agreement_checks_see_a_subtly_wrong_newton_matrix() {
     // 1e-5 too large (the core's test-only hook `RibbonSim::set_newton_matrix_error`,
     // feature `test-hooks`, on in this crate's dev-dependency only; the objective and
     // its gradient stay exact, so the solve reaches the same minimizer by other
-    // iterates). Measured (2026-12-08, the third warm step): RMS 6.4e-13 m on the
+    // iterates). Measured (2026-12-07, the third warm step): RMS 6.4e-13 m on the
     // extreme torsion and 3.7e-11 m on the Moebius band, 6x and 3.7x above the bounds
     // of the tests above, so both fail; the distance scales with the error (1e-4:
     // 6.5e-12 and 3.7e-10 m), so 1e-6 (6.4e-14 and 3.7e-12 m) passes unseen. The

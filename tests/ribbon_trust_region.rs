@@ -99,7 +99,7 @@ const SAME_MINIMIZER: f64 = 1e-9;
 
 #[test]
 fn trust_region_reaches_the_damped_minimizer_where_both_converge() {
-    // measured (2026-12-08, a2e15ff): largest RMS 1.9e-10 m (heavy cantilever n = 50),
+    // measured (2026-12-07, a2e15ff): largest RMS 1.9e-10 m (heavy cantilever n = 50),
     // 6.6e-10 m (buckled strip n = 50), 8.4e-12 m (vibrating cantilever n = 50), below
     // 1e-15 m elsewhere; every step converged with both; no singular points on either
     for (name, n) in [

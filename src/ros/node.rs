@@ -415,7 +415,9 @@ impl SimNode {
             Some(Err(e)) => self.encode_failed(&e),
             None => {}
         }
-        if applied == Applied::NewState {
+        // the first /clock sample republishes the state at t = 0: its camera tick is
+        // captured then (see `capture_cameras`)
+        if matches!(applied, Applied::NewState | Applied::TimeOrigin) {
             self.capture_cameras();
         }
         applied
@@ -466,7 +468,7 @@ impl SimNode {
 
     /// Under use_sim_time, before the first /clock sample: no time yet, so nothing is
     /// published or recorded (a status stamped 0 would be in no one's time base).
-    fn waiting_for_clock(&self) -> bool {
+    pub(super) fn waiting_for_clock(&self) -> bool {
         self.io
             .clock_in
             .as_ref()

@@ -143,12 +143,13 @@ impl Cameras {
     }
 
     /// Capture the due frame of camera `camera` of `scene`, seen from
-    /// `world_from_optical`; returns its tick (None: no tick of it is due).
+    /// `world_from_optical` and stamped `stamp` (the state's, after the time origin of
+    /// an external clock); returns its tick (None: no tick of it is due).
     pub fn capture(
         &mut self,
         scene: &Scene,
         camera: usize,
-        world_from_optical: &Pose,
+        (world_from_optical, stamp): (&Pose, Time),
     ) -> Option<u64> {
         let frame = self.due.get_mut(camera)?.take()?;
         let snapshot = self.draws[camera].then(|| {
@@ -164,7 +165,7 @@ impl Cameras {
         self.pending[camera].push_back(Capture {
             camera,
             frame,
-            stamp: Time::from_secs(scene.world.time()),
+            stamp,
             step: scene.world.steps_taken(),
             world_from_optical: *world_from_optical,
             snapshot,
@@ -310,8 +311,15 @@ mod tests {
         assert_eq!(cams.on_state(&s), 0);
         assert_eq!(cams.due(0), Some(0));
         let pose = fixed_pose(&s.cameras[0]).unwrap();
-        assert_eq!(cams.capture(&s, 0, &pose), Some(0));
-        assert_eq!(cams.capture(&s, 0, &pose), None, "a tick is captured once");
+        assert_eq!(
+            cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time()))),
+            Some(0)
+        );
+        assert_eq!(
+            cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time()))),
+            None,
+            "a tick is captured once"
+        );
         // ticks 1 and 2 fall on steps 7 (t = 0.07) and 13 (0.13); tick 1 not captured
         let targets = vec![None; s.world.handles().len()];
         let (mut skipped, mut dues) = (0, Vec::new());
@@ -350,7 +358,10 @@ mod tests {
         let mut cams = Cameras::new(&s, &infos);
         cams.on_state(&s);
         let pose = fixed_pose(&s.cameras[0]).unwrap();
-        assert_eq!(cams.capture(&s, 0, &pose), Some(0));
+        assert_eq!(
+            cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time()))),
+            Some(0)
+        );
         assert_eq!(cams.take(0).unwrap().snapshot, None);
         // no camera row at all: never due
         let mut none = Cameras::new(&s, &[]);
@@ -363,7 +374,8 @@ mod tests {
         let mut cams = Cameras::new(s, rows);
         cams.on_state(s);
         let pose = fixed_pose(&s.cameras[0]).unwrap();
-        cams.capture(s, 0, &pose).unwrap();
+        cams.capture(s, 0, (&pose, Time::from_secs(s.world.time())))
+            .unwrap();
         let capture = cams.take(0).unwrap();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -474,7 +486,8 @@ mod tests {
         let pose = fixed_pose(&cam).unwrap();
         let mut r = renderer(&s, &cam);
         cams.on_state(&s);
-        cams.capture(&s, 0, &pose).unwrap();
+        cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time())))
+            .unwrap();
         let first = cams.take(0).unwrap();
         assert_eq!(
             first.colliders, None,
@@ -496,7 +509,8 @@ mod tests {
             s.world.step(&targets);
             cams.on_state(&s);
         }
-        cams.capture(&s, 0, &pose).unwrap();
+        cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time())))
+            .unwrap();
         let second = cams.take(0).unwrap();
         let now = camera::world_colliders(&s.world).to_vec();
         assert_eq!(second.colliders.as_ref(), Some(&now));

@@ -197,9 +197,11 @@ impl Session {
                 world_from_optical,
             } => Applied::Captured {
                 camera: *camera,
-                frame: self
-                    .cameras
-                    .capture(&self.scene, *camera, world_from_optical),
+                frame: {
+                    let stamp = self.stamp();
+                    self.cameras
+                        .capture(&self.scene, *camera, (world_from_optical, stamp))
+                },
             },
         }
     }
@@ -352,7 +354,9 @@ impl Session {
         camera: usize,
         world_from_optical: &Pose,
     ) -> Option<u64> {
-        self.cameras.capture(scene, camera, world_from_optical)
+        let stamp = stamp_at(self.origin_ns, scene.world.time());
+        self.cameras
+            .capture(scene, camera, (world_from_optical, stamp))
     }
 
     /// The frame of the state of `scene` (see [`Session::frame_of`]).

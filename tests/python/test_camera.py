@@ -339,7 +339,7 @@ def test_an_independent_ray_caster_agrees_with_the_depth_image(start_node, ros, 
     assert err.max() <= 1e-4, f"depth differs by {err.max()} m"
     # and closer: the renderer reads the depth off the pixel's own ray in float64 and
     # rounds it once to float32 (half an ulp, 2^-24 relative); one ulp bounds it
-    # (measured: 5.9e-8 m at ~1 m, 2026-12-09)
+    # (measured: 5.9e-8 m at ~1 m, 2026-12-07)
     assert np.all(err <= 2.0**-23 * z), err.max()
     # the check can fail: the same image one pixel off, or 1 mm deeper, does
     agree, err, _ = compare(np.roll(depth, 1, axis=1))

@@ -40,9 +40,14 @@ impl SimNode {
 
     /// At a new state: every camera whose tick is due and which is done drawing
     /// captures it (a command, recorded) and hands it to its thread; a camera still
-    /// drawing skips the tick (the session counts it).
+    /// drawing skips the tick (the session counts it). Under use_sim_time nothing is
+    /// captured before the first /clock sample: its frame could not be published (no
+    /// time yet), and a recorded capture nobody saw would shift `replay`'s frames.
     pub(super) fn capture_cameras(&mut self) {
         self.drain_cameras();
+        if self.waiting_for_clock() {
+            return;
+        }
         for c in 0..self.session.scene.cameras.len() {
             if self.session.cameras.due(c).is_none() || self.cameras.busy(c) {
                 continue;
