@@ -48,6 +48,11 @@ pub fn banner(config: &NodeConfig) -> Vec<String> {
          (developable_sim/srv/Release)",
         names.grasp, names.release
     ));
+    let sim = &names.simulation;
+    lines.push(format!(
+        "[developable_sim]   services: {} {} {} {} {} (simulation_interfaces 1.5.1)",
+        sim.get_features, sim.reset, sim.step, sim.get_state, sim.set_state
+    ));
     if !names.handle_grasp.is_empty() {
         lines.push(format!(
             "[developable_sim]   services: {} (std_srvs/srv/SetBool: true closes, false opens)",

@@ -148,6 +148,9 @@ def test_simulation_interfaces_services(ros, domain_id, start_node):
     node = start_node(domain_id, GRIPPER)
     status = ros.reader("/ribbon/status", rt.SimStatus, STATUS_QOS)
     ros.wait_matched(status)
+    # the start-up banner names them (the node prints it before "ready")
+    banner = [l for l in node.log().splitlines() if "(simulation_interfaces 1.5.1)" in l]
+    assert len(banner) == 1 and "/developable_sim/set_simulation_state" in banner[0], banner
 
     f = call(
         ros, "get_simulator_features", rt.GetSimulatorFeaturesRequest,
