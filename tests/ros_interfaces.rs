@@ -6,7 +6,9 @@ use std::collections::BTreeSet;
 
 use developable_sim::wire::introspect::{to_value, Value};
 use developable_sim::wire::msgs::*;
-use developable_sim::wire::schema::{is_primitive, parse_msg, FieldDef, DEFINITIONS, SERVICES};
+use developable_sim::wire::schema::{
+    is_primitive, parse_msg, FieldDef, ACTIONS, DEFINITIONS, SERVICES,
+};
 use developable_sim::wire::sim_interfaces::*;
 
 /// `package/msg/Type` of a Rust struct name (each name is unique among the definitions).
@@ -384,6 +386,46 @@ fn service_structs_match_simulation_interfaces() {
         to_value(&ResultResponse::default()).unwrap(),
     );
     assert!(seen.contains("simulation_interfaces/msg/SimulatorFeatures"));
+}
+
+/// The SimulateSteps action's goal, result and feedback (vendored release 1.5.1)
+/// against the three parts of its .action, field for field.
+#[test]
+fn action_structs_match_simulate_steps() {
+    let text = ACTIONS
+        .iter()
+        .find(|(n, _)| *n == "simulation_interfaces/action/SimulateSteps")
+        .unwrap()
+        .1;
+    let parts: Vec<Vec<FieldDef>> = text
+        .split("\n---\n")
+        .map(|part| {
+            let all = parse_msg("simulation_interfaces", part).unwrap();
+            all.into_iter().filter(|f| !f.constant).collect()
+        })
+        .collect();
+    assert_eq!(parts.len(), 3, "goal, result, feedback");
+    let mut seen = BTreeSet::new();
+    let samples = [
+        ("Goal", to_value(&SimulateStepsGoal::default()).unwrap()),
+        ("Result", to_value(&SimulateStepsResult::default()).unwrap()),
+        (
+            "Feedback",
+            to_value(&SimulateStepsFeedback::default()).unwrap(),
+        ),
+    ];
+    for ((what, v), defs) in samples.into_iter().zip(&parts) {
+        check_fields(what, &fields_of(v), defs, &mut seen);
+    }
+    assert!(seen.contains("simulation_interfaces/msg/Result"));
+    // the checker itself: the feedback's two counters swapped are caught
+    let mut swapped = parts[2].clone();
+    swapped.swap(0, 1);
+    let v = to_value(&SimulateStepsFeedback::default()).unwrap();
+    let r = std::panic::catch_unwind(|| {
+        check_fields("Feedback", &fields_of(v), &swapped, &mut BTreeSet::new())
+    });
+    assert!(r.is_err());
 }
 
 /// The constants the node answers with are the vendored definitions' values.

@@ -6,6 +6,7 @@
 //! Architecture invariant: the only module that knows DDS. Messages, encodings and QoS
 //! come from `wire`; what a state publishes and how inputs are judged from `session`.
 
+pub mod action;
 pub mod dds;
 pub mod graph;
 pub mod node;

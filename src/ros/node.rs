@@ -45,6 +45,7 @@ mod latency;
 mod realtime;
 mod robot;
 mod sim_state;
+mod simulate_steps;
 mod simulation;
 
 use drawing::CameraThreads;

@@ -1,4 +1,5 @@
-//! Service replies held until the client can receive them.
+//! Service replies held until the client can receive them (and [`receive_request`],
+//! the request side every server and the action share).
 //!
 //! A client on the Cyclone DDS service mapping (rclpy on rmw_cyclonedds) creates its
 //! request writer and its reply reader together and may send a request as soon as its
@@ -147,4 +148,35 @@ impl<Resp: Message + 'static> HeldReplies<Resp> {
         self.waiting = keep;
         done
     }
+}
+
+/// Requests a single `receive` skips past when they fail to read (deserialize or
+/// unwrap), so one bad sample does not stall the good ones queued behind it until
+/// the next wake, yet a reader that fails forever cannot spin the loop.
+const MAX_UNREADABLE_PER_CALL: usize = 16;
+
+/// The next request of `server`, if any. A request that cannot be read is reported on
+/// stderr (once per run of failures, naming the service `name`; `failing` keeps the run)
+/// and skipped, never dropped silently: a client waiting on it would otherwise see only
+/// a missing reply.
+pub fn receive_request<Req: Message + 'static, Resp: Message + 'static>(
+    server: &Server<Req, Resp>,
+    name: &str,
+    failing: &mut bool,
+) -> Option<(RmwRequestId, Req)> {
+    for _ in 0..MAX_UNREADABLE_PER_CALL {
+        match server.receive_request() {
+            Ok(next) => {
+                *failing = false;
+                return next;
+            }
+            Err(e) => {
+                if !*failing {
+                    eprintln!("warning: service {name}: unreadable request dropped: {e:?}");
+                }
+                *failing = true;
+            }
+        }
+    }
+    None
 }

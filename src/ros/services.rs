@@ -1,8 +1,9 @@
 //! The node's services on the Cyclone DDS service mapping (as rclpy on rmw_cyclonedds
 //! calls them): `~/reset`, `~/set_paused`, `~/step` (std_srvs) and the parameter
 //! services `~/list_parameters`, `~/get_parameters`, `~/set_parameters`,
-//! `~/describe_parameters`, `~/get_parameter_types` (rcl_interfaces). Every reply is
-//! held until the client's reply reader is matched ([`crate::ros::reply`]).
+//! `~/describe_parameters`, `~/get_parameter_types` (rcl_interfaces), the
+//! simulation_interfaces services and the SimulateSteps action ([`crate::ros::action`]).
+//! Every reply is held until the client's reply reader is matched ([`crate::ros::reply`]).
 //!
 //! ros2-client's own parameter services are hard-wired to the Enhanced (Fast DDS)
 //! mapping, which Cyclone clients cannot call; the node turns them off
@@ -17,8 +18,9 @@ use ros2_client::{
     ServiceTypeName,
 };
 
+use crate::ros::action::StepsAction;
 use crate::ros::dds::{dds, NodeError};
-use crate::ros::reply::{ClientWriters, Flushed, HeldReplies};
+use crate::ros::reply::{receive_request, ClientWriters, Flushed, HeldReplies};
 use crate::session::names::NodeNames;
 use crate::wire::msgs::{
     GraspRequest, GraspResponse, ReleaseRequest, ReleaseResponse, SetBoolRequest, SetBoolResponse,
@@ -40,11 +42,6 @@ pub struct Service<Req: Message + 'static, Resp: Message + 'static> {
     /// such episode, not once per request.
     failing: bool,
 }
-
-/// Requests a single `receive` skips past when they fail to read (deserialize or
-/// unwrap), so one bad sample does not stall the good ones queued behind it until
-/// the next wake, yet a reader that fails forever cannot spin the loop.
-const MAX_UNREADABLE_PER_CALL: usize = 16;
 
 impl<Req: Message + Clone + 'static, Resp: Message + 'static> Service<Req, Resp> {
     fn new(
@@ -81,28 +78,9 @@ impl<Req: Message + Clone + 'static, Resp: Message + 'static> Service<Req, Resp>
         })
     }
 
-    /// The next request, if any. A request that cannot be read is reported on stderr
-    /// (once per run of failures, naming the service) and skipped, never dropped
-    /// silently: a client waiting on it would otherwise see only a missing reply.
+    /// The next request, if any (see [`receive_request`]).
     pub fn receive(&mut self) -> Option<(RmwRequestId, Req)> {
-        for _ in 0..MAX_UNREADABLE_PER_CALL {
-            match self.server.receive_request() {
-                Ok(next) => {
-                    self.failing = false;
-                    return next;
-                }
-                Err(e) => {
-                    if !self.failing {
-                        eprintln!(
-                            "warning: service {}: unreadable request dropped: {e:?}",
-                            self.name
-                        );
-                    }
-                    self.failing = true;
-                }
-            }
-        }
-        None
+        receive_request(&self.server, &self.name, &mut self.failing)
     }
 
     /// Hold the reply to `id` until its client can receive it.
@@ -147,6 +125,8 @@ pub struct SimulationServices {
     pub step: Service<StepSimulationRequest, ResultResponse>,
     pub get_state: Service<TriggerRequest, GetSimulationStateResponse>,
     pub set_state: Service<SetSimulationStateRequest, ResultResponse>,
+    /// The SimulateSteps action `~/simulate_steps`.
+    pub simulate_steps: StepsAction,
 }
 
 impl SimulationServices {
@@ -155,6 +135,9 @@ impl SimulationServices {
         names: &crate::session::names::SimulationServices,
     ) -> Result<Self, NodeError> {
         let t = |n| ("simulation_interfaces", n);
+        let simulate_steps =
+            StepsAction::new(c.node, c.node_name, &names.simulate_steps, c.poll, c.token)?;
+        c.token += crate::ros::action::TOKENS;
         Ok(SimulationServices {
             get_features: Service::new(
                 c,
@@ -176,6 +159,7 @@ impl SimulationServices {
                 t("SetSimulationState"),
                 "set_simulation_state",
             )?,
+            simulate_steps,
         })
     }
 
@@ -184,16 +168,21 @@ impl SimulationServices {
             && self.reset.replies.is_empty()
             && self.step.replies.is_empty()
             && self.get_state.replies.is_empty()
-            && self.set_state.replies.is_empty())
+            && self.set_state.replies.is_empty()
+            && !self.simulate_steps.waiting())
     }
 
-    fn flush(&mut self, node: &Node, w: &ClientWriters, now: Instant) -> [Flushed; 5] {
+    fn flush(&mut self, node: &Node, w: &ClientWriters, now: Instant) -> [Flushed; 8] {
+        let [goal, cancel, result] = self.simulate_steps.flush(node, w, now);
         [
             self.get_features.flush(node, w, now),
             self.reset.flush(node, w, now),
             self.step.flush(node, w, now),
             self.get_state.flush(node, w, now),
             self.set_state.flush(node, w, now),
+            goal,
+            cancel,
+            result,
         ]
     }
 }

@@ -59,7 +59,8 @@ pub struct NodeNames {
 }
 
 /// `~/get_simulator_features`, `~/reset_simulation`, `~/step_simulation`,
-/// `~/get_simulation_state`, `~/set_simulation_state` (simulation_interfaces).
+/// `~/get_simulation_state`, `~/set_simulation_state` (simulation_interfaces), and the
+/// SimulateSteps action `~/simulate_steps`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct SimulationServices {
     pub get_features: String,
@@ -67,6 +68,7 @@ pub struct SimulationServices {
     pub step: String,
     pub get_state: String,
     pub set_state: String,
+    pub simulate_steps: String,
 }
 
 /// `~/list_parameters`, `~/get_parameters`, `~/set_parameters`, `~/describe_parameters`,
@@ -155,6 +157,7 @@ impl NodeNames {
                 step: resolve("~/step_simulation")?,
                 get_state: resolve("~/get_simulation_state")?,
                 set_state: resolve("~/set_simulation_state")?,
+                simulate_steps: resolve("~/simulate_steps")?,
             },
             handles,
             ..names.clone()

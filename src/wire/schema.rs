@@ -192,6 +192,12 @@ pub const SERVICES: &[(&str, &str)] = &[
     ),
 ];
 
+/// `(package/action/Type, definition)` of the actions the node serves.
+pub const ACTIONS: &[(&str, &str)] = &[(
+    "simulation_interfaces/action/SimulateSteps",
+    include_str!("interfaces/simulation_interfaces/SimulateSteps.action"),
+)];
+
 /// The definition text of `package/msg/Type`.
 pub fn definition(type_name: &str) -> Option<&'static str> {
     DEFINITIONS

@@ -1,8 +1,8 @@
 //! The ROS 2 standard `simulation_interfaces` (release 1.5.1, the Jazzy line; the
 //! definitions are vendored verbatim in `interfaces/simulation_interfaces/`): the
-//! messages and service requests and responses the node serves, fields in definition
-//! order (CDR carries no names; `tests/ros_interfaces.rs` checks them against the
-//! `.msg`/`.srv` text).
+//! messages, service requests and responses and the SimulateSteps action's parts the
+//! node serves, fields in definition order (CDR carries no names;
+//! `tests/ros_interfaces.rs` checks them against the `.msg`/`.srv`/`.action` text).
 
 use serde::{Deserialize, Serialize};
 
@@ -146,3 +146,25 @@ impl ros2_client::Message for SetSimulationStateRequest {}
 pub const ALREADY_IN_TARGET_STATE: u8 = 101;
 pub const STATE_TRANSITION_ERROR: u8 = 102;
 pub const INCORRECT_TRANSITION: u8 = 103;
+
+/// `simulation_interfaces/action/SimulateSteps` goal (`SimulateSteps_Goal`).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SimulateStepsGoal {
+    pub steps: u64,
+}
+impl ros2_client::Message for SimulateStepsGoal {}
+
+/// `simulation_interfaces/action/SimulateSteps` result (`SimulateSteps_Result`).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SimulateStepsResult {
+    pub result: SimResult,
+}
+impl ros2_client::Message for SimulateStepsResult {}
+
+/// `simulation_interfaces/action/SimulateSteps` feedback (`SimulateSteps_Feedback`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SimulateStepsFeedback {
+    pub completed_steps: u64,
+    pub remaining_steps: u64,
+}
+impl ros2_client::Message for SimulateStepsFeedback {}

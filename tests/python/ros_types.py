@@ -644,3 +644,112 @@ class SetSimulationStateResponse(
     client_guid: t.uint64 = 0
     sequence_number: t.int64 = 0
     result: SimResult = field(default_factory=SimResult)
+
+
+# simulation_interfaces/action/SimulateSteps (1.5.1) and the action_msgs parts of every
+# action, as rosidl generates them and rmw_cyclonedds carries them: the three services
+# (request header client_guid + sequence_number) and the feedback and status topics.
+
+
+@dataclass
+class UUID(IdlStruct, typename="unique_identifier_msgs::msg::dds_::UUID_"):
+    uuid: t.array[t.uint8, 16] = field(default_factory=lambda: [0] * 16)
+
+
+@dataclass
+class GoalInfo(IdlStruct, typename="action_msgs::msg::dds_::GoalInfo_"):
+    goal_id: UUID = field(default_factory=UUID)
+    stamp: Time = field(default_factory=Time)
+
+
+@dataclass
+class GoalStatus(IdlStruct, typename="action_msgs::msg::dds_::GoalStatus_"):
+    goal_info: GoalInfo = field(default_factory=GoalInfo)
+    status: t.int8 = 0
+
+
+@dataclass
+class GoalStatusArray(IdlStruct, typename="action_msgs::msg::dds_::GoalStatusArray_"):
+    status_list: t.sequence[GoalStatus] = field(default_factory=list)
+
+
+@dataclass
+class CancelGoalRequest(IdlStruct, typename="action_msgs::srv::dds_::CancelGoal_Request_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    goal_info: GoalInfo = field(default_factory=GoalInfo)
+
+
+@dataclass
+class CancelGoalResponse(IdlStruct, typename="action_msgs::srv::dds_::CancelGoal_Response_"):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    return_code: t.int8 = 0
+    goals_canceling: t.sequence[GoalInfo] = field(default_factory=list)
+
+
+@dataclass
+class SimulateStepsGoal(IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_Goal_"):
+    steps: t.uint64 = 0
+
+
+@dataclass
+class SimulateStepsResult(
+    IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_Result_"
+):
+    result: SimResult = field(default_factory=SimResult)
+
+
+@dataclass
+class SimulateStepsFeedback(
+    IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_Feedback_"
+):
+    completed_steps: t.uint64 = 0
+    remaining_steps: t.uint64 = 0
+
+
+@dataclass
+class SimulateStepsSendGoalRequest(
+    IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_SendGoal_Request_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    goal_id: UUID = field(default_factory=UUID)
+    goal: SimulateStepsGoal = field(default_factory=SimulateStepsGoal)
+
+
+@dataclass
+class SimulateStepsSendGoalResponse(
+    IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_SendGoal_Response_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    accepted: bool = False
+    stamp: Time = field(default_factory=Time)
+
+
+@dataclass
+class SimulateStepsGetResultRequest(
+    IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_GetResult_Request_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    goal_id: UUID = field(default_factory=UUID)
+
+
+@dataclass
+class SimulateStepsGetResultResponse(
+    IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_GetResult_Response_"
+):
+    client_guid: t.uint64 = 0
+    sequence_number: t.int64 = 0
+    status: t.int8 = 0
+    result: SimulateStepsResult = field(default_factory=SimulateStepsResult)
+
+
+@dataclass
+class SimulateStepsFeedbackMessage(
+    IdlStruct, typename="simulation_interfaces::action::dds_::SimulateSteps_FeedbackMessage_"
+):
+    goal_id: UUID = field(default_factory=UUID)
+    feedback: SimulateStepsFeedback = field(default_factory=SimulateStepsFeedback)

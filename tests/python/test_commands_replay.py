@@ -222,3 +222,29 @@ def test_grasps_and_releases_with_every_runtime_change_replay_identical(
     assert code == 1 and not rep["identical"], rep
     differing = {t["topic"] for t in rep["topics"] if t["differing"] > 0}
     assert {"/ribbon/status", "/ribbon/markers", "/handles/gripper/state"} <= differing, rep
+
+
+def test_simulate_steps_goal_replays_identical(start_node, ros, domain_id, tmp_path):
+    """A SimulateSteps goal's steps are the node's own step commands: recorded one per
+    step (exactly N from a node started paused) and replayed IDENTICAL; without one of
+    them, DIFFERENT."""
+    from test_simulation_interfaces import OK, SUCCEEDED, get_result, goal_uuid, send_goal
+
+    bag = tmp_path / "bag"
+    node = start_node(domain_id, GRIPPER, "--paused", "--record", str(bag))
+    n = 30
+    g = goal_uuid()
+    assert send_goal(ros, g, n).accepted
+    r = get_result(ros, g)
+    assert r.status == SUCCEEDED and r.result.result.result == OK, r
+    assert node.stop() == 0, node.log()
+
+    kinds = [k for k, _ in commands(bag)]
+    assert kinds.count(STEP) == n, kinds
+    code, rep = replay(bag, tmp_path / "replay.json")
+    assert code == 0 and rep["identical"] and rep["steps"] == n, rep
+
+    tampered = tmp_path / "tampered"
+    without_one_command(bag, tampered, lambda m: m.kind == STEP)
+    code, rep = replay(tampered, tmp_path / "tampered.json")
+    assert code == 1 and not rep["identical"], rep

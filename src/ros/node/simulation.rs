@@ -5,10 +5,14 @@
 //!
 //! States: PLAYING (running), PAUSED, STOPPED (paused and reset, until played, paused
 //! or stepped), QUITTING (the node exits after replying). StepSimulation runs its steps
-//! a batch per loop iteration (inputs and services stay served) and replies when done.
+//! a batch per loop iteration (inputs and services stay served) and replies when done;
+//! SimulateSteps goals (`simulate_steps`) share that queue.
 
 use std::time::Instant;
 
+use ros2_client::action::GoalStatusEnum;
+
+use super::sim_state::StepJob;
 use super::{Lockstep, SimNode, CATCH_UP_BATCH, CATCH_UP_WALL};
 use crate::wire::sim_interfaces::{
     GetSimulationStateResponse, GetSimulatorFeaturesResponse, ResetSimulationRequest as Reset,
@@ -29,14 +33,16 @@ fn features() -> GetSimulatorFeaturesResponse {
                 F::SIMULATION_STATE_PAUSE,
                 F::STEP_SIMULATION_SINGLE,
                 F::STEP_SIMULATION_MULTIPLE,
+                F::STEP_SIMULATION_ACTION,
             ],
             spawn_formats: Vec::new(),
             custom_info: format!(
                 "developable_sim {}, simulation_interfaces 1.5.1. ResetSimulation resets \
                  time and state together (SCOPE_DEFAULT, SCOPE_ALL, or SCOPE_TIME | \
                  SCOPE_STATE; nothing is ever spawned); under use_sim_time the reset state \
-                 is stamped at the /clock's time. A step is the scene's dt. No spawning, no \
-                 worlds, no SimulateSteps action (docs/ros2_interop.md).",
+                 is stamped at the /clock's time. A step is the scene's dt. SimulateSteps \
+                 (~/simulate_steps): feedback after every step, a canceled goal stops \
+                 between steps. No spawning, no worlds (docs/ros2_interop.md).",
                 env!("CARGO_PKG_VERSION")
             ),
         },
@@ -80,8 +86,10 @@ impl SimNode {
                 continue;
             }
             self.sim_if.stopped = false;
-            self.sim_if.stepping.push_back((id, req.steps, 0));
+            let job = StepJob::Service(id);
+            self.sim_if.stepping.push_back((job, req.steps, 0));
         }
+        self.drain_simulate_steps();
     }
 
     fn simulation_state(&self) -> u8 {
@@ -145,8 +153,8 @@ impl SimNode {
         SimResult::ok()
     }
 
-    /// Whether StepSimulation may run `steps` now.
-    fn may_step(&self, steps: u64) -> Result<(), SimResult> {
+    /// Whether StepSimulation (or a SimulateSteps goal) may run `steps` now.
+    pub(super) fn may_step(&self, steps: u64) -> Result<(), SimResult> {
         let failed = |why: &str| Err(SimResult::failed(SimResult::OPERATION_FAILED, why));
         if steps == 0 {
             return failed("steps must be at least 1");
@@ -162,10 +170,11 @@ impl SimNode {
         Ok(())
     }
 
-    /// Run the oldest StepSimulation request's steps, a batch at a time; reply when it
-    /// is done, or failed if the simulation was resumed meanwhile.
+    /// Run the oldest StepSimulation request's or SimulateSteps goal's steps, a batch at
+    /// a time (a goal's feedback after each step); reply or end the goal when it is
+    /// done, or failed if the simulation was resumed meanwhile.
     pub(super) fn advance_step_requests(&mut self) {
-        let Some((id, asked, mut done)) = self.sim_if.stepping.pop_front() else {
+        let Some((job, asked, mut done)) = self.sim_if.stepping.pop_front() else {
             return;
         };
         let start = Instant::now();
@@ -180,22 +189,30 @@ impl SimNode {
             }
             self.tick(Instant::now());
             done += 1;
+            if let StepJob::Goal(goal) = job {
+                self.goal_feedback(goal, done, asked);
+            }
             if start.elapsed() >= CATCH_UP_WALL {
                 break;
             }
         }
-        let result = match stopped_early {
+        let (status, result) = match stopped_early {
             Some(mut r) => {
                 r.error_message = format!("after {done} of {asked} steps: {}", r.error_message);
-                r
+                (GoalStatusEnum::Aborted, r)
             }
-            None if done == asked => SimResult::ok(),
+            None if done == asked => (GoalStatusEnum::Succeeded, SimResult::ok()),
             None => {
-                self.sim_if.stepping.push_front((id, asked, done));
+                self.sim_if.stepping.push_front((job, asked, done));
                 return;
             }
         };
-        let resp = ResultResponse { result };
-        self.io.services.simulation.step.reply(id, resp);
+        match job {
+            StepJob::Service(id) => {
+                let resp = ResultResponse { result };
+                self.io.services.simulation.step.reply(id, resp);
+            }
+            StepJob::Goal(goal) => self.end_goal(goal, status, result),
+        }
     }
 }

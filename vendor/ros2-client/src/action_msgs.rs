@@ -59,6 +59,15 @@ pub struct CancelGoalRequest {
 }
 impl Message for CancelGoalRequest {}
 
+impl CancelGoalRequest {
+  /// The goal to cancel (zero: none named) and the time at or before which every
+  /// accepted goal is canceled (zero: none), for a server that applies the policy above
+  /// itself (the synchronous `ActionServer` leaves it to its user).
+  pub fn goal_info(&self) -> &GoalInfo {
+    &self.goal_info
+  }
+}
+
 /// From [CancelGoal](https://docs.ros2.org/foxy/api/action_msgs/srv/CancelGoal.html)
 #[derive(Clone, Copy, Serialize_repr, Deserialize_repr, PartialEq, Debug)]
 #[repr(i8)]
