@@ -50,8 +50,8 @@ pub fn banner(config: &NodeConfig) -> Vec<String> {
     ));
     let sim = &names.simulation;
     lines.push(format!(
-        "[developable_sim]   services: {} {} {} {} {} (simulation_interfaces 1.5.1)",
-        sim.get_features, sim.reset, sim.step, sim.get_state, sim.set_state
+        "[developable_sim]   services: {} {} {} {} {}, action: {} (simulation_interfaces 1.5.1)",
+        sim.get_features, sim.reset, sim.step, sim.get_state, sim.set_state, sim.simulate_steps
     ));
     if !names.handle_grasp.is_empty() {
         lines.push(format!(

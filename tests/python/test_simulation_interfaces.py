@@ -164,6 +164,7 @@ def test_simulation_interfaces_services(ros, domain_id, start_node):
     # the start-up banner names them (the node prints it before "ready")
     banner = [l for l in node.log().splitlines() if "(simulation_interfaces 1.5.1)" in l]
     assert len(banner) == 1 and "/developable_sim/set_simulation_state" in banner[0], banner
+    assert "action: /developable_sim/simulate_steps" in banner[0], banner
 
     f = call(
         ros, "get_simulator_features", rt.GetSimulatorFeaturesRequest,
