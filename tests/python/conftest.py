@@ -157,6 +157,10 @@ def start_node(tmp_path, domain_id):
     for n in started:
         if n.running():
             n.stop(signal.SIGKILL)
+        # pytest shows a test's captured output only when it fails: then the nodes' own
+        # account (held or unseen service replies, dropped publications, TF) is beside it
+        tail = n.log().splitlines()[-40:]
+        print(f"--- {n.log_path} (last {len(tail)} lines)\n" + "\n".join(tail))
 
 
 class Ros:
