@@ -149,7 +149,8 @@ impl Cameras {
         &mut self,
         scene: &Scene,
         camera: usize,
-        (world_from_optical, stamp): (&Pose, Time),
+        world_from_optical: &Pose,
+        stamp: Time,
     ) -> Option<u64> {
         let frame = self.due.get_mut(camera)?.take()?;
         let snapshot = self.draws[camera].then(|| {
@@ -312,11 +313,11 @@ mod tests {
         assert_eq!(cams.due(0), Some(0));
         let pose = fixed_pose(&s.cameras[0]).unwrap();
         assert_eq!(
-            cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time()))),
+            cams.capture(&s, 0, &pose, Time::from_secs(s.world.time())),
             Some(0)
         );
         assert_eq!(
-            cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time()))),
+            cams.capture(&s, 0, &pose, Time::from_secs(s.world.time())),
             None,
             "a tick is captured once"
         );
@@ -359,7 +360,7 @@ mod tests {
         cams.on_state(&s);
         let pose = fixed_pose(&s.cameras[0]).unwrap();
         assert_eq!(
-            cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time()))),
+            cams.capture(&s, 0, &pose, Time::from_secs(s.world.time())),
             Some(0)
         );
         assert_eq!(cams.take(0).unwrap().snapshot, None);
@@ -374,7 +375,7 @@ mod tests {
         let mut cams = Cameras::new(s, rows);
         cams.on_state(s);
         let pose = fixed_pose(&s.cameras[0]).unwrap();
-        cams.capture(s, 0, (&pose, Time::from_secs(s.world.time())))
+        cams.capture(s, 0, &pose, Time::from_secs(s.world.time()))
             .unwrap();
         let capture = cams.take(0).unwrap();
         let pool = rayon::ThreadPoolBuilder::new()
@@ -486,7 +487,7 @@ mod tests {
         let pose = fixed_pose(&cam).unwrap();
         let mut r = renderer(&s, &cam);
         cams.on_state(&s);
-        cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time())))
+        cams.capture(&s, 0, &pose, Time::from_secs(s.world.time()))
             .unwrap();
         let first = cams.take(0).unwrap();
         assert_eq!(
@@ -509,7 +510,7 @@ mod tests {
             s.world.step(&targets);
             cams.on_state(&s);
         }
-        cams.capture(&s, 0, (&pose, Time::from_secs(s.world.time())))
+        cams.capture(&s, 0, &pose, Time::from_secs(s.world.time()))
             .unwrap();
         let second = cams.take(0).unwrap();
         let now = camera::world_colliders(&s.world).to_vec();

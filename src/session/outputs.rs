@@ -120,9 +120,14 @@ impl<M: RosMessage> Producer for Typed<M> {
         (self.0)(p, scope).map(|m| cdr::encode(&m).map(Bytes::from))
     }
     fn value(&self, bytes: &[u8]) -> Result<Value, String> {
-        let m: M = cdr::decode(bytes).map_err(|e| format!("{}: {e}", M::TYPE))?;
-        to_value(&m).map_err(|e| format!("{}: {e}", M::TYPE))
+        decoded_value::<M>(bytes)
     }
+}
+
+/// The CDR message `bytes` of type `M` as a value tree (replay's comparisons).
+fn decoded_value<M: RosMessage>(bytes: &[u8]) -> Result<Value, String> {
+    let m: M = cdr::decode(bytes).map_err(|e| format!("{}: {e}", M::TYPE))?;
+    to_value(&m).map_err(|e| format!("{}: {e}", M::TYPE))
 }
 
 /// A camera row's message made from a drawn frame, CDR-encoded (None: not made).
@@ -158,8 +163,7 @@ impl<M: RosMessage> Producer for Drawn<M> {
         None
     }
     fn value(&self, bytes: &[u8]) -> Result<Value, String> {
-        let m: M = cdr::decode(bytes).map_err(|e| format!("{}: {e}", M::TYPE))?;
-        to_value(&m).map_err(|e| format!("{}: {e}", M::TYPE))
+        decoded_value::<M>(bytes)
     }
     fn camera(&self, view: &CameraView) -> Option<Result<Bytes, CdrError>> {
         (self.make)(view).map(|r| r.map(Bytes::from))

@@ -200,7 +200,7 @@ impl Session {
                 frame: {
                     let stamp = self.stamp();
                     self.cameras
-                        .capture(&self.scene, *camera, (world_from_optical, stamp))
+                        .capture(&self.scene, *camera, world_from_optical, stamp)
                 },
             },
         }
@@ -356,7 +356,7 @@ impl Session {
     ) -> Option<u64> {
         let stamp = stamp_at(self.origin_ns, scene.world.time());
         self.cameras
-            .capture(scene, camera, (world_from_optical, stamp))
+            .capture(scene, camera, world_from_optical, stamp)
     }
 
     /// The frame of the state of `scene` (see [`Session::frame_of`]).
