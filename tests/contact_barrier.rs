@@ -579,3 +579,112 @@ fn the_pushed_ribbon_sticks_and_slips_as_coulomb_says() {
         "still sliding at {after} m/s {stop} steps after release"
     );
 }
+
+/// Two ribbons crossing at right angles, 30 mm apart: the upper one falls, a handle
+/// lifts the middle of the lower one at 0.5 m/s. They meet within a few steps.
+const MEETING: &str = r#"
+name: side_by_side_meeting
+duration: 0.15
+dt: 0.01
+gravity: [0.0, 0.0, -9.81]
+solver: {kind: chain}
+contact: {method: barrier, thickness: 0.002}
+ribbons:
+  - name: upper
+    length: 0.3
+    width: 0.05
+    segments: 15
+    base: {mode: floating, position: [-0.15, 0.0, 0.03], rotation: [0.0, 0.0, 0.0]}
+  - name: lower
+    length: 0.3
+    width: 0.05
+    segments: 15
+    base: {mode: floating, position: [0.0, -0.15, 0.0], rotation: [0.0, 0.0, 1.5707963267948966]}
+handles:
+  - name: lift
+    object: lower
+    point: [0.15, 0.0]
+    trajectory:
+      initial: {position: [0.0, 0.0, 0.0], rotation: [0.0, 0.0, 1.5707963267948966]}
+      motions:
+        - {start: 0.0, end: 0.15, translation: [0.0, 0.0, 0.075]}
+"#;
+
+/// The meeting scene with the side-by-side steps' guess of who may meet scaled by
+/// `guess_scale` and the check after each class on or off: the frames' checks, the
+/// bodies stepped side by side and those stepped again.
+fn meeting(guess_scale: f64, check: bool) -> (Checked, usize, usize) {
+    let dir = common::scratch(&format!("meeting_{guess_scale}_{check}"));
+    let path = dir.join("meeting.yaml");
+    std::fs::write(&path, MEETING).expect("a scratch file");
+    let mut scene = developable_sim::scene::load(&path, &[]).expect("the meeting scene");
+    scene.world.set_side_by_side_hooks(guess_scale, check);
+    let mut c = fresh();
+    let (mut side_by_side, mut again) = (0, 0);
+    for _ in 0..(scene.duration / scene.world.dt()).round() as usize {
+        let r = scene.world.step(&[]);
+        let contact = r.contact.expect("barrier contact");
+        side_by_side += contact.side_by_side;
+        again += contact.stepped_again;
+        c.contacts += contact.report.contacts;
+        check_frame(&scene, &mut c);
+    }
+    (c, side_by_side, again)
+}
+
+/// Bodies that cannot meet in a step are stepped side by side, each against the
+/// others as the class found them; what holds them apart is the check after the
+/// class. With the guess of who may meet made blind (its motions scaled to 0), the two
+/// ribbons of the meeting scene are stepped side by side while they close in: the check
+/// steps the later one again and they never cross. Without the check they do (the
+/// negative control: the upper one falls through the lower one's new place).
+#[test]
+fn bodies_stepped_side_by_side_are_stepped_again_when_they_meet() {
+    let (designed, side_by_side, again) = meeting(1.0, true);
+    eprintln!("as designed: {side_by_side} side by side, {again} again");
+    assert_exact_and_apart("meeting, as designed", &designed);
+    let (checked, side_by_side, again) = meeting(0.0, true);
+    assert_exact_and_apart("meeting, blind guess", &checked);
+    assert!(
+        side_by_side > 0 && again > 0,
+        "{side_by_side} side by side, {again} again"
+    );
+    let (unchecked, _, _) = meeting(0.0, false);
+    eprintln!("meeting, no check: {unchecked:?}");
+    assert!(
+        unchecked.other_margin < -1e-4,
+        "without the check the ribbons should overlap: closest {:.3e} m beyond h",
+        unchecked.other_margin
+    );
+}
+
+/// The barrier steps (classes side by side on the threads) give bit-identical meshes in
+/// rayon pools of 1 and 2 threads, and the chain's loops did step side by side.
+#[test]
+fn barrier_steps_do_not_depend_on_the_thread_count() {
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("a thread pool");
+        pool.install(|| {
+            let mut s = load("ribbon_mobius_chain", &["duration=0.3"]);
+            let mut side_by_side = 0;
+            for _ in 0..(s.duration / s.world.dt()).round() as usize {
+                side_by_side += s.world.step(&[]).contact.expect("contact").side_by_side;
+            }
+            let bits: Vec<u64> = (0..s.world.objects().len())
+                .flat_map(|o| s.world.mesh(o).vertices.clone())
+                .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
+                .collect();
+            (bits, side_by_side)
+        })
+    };
+    let ((one, side_by_side), (two, _)) = (run(1), run(2));
+    assert!(side_by_side > 0, "no loop was stepped side by side");
+    let differing = one.iter().zip(&two).filter(|(a, b)| a != b).count();
+    assert_eq!(
+        differing, 0,
+        "{differing} coordinates differ between 1 and 2 threads"
+    );
+}

@@ -68,6 +68,7 @@ impl RibbonContact {
         q: &mut [f64],
     ) -> SolveOutcome {
         self.prepare(env, &step);
+        step.solver.workspace.reset_swept(&self.mesh);
         let env = ContactEnv {
             poses0: &self.start,
             poses1: &self.end,
@@ -115,6 +116,14 @@ impl RibbonContact {
                 .map(|(a, b)| interpolate_pose(a, b, tau)),
         );
         self.finish(&mut step, q, rounds, tau);
+        // the end of the step into the swept record (finish evaluated the frames at q)
+        let ws = &mut step.solver.workspace;
+        self.mesh.clear();
+        for (b, t) in ws.frames.rim_bottom.iter().zip(&ws.frames.rim_top) {
+            self.mesh.push(b.coords);
+            self.mesh.push(t.coords);
+        }
+        ws.add_swept(&self.mesh);
         total
     }
 

@@ -779,6 +779,12 @@ impl ContactBody for RibbonSim {
         self.contact_step(base, dt, |c, step| c.gap_at(env, step, &q))
     }
 
+    /// The meshes of the last step's line searches, its start and its end (recorded
+    /// by the steps' collision checks).
+    fn swept_boxes(&self) -> &[(Vector3, Vector3)] {
+        self.solver.workspace.swept_boxes()
+    }
+
     /// Replace the reconstructed mesh of the last step by the collision-free one
     /// (Pan et al. sec. 5.2): it becomes X^{n+1} of the kinetic term, with velocities
     /// V = (X^{n+1} - R(X̄^{n+1}, X^n)) / h from the corrected positions; the next

@@ -75,6 +75,8 @@ pub struct StepSolver {
     lower: Vec<f64>,
     upper: Vec<f64>,
     q_prev: Vec<f64>,
+    /// The contact hook's last checked path (kept buffers).
+    path: CheckedPath,
     /// Buffers of the z-problem (q and its gradient), kept across rounds and steps.
     q_scratch: Vec<f64>,
     gq_scratch: Vec<f64>,
@@ -140,6 +142,60 @@ struct ZProblem<'o, 'w> {
     newton_matrix_error: f64,
     /// A z on the line search's path (contact hook).
     z_scratch: Vec<f64>,
+    /// The last path the contact hook checked.
+    path: CheckedPath,
+}
+
+/// The path z(α) = clamp(z0 + α d, lower, upper), α in [0, alpha], that the last line
+/// search's collision check covered: evaluations on it may read its candidate pairs.
+#[derive(Clone, Debug, Default)]
+struct CheckedPath {
+    z0: Vec<f64>,
+    d: Vec<f64>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    alpha: f64,
+    valid: bool,
+}
+
+impl CheckedPath {
+    fn record(&mut self, z: &[f64], d: &[f64], lower: &[f64], upper: &[f64], alpha: f64) {
+        for (v, x) in [
+            (&mut self.z0, z),
+            (&mut self.d, d),
+            (&mut self.lower, lower),
+            (&mut self.upper, upper),
+        ] {
+            v.clear();
+            v.extend_from_slice(x);
+        }
+        self.alpha = alpha;
+        self.valid = alpha > 0.0;
+    }
+
+    /// Whether z lies on the path (to 1e-12 relative: the solvers form their trial
+    /// points with the same operations, a line search exactly, a trust region as
+    /// z0 + α d within the box). α is read off the largest move not on a bound.
+    fn contains(&self, z: &[f64]) -> bool {
+        if !self.valid || z.len() != self.z0.len() {
+            return false;
+        }
+        let inside = |i: usize| z[i] > self.lower[i] && z[i] < self.upper[i];
+        let (mut largest, mut alpha) = (0.0, 0.0);
+        for i in 0..z.len() {
+            if self.d[i].abs() > largest && inside(i) {
+                largest = self.d[i].abs();
+                alpha = (z[i] - self.z0[i]) / self.d[i];
+            }
+        }
+        if !(-1e-12..=self.alpha * (1.0 + 1e-12)).contains(&alpha) {
+            return false;
+        }
+        (0..z.len()).all(|i| {
+            let on = (self.z0[i] + alpha * self.d[i]).clamp(self.lower[i], self.upper[i]);
+            (z[i] - on).abs() <= 1e-12 * (1.0 + z[i].abs())
+        })
+    }
 }
 
 impl ZProblem<'_, '_> {
@@ -166,6 +222,8 @@ impl ZProblem<'_, '_> {
     ) -> f64 {
         let lay = self.objective.layout;
         z_to_q(&lay, z, &mut self.q);
+        let on_path = self.path.contains(z);
+        self.workspace.set_on_checked_path(on_path);
         let want_g = gradient.is_some();
         let second_order = hessian || (want_g && self.second_order);
         let f = if want_g {
@@ -179,6 +237,7 @@ impl ZProblem<'_, '_> {
             self.objective
                 .evaluate_recording(&self.q, self.workspace, None, second_order)
         };
+        self.workspace.set_on_checked_path(false);
         if let Some(g) = gradient {
             self.gradient_to_z(g);
         }
@@ -202,6 +261,7 @@ impl ZProblem<'_, '_> {
                 z_to_q(&lay, &zs, q);
             });
         self.z_scratch = zs;
+        self.path.record(z, d, lower, upper, fraction);
         fraction
     }
     /// f(q(z)) and, if asked, its z-gradient (second-order data as `second_order`).
@@ -560,7 +620,9 @@ impl StepSolver {
             #[cfg(any(test, feature = "test-hooks"))]
             newton_matrix_error: self.newton_matrix_error,
             z_scratch: std::mem::take(&mut self.z_scratch),
+            path: std::mem::take(&mut self.path),
         };
+        problem.path.valid = false;
         let result = match settings.kind {
             SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => {
                 // relative gradient tolerance against the first round's start (the
@@ -642,6 +704,7 @@ impl StepSolver {
         self.q_scratch = std::mem::take(&mut problem.q);
         self.gq_scratch = std::mem::take(&mut problem.gq);
         self.z_scratch = std::mem::take(&mut problem.z_scratch);
+        self.path = std::mem::take(&mut problem.path);
         result
     }
 }
@@ -649,6 +712,30 @@ impl StepSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_checked_path_holds_its_points_and_no_others() {
+        // z0 + α d clamped into the box, α up to 0.5; coordinate 2 reaches its bound
+        let (z0, d) = ([0.1, -0.2, 0.9, 0.0], [1.0, 0.5, 1.0, 0.0]);
+        let (lower, upper) = ([-1.0; 4], [1.0; 4]);
+        let mut path = CheckedPath::default();
+        path.record(&z0, &d, &lower, &upper, 0.5);
+        let at = |a: f64| -> Vec<f64> {
+            (0..4)
+                .map(|i| (z0[i] + a * d[i]).clamp(lower[i], upper[i]))
+                .collect()
+        };
+        for a in [0.0, 0.05, 0.25, 0.5] {
+            assert!(path.contains(&at(a)), "α = {a}");
+        }
+        assert!(!path.contains(&at(0.6)), "beyond the checked fraction");
+        assert!(!path.contains(&at(-0.1)), "behind the start");
+        let mut off = at(0.25);
+        off[3] += 1e-9;
+        assert!(!path.contains(&off), "off the line");
+        path.record(&z0, &d, &lower, &upper, 0.0);
+        assert!(!path.contains(&z0), "no step was checked");
+    }
 
     #[test]
     fn substitution_round_trips_and_hessian_transform_is_a_congruence() {

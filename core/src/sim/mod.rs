@@ -6,6 +6,7 @@
 //! Every object meets one contract, [`ObjectSim`] (`object`, a leaf: the simulators
 //! import it, not the world).
 
+mod barrier_steps;
 mod grasp;
 pub mod handle;
 pub mod object;

@@ -168,6 +168,12 @@ pub trait ContactBody {
     ) -> (f64, crate::contact::barrier::PairSource) {
         (f64::INFINITY, Default::default())
     }
+    /// With contact inside the step: boxes (m) covering every position the mesh took
+    /// during the last step, the path between its iterates included; empty when the
+    /// body does not record them (then it never steps beside another body).
+    fn swept_boxes(&self) -> &[(crate::geometry::Vector3, crate::geometry::Vector3)] {
+        &[]
+    }
 }
 
 /// One simulated object: what the world, the edges (statistics, runner, report, ROS

@@ -32,6 +32,11 @@ pub struct StepReport {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct ContactStepReport {
     pub report: ContactReport,
+    /// With barrier contact: bodies stepped side by side with another
+    /// (docs/contact_barrier.md, "Several ribbons"), and of those, bodies put back and
+    /// stepped again after their class because they came within reach of another.
+    pub side_by_side: usize,
+    pub stepped_again: usize,
 }
 
 /// The contact stage of a world and its per-step buffers.
@@ -76,13 +81,17 @@ pub struct World {
 /// Contact inside the objects' steps (docs/contact_barrier.md): the settings, the
 /// colliders, and the contact bodies' mesh cells (for the other bodies' steps).
 #[derive(Clone, Debug)]
-struct BarrierState {
-    settings: BarrierSettings,
-    colliders: Vec<Collider>,
+pub(super) struct BarrierState {
+    pub(super) settings: BarrierSettings,
+    pub(super) colliders: Vec<Collider>,
     /// Per object: its mesh cells when it is a contact body.
-    cells: Vec<Option<Arc<CellMesh>>>,
+    pub(super) cells: Vec<Option<Arc<CellMesh>>>,
     /// The first colliders, the scene's; kinematic colliders follow them.
     scene_colliders: usize,
+    /// The guess of which bodies may meet scales their last motions by this (1: as
+    /// designed); whether the check after a class runs (tests only change them).
+    pub(super) guess_scale: f64,
+    pub(super) check_classes: bool,
 }
 
 impl World {
@@ -131,8 +140,21 @@ impl World {
             scene_colliders: colliders.len(),
             colliders,
             cells,
+            guess_scale: 1.0,
+            check_classes: true,
         });
         self
+    }
+
+    /// Test only: the side-by-side steps' guess of which bodies may meet with their
+    /// last motions scaled by `guess_scale`, and the check after each class on or off
+    /// (docs/contact_barrier.md, "Several ribbons").
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub fn set_side_by_side_hooks(&mut self, guess_scale: f64, check: bool) {
+        if let Some(b) = self.barrier.as_mut() {
+            b.guess_scale = guess_scale;
+            b.check_classes = check;
+        }
     }
 
     /// With barrier contact: the smallest gap (m, beyond the thickness) of any contact
@@ -525,84 +547,6 @@ impl World {
     }
 }
 
-impl BarrierState {
-    /// Every object's step in turn (forward on even steps, backward on odd), each
-    /// contact body with the colliders and the other bodies' current meshes; the
-    /// bodies' contact outcomes summed into a [`ContactStepReport`].
-    fn step(
-        &self,
-        objects: &mut [Box<dyn ObjectSim>],
-        step_index: u64,
-        (targets0, targets1): (&[Pose], &[Pose]),
-        (dt, time, handles): (f64, f64, &[HandleSpec]),
-        clock: &dyn PhaseClock,
-    ) -> (Vec<ObjectStepReport>, ContactStepReport) {
-        let poses0: Vec<Pose> = self
-            .colliders
-            .iter()
-            .map(|c| c.world_pose(targets0))
-            .collect();
-        let poses1: Vec<Pose> = self
-            .colliders
-            .iter()
-            .map(|c| c.world_pose(targets1))
-            .collect();
-        let count = objects.len();
-        let mut reports = vec![ObjectStepReport::default(); count];
-        let order: Vec<usize> = if step_index.is_multiple_of(2) {
-            (0..count).collect()
-        } else {
-            (0..count).rev().collect()
-        };
-        for index in order {
-            let (before, rest) = objects.split_at_mut(index);
-            let (object, after) = rest.split_first_mut().expect("index < count");
-            let others: Vec<OtherMesh> = before
-                .iter()
-                .enumerate()
-                .chain(after.iter().enumerate().map(|(j, o)| (index + 1 + j, o)))
-                .filter_map(|(j, o)| {
-                    self.cells[j].as_ref().map(|cells| OtherMesh {
-                        vertices: &o.mesh().vertices,
-                        cells,
-                    })
-                })
-                .collect();
-            let env = ContactEnv {
-                settings: self.settings,
-                colliders: &self.colliders,
-                poses0: &poses0,
-                poses1: &poses1,
-                others: &others,
-            };
-            reports[index] = object.step(&StepContext {
-                dt,
-                time,
-                index,
-                handles,
-                // (the carriers' poses: the handles' targets, then the kinematic bodies)
-                targets: &targets1[..handles.len()],
-                clock,
-                contact: self.cells[index].as_ref().map(|_| &env),
-            });
-        }
-        let mut report = ContactReport {
-            resolved: true,
-            ..Default::default()
-        };
-        for outcome in reports.iter().filter_map(|r| r.contact) {
-            report.contacts += outcome.active;
-            report.constraints += outcome.active;
-            report.iterations = report.iterations.max(outcome.rounds);
-            report.resolved &= outcome.resolved;
-            // the smallest gap left, as an overlap when it is negative (never, by
-            // construction: every iterate is feasible)
-            report.penetration_max = report.penetration_max.max(-outcome.min_gap);
-        }
-        (reports, ContactStepReport { report })
-    }
-}
-
 impl ContactState {
     /// The contact stage on all contact bodies together (Pan et al. algorithm 1, line
     /// 5); the corrected meshes become the bodies' X^{n+1}.
@@ -642,6 +586,9 @@ impl ContactState {
             reports[o].isometry_error = object.mesh().isometry_error();
             reports[o].energies = object.energies();
         }
-        ContactStepReport { report }
+        ContactStepReport {
+            report,
+            ..Default::default()
+        }
     }
 }

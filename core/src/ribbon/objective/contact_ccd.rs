@@ -43,7 +43,17 @@ pub(crate) struct CcdScratch {
     margin: Vec<f64>,
     boxes: Vec<(Vector3, Vector3)>,
     order: Vec<u32>,
+    /// Boxes of every mesh the checked paths passed through since the last
+    /// [`Workspace::reset_swept`], per run of [`SWEPT_CHUNK`] vertices, m: where the
+    /// ribbon went during a step (the world steps ribbons whose swept boxes stay apart
+    /// side by side).
+    swept: Vec<(Vector3, Vector3)>,
+    /// Per vertex: its box over the last checked path (up to the safe fraction), m.
+    vertex_boxes: Vec<(Vector3, Vector3)>,
 }
+
+/// Mesh vertices per swept box (8 stations of a ribbon: 8 elements' worth, a few cm).
+pub const SWEPT_CHUNK: usize = 16;
 
 impl Default for CcdScratch {
     fn default() -> Self {
@@ -55,7 +65,76 @@ impl Default for CcdScratch {
             margin: Vec::new(),
             boxes: Vec::new(),
             order: Vec::new(),
+            swept: Vec::new(),
+            vertex_boxes: Vec::new(),
         }
+    }
+}
+
+impl CcdScratch {
+    /// Grow the swept boxes by the mesh `x` (mesh order, m).
+    fn add_swept(&mut self, x: &[Vector3]) {
+        let chunks = x.len().div_ceil(SWEPT_CHUNK);
+        let empty = (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        );
+        self.swept.resize(chunks, empty);
+        for (v, p) in x.iter().enumerate() {
+            let b = &mut self.swept[v / SWEPT_CHUNK];
+            b.0 = b.0.inf(p);
+            b.1 = b.1.sup(p);
+        }
+    }
+
+    /// Samples 0..=`last` of the checked path: each vertex's box over them, grown by
+    /// its margin, into `vertex_boxes` and the swept boxes.
+    fn record_path(&mut self, last: usize) {
+        let vertices = self.samples[0].x.len();
+        self.vertex_boxes.clear();
+        self.vertex_boxes.extend((0..vertices).map(|v| {
+            let m = Vector3::repeat(self.margin.get(v).copied().unwrap_or(0.0));
+            let (lo, hi) = self.samples[..=last].iter().fold(
+                (
+                    Vector3::repeat(f64::INFINITY),
+                    Vector3::repeat(f64::NEG_INFINITY),
+                ),
+                |(lo, hi), s| (lo.inf(&s.x[v]), hi.sup(&s.x[v])),
+            );
+            (lo - m, hi + m)
+        }));
+        let chunks = vertices.div_ceil(SWEPT_CHUNK);
+        let empty = (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        );
+        self.swept.resize(chunks, empty);
+        for (v, b) in self.vertex_boxes.iter().enumerate() {
+            let s = &mut self.swept[v / SWEPT_CHUNK];
+            s.0 = s.0.inf(&b.0);
+            s.1 = s.1.sup(&b.1);
+        }
+    }
+}
+
+impl Workspace {
+    /// Start a new swept record at `mesh` (mesh order, m).
+    pub fn reset_swept(&mut self, mesh: &[Vector3]) {
+        self.ccd.swept.clear();
+        self.ccd.add_swept(mesh);
+    }
+    /// Whether the next evaluations lie on the last checked path (then they read its
+    /// candidate pairs instead of running the broad phase).
+    pub fn set_on_checked_path(&mut self, on: bool) {
+        self.contact.use_candidates = on;
+    }
+    /// Add `mesh` (mesh order, m) to the swept record.
+    pub fn add_swept(&mut self, mesh: &[Vector3]) {
+        self.ccd.add_swept(mesh);
+    }
+    /// The swept record: boxes covering every mesh since the last reset, m.
+    pub fn swept_boxes(&self) -> &[(Vector3, Vector3)] {
+        &self.ccd.swept
     }
 }
 
@@ -81,7 +160,25 @@ impl Objective<'_> {
         let Some(ct) = self.contact else {
             return 1.0;
         };
-        let scratch = &mut ws.ccd;
+        let (fraction, last) = self.checked_fraction(ct, &mut ws.ccd, path);
+        if let Some(last) = last {
+            // where the path up to the safe fraction goes: the swept record and the
+            // pairs its evaluations may meet
+            ws.ccd.record_path(last);
+            ws.contact
+                .candidates
+                .build(ct, &ws.ccd.vertex_boxes, &ws.ccd.samples[0].x);
+        }
+        fraction
+    }
+
+    /// The safe fraction and the last sample of the path up to it (None: no step).
+    fn checked_fraction(
+        &self,
+        ct: &ContactTerms,
+        scratch: &mut CcdScratch,
+        path: &mut dyn FnMut(f64, &mut [f64]),
+    ) -> (f64, Option<usize>) {
         let mut alpha = 1.0;
         for _ in 0..24 {
             self.sample(scratch, 0, 0.0, path);
@@ -115,20 +212,20 @@ impl Objective<'_> {
                     if r.t == 0.0 && cramped.is_some() && i == 0 {
                         break;
                     }
-                    return alpha * (i as f64 + r.t) / pieces as f64;
+                    return (alpha * (i as f64 + r.t) / pieces as f64, Some(i + 1));
                 }
             }
             let Some(shrink) = cramped else {
-                return alpha;
+                return (alpha, Some(pieces));
             };
             // the curve is too bent for the gaps at hand: a shorter step bends less (its
             // deviation as α^2)
             if !(shrink > 0.0) {
-                return 0.0;
+                return (0.0, None);
             }
             alpha *= shrink.min(0.25);
         }
-        0.0
+        (0.0, None)
     }
 
     /// The mesh at α into sample `i`.

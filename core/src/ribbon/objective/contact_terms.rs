@@ -13,11 +13,10 @@
 use std::sync::Arc;
 
 use super::accumulate::{sliding_rate, Accumulator};
-use super::kinetic::interpolate;
+use super::contact_candidates::Candidates;
 use super::{Objective, Vec8};
 use crate::contact::barrier::{
-    barrier, edge_edge, edge_mollifier, friction_mollifier, mollifier_threshold, point_triangle,
-    Closest, PairSource,
+    barrier, edge_edge, edge_mollifier, mollifier_threshold, point_triangle, Closest, PairSource,
 };
 use crate::contact::obstacles::{
     apart, bounds, boxes_near, sort_boxes, window, CellMesh, Obstacles,
@@ -123,23 +122,27 @@ pub struct ContactWorkspace {
     pub collider_force: Vec<f64>,
     /// A pair's dense gradient (the dense baseline's Hessian).
     pub(super) dense_g: Vec<f64>,
+    /// The pairs the last checked line-search path admits, and whether the next
+    /// evaluation may use them instead of the broad phase (it lies on that path).
+    pub(super) candidates: Candidates,
+    pub(super) use_candidates: bool,
 }
 
 /// The ribbon's side of a pair: its points (mesh vertices), their weights in the
 /// gap's gradient (∂s/∂x_i = w_i n), how many, and the element carrying them all.
 #[derive(Clone, Copy)]
-struct Side {
-    vertices: [u32; 3],
-    weights: [f64; 3],
-    count: usize,
-    element: usize,
+pub(super) struct Side {
+    pub(super) vertices: [u32; 3],
+    pub(super) weights: [f64; 3],
+    pub(super) count: usize,
+    pub(super) element: usize,
     /// An edge-edge pair's mollifier m and its gradient at this side's points (1 and 0
     /// for every other pair).
-    mollifier: (f64, [Vector3; 3]),
+    pub(super) mollifier: (f64, [Vector3; 3]),
 }
 
 impl Side {
-    fn vertex(v: u32, element: usize) -> Side {
+    pub(super) fn vertex(v: u32, element: usize) -> Side {
         Side {
             vertices: [v, 0, 0],
             weights: [1.0, 0.0, 0.0],
@@ -148,7 +151,7 @@ impl Side {
             mollifier: (1.0, [Vector3::zeros(); 3]),
         }
     }
-    fn edge(e: [u32; 2], w: [f64; 2], element: usize) -> Side {
+    pub(super) fn edge(e: [u32; 2], w: [f64; 2], element: usize) -> Side {
         Side {
             vertices: [e[0], e[1], 0],
             weights: [w[0], w[1], 0.0],
@@ -157,7 +160,7 @@ impl Side {
             mollifier: (1.0, [Vector3::zeros(); 3]),
         }
     }
-    fn triangle(t: [u32; 3], w: [f64; 3], element: usize) -> Side {
+    pub(super) fn triangle(t: [u32; 3], w: [f64; 3], element: usize) -> Side {
         Side {
             vertices: t,
             weights: w,
@@ -169,22 +172,22 @@ impl Side {
 }
 
 /// What the pairs of one evaluation add up to.
-struct Found<'p> {
-    value: f64,
+pub(super) struct Found<'p> {
+    pub(super) value: f64,
     feasible: bool,
     active: usize,
     min_gap: f64,
     /// What the pair of the smallest gap is against.
     min_source: PairSource,
-    pairs: &'p mut Vec<PairTerm>,
+    pub(super) pairs: &'p mut Vec<PairTerm>,
     collider_force: &'p mut Vec<f64>,
-    wrench: &'p mut Vec<Vec8>,
+    pub(super) wrench: &'p mut Vec<Vec8>,
 }
 
 impl Found<'_> {
     /// Counts a pair at gap s; false when it is outside the barrier or infeasible (then
     /// nothing more is to be added).
-    fn enter(&mut self, s: f64, activation: f64, source: PairSource) -> bool {
+    pub(super) fn enter(&mut self, s: f64, activation: f64, source: PairSource) -> bool {
         if s >= activation {
             return false;
         }
@@ -216,7 +219,8 @@ impl Objective<'_> {
         }
         cw.collider_force.clear();
         cw.collider_force.resize(ct.obstacles.poses.len(), 0.0);
-        self.cell_geometry(acc, ct, &mut cw.cells);
+        let cached = cw.use_candidates;
+        self.cell_geometry(acc, ct, &mut cw.cells, !cached);
         let geo = &cw.cells;
         let mut found = Found {
             value: 0.0,
@@ -228,13 +232,18 @@ impl Objective<'_> {
             collider_force: &mut cw.collider_force,
             wrench: &mut cw.wrench,
         };
-        self.vertex_solid_pairs(acc, ct, &mut found);
-        self.collider_feature_pairs(acc, ct, geo, &mut found);
-        for b in 0..ct.obstacles.bodies.len() {
-            self.other_body_pairs(acc, ct, geo, b, &mut found);
-        }
-        if ct.self_contact {
-            self.self_pairs(acc, ct, geo, &mut found);
+        if cached {
+            // the pairs the line search's path admits (`contact_candidates`)
+            self.candidate_pairs(acc, ct, geo, &cw.candidates, &mut found);
+        } else {
+            self.vertex_solid_pairs(acc, ct, &mut found);
+            self.collider_feature_pairs(acc, ct, geo, &mut found);
+            for b in 0..ct.obstacles.bodies.len() {
+                self.other_body_pairs(acc, ct, geo, b, &mut found);
+            }
+            if ct.self_contact {
+                self.self_pairs(acc, ct, geo, &mut found);
+            }
         }
         let (value, feasible) = (found.value, found.feasible);
         cw.active = found.active;
@@ -252,7 +261,13 @@ impl Objective<'_> {
 
     /// Cell boxes (sorted along the obstacles' axis), rim stations u of every vertex
     /// and the u-interval of every cell, m.
-    fn cell_geometry(&self, acc: &Accumulator, ct: &ContactTerms, geo: &mut CellGeometry) {
+    fn cell_geometry(
+        &self,
+        acc: &Accumulator,
+        ct: &ContactTerms,
+        geo: &mut CellGeometry,
+        sorted: bool,
+    ) {
         let n = self.strip.segments;
         let c = &acc.coords.crease_direction;
         geo.vertex_u.clear();
@@ -274,39 +289,54 @@ impl Objective<'_> {
                 .push((u[0].min(u[1]).min(u[2]), u[0].max(u[1]).max(u[2])));
         }
         geo.widest = widest;
-        sort_boxes(&geo.boxes, axis, &mut geo.order);
+        if sorted {
+            sort_boxes(&geo.boxes, axis, &mut geo.order);
+        }
     }
 
     /// Every rim vertex against every collider solid (plane, box, sphere, capsule).
     fn vertex_solid_pairs(&self, acc: &mut Accumulator, ct: &ContactTerms, found: &mut Found) {
-        let obs = &ct.obstacles;
-        let half = 0.5 * ct.thickness;
-        let reach = half + ct.activation;
-        for solid in &obs.solids {
+        for k in 0..ct.obstacles.solids.len() {
             for v in 0..ct.vertex_cell.len() as u32 {
-                let x = vertex_position(acc, v);
-                if let Some((lo, hi)) = &solid.aabb {
-                    if (0..3).any(|d| x[d] < lo[d] - reach || x[d] > hi[d] + reach) {
-                        continue;
-                    }
-                }
-                let (sd, normal) = obs.solid_distance(solid, &x);
-                let pair = Closest {
-                    distance: sd,
-                    normal,
-                    weights: [1.0, 0.0, 0.0, 0.0],
-                };
-                let side = Side::vertex(v, element_of_vertex(ct, v));
-                self.static_pair(
-                    acc,
-                    ct,
-                    &pair,
-                    (half, PairSource::Collider(solid.collider)),
-                    &side,
-                    found,
-                );
+                self.vertex_solid(acc, ct, k, v, found);
             }
         }
+    }
+
+    /// Rim vertex `v` against collider solid `k`.
+    pub(super) fn vertex_solid(
+        &self,
+        acc: &mut Accumulator,
+        ct: &ContactTerms,
+        k: usize,
+        v: u32,
+        found: &mut Found,
+    ) {
+        let obs = &ct.obstacles;
+        let solid = &obs.solids[k];
+        let half = 0.5 * ct.thickness;
+        let reach = half + ct.activation;
+        let x = vertex_position(acc, v);
+        if let Some((lo, hi)) = &solid.aabb {
+            if (0..3).any(|d| x[d] < lo[d] - reach || x[d] > hi[d] + reach) {
+                return;
+            }
+        }
+        let (sd, normal) = obs.solid_distance(solid, &x);
+        let pair = Closest {
+            distance: sd,
+            normal,
+            weights: [1.0, 0.0, 0.0, 0.0],
+        };
+        let side = Side::vertex(v, element_of_vertex(ct, v));
+        self.static_pair(
+            acc,
+            ct,
+            &pair,
+            (half, PairSource::Collider(solid.collider)),
+            &side,
+            found,
+        );
     }
 
     /// The colliders' features (points, edges, mesh triangles) against the ribbon's
@@ -319,66 +349,86 @@ impl Objective<'_> {
         found: &mut Found,
     ) {
         let obs = &ct.obstacles;
-        let cells = &ct.cells;
-        for f in &obs.points {
+        for (k, f) in obs.points.iter().enumerate() {
             for t in cells_near(geo, &(f.lo, f.hi), obs.axis, f.offset + ct.activation) {
-                let tri = cells.triangles[t];
-                let x = tri.map(|v| vertex_position(acc, v));
-                let pair = point_triangle(&f.x[0], &x[0], &x[1], &x[2]);
-                let w = [pair.weights[1], pair.weights[2], pair.weights[3]];
-                let side = Side::triangle(tri, w, t / 2);
-                self.static_pair(
-                    acc,
-                    ct,
-                    &pair,
-                    (f.offset, PairSource::Collider(f.collider)),
-                    &side,
-                    found,
-                );
+                self.point_feature(acc, ct, k, t, found);
             }
         }
-        for f in &obs.edges {
+        for (k, f) in obs.edges.iter().enumerate() {
             for t in cells_near(geo, &(f.lo, f.hi), obs.axis, f.offset + ct.activation) {
-                for e in cells.owned_edges(t) {
-                    let (a, b) = (vertex_position(acc, e[0]), vertex_position(acc, e[1]));
-                    if apart(&f.x, &[a, b], f.offset + ct.activation) {
-                        continue;
-                    }
-                    let pair = edge_edge(&f.x[0], &f.x[1], &a, &b);
-                    let eps = mollifier_threshold(&f.x[0], &f.x[1], &a, &b);
-                    let (m, gm) = edge_mollifier(&f.x[0], &f.x[1], &a, &b, eps);
-                    let mut side = Side::edge(*e, [pair.weights[2], pair.weights[3]], t / 2);
-                    side.mollifier = (m, [gm[2], gm[3], Vector3::zeros()]);
-                    self.static_pair(
-                        acc,
-                        ct,
-                        &pair,
-                        (f.offset, PairSource::Collider(f.collider)),
-                        &side,
-                        found,
-                    );
-                }
+                self.edge_feature(acc, ct, k, t, found);
             }
         }
-        for f in &obs.triangles {
+        for (k, f) in obs.triangles.iter().enumerate() {
             for t in cells_near(geo, &(f.lo, f.hi), obs.axis, f.offset + ct.activation) {
-                for &v in cells.owned_vertices(t) {
-                    let x = vertex_position(acc, v);
-                    if apart(&[x], &f.x, f.offset + ct.activation) {
-                        continue;
-                    }
-                    let pair = point_triangle(&x, &f.x[0], &f.x[1], &f.x[2]);
-                    let side = Side::vertex(v, t / 2);
-                    self.static_pair(
-                        acc,
-                        ct,
-                        &pair,
-                        (f.offset, PairSource::Collider(f.collider)),
-                        &side,
-                        found,
-                    );
-                }
+                self.triangle_feature(acc, ct, k, t, found);
             }
+        }
+    }
+
+    /// Collider point `k` against the ribbon's cell `t`.
+    pub(super) fn point_feature(
+        &self,
+        acc: &mut Accumulator,
+        ct: &ContactTerms,
+        k: usize,
+        t: usize,
+        found: &mut Found,
+    ) {
+        let f = &ct.obstacles.points[k];
+        let tri = ct.cells.triangles[t];
+        let x = tri.map(|v| vertex_position(acc, v));
+        let pair = point_triangle(&f.x[0], &x[0], &x[1], &x[2]);
+        let w = [pair.weights[1], pair.weights[2], pair.weights[3]];
+        let side = Side::triangle(tri, w, t / 2);
+        let source = PairSource::Collider(f.collider);
+        self.static_pair(acc, ct, &pair, (f.offset, source), &side, found);
+    }
+
+    /// Collider edge `k` against the edges the ribbon's cell `t` owns.
+    pub(super) fn edge_feature(
+        &self,
+        acc: &mut Accumulator,
+        ct: &ContactTerms,
+        k: usize,
+        t: usize,
+        found: &mut Found,
+    ) {
+        let f = &ct.obstacles.edges[k];
+        for e in ct.cells.owned_edges(t) {
+            let (a, b) = (vertex_position(acc, e[0]), vertex_position(acc, e[1]));
+            if apart(&f.x, &[a, b], f.offset + ct.activation) {
+                continue;
+            }
+            let pair = edge_edge(&f.x[0], &f.x[1], &a, &b);
+            let eps = mollifier_threshold(&f.x[0], &f.x[1], &a, &b);
+            let (m, gm) = edge_mollifier(&f.x[0], &f.x[1], &a, &b, eps);
+            let mut side = Side::edge(*e, [pair.weights[2], pair.weights[3]], t / 2);
+            side.mollifier = (m, [gm[2], gm[3], Vector3::zeros()]);
+            let source = PairSource::Collider(f.collider);
+            self.static_pair(acc, ct, &pair, (f.offset, source), &side, found);
+        }
+    }
+
+    /// Collider triangle `k` against the vertices the ribbon's cell `t` owns.
+    pub(super) fn triangle_feature(
+        &self,
+        acc: &mut Accumulator,
+        ct: &ContactTerms,
+        k: usize,
+        t: usize,
+        found: &mut Found,
+    ) {
+        let f = &ct.obstacles.triangles[k];
+        for &v in ct.cells.owned_vertices(t) {
+            let x = vertex_position(acc, v);
+            if apart(&[x], &f.x, f.offset + ct.activation) {
+                continue;
+            }
+            let pair = point_triangle(&x, &f.x[0], &f.x[1], &f.x[2]);
+            let side = Side::vertex(v, t / 2);
+            let source = PairSource::Collider(f.collider);
+            self.static_pair(acc, ct, &pair, (f.offset, source), &side, found);
         }
     }
 
@@ -394,8 +444,7 @@ impl Objective<'_> {
         let body = &ct.obstacles.bodies[b];
         let axis = ct.obstacles.axis;
         let margin = ct.thickness + ct.activation;
-        let own = &ct.cells;
-        for t in 0..own.len() {
+        for t in 0..ct.cells.len() {
             let bt = geo.boxes[t];
             if !boxes_near(&bt, &(body.lo, body.hi), margin) {
                 continue;
@@ -409,77 +458,114 @@ impl Objective<'_> {
                 bt.1[axis],
                 margin,
             );
-            let (tri, e) = (own.triangles[t], t / 2);
-            let x = tri.map(|v| vertex_position(acc, v));
             for &o in &body.order[range] {
-                let o = o as usize;
-                if !boxes_near(&bt, &body.boxes[o], margin) {
-                    continue;
-                }
-                let other = |v: u32| body.vertices[v as usize];
-                let ox = body.cells.triangles[o].map(other);
-                for &v in own.owned_vertices(t) {
-                    let p = vertex_position(acc, v);
-                    if !boxes_near(&(p, p), &body.boxes[o], margin) {
-                        continue;
-                    }
-                    let pair = point_triangle(&p, &ox[0], &ox[1], &ox[2]);
-                    let side = Side::vertex(v, e);
-                    self.static_pair(
-                        acc,
-                        ct,
-                        &pair,
-                        (ct.thickness, PairSource::Body(b)),
-                        &side,
-                        found,
-                    );
-                }
-                for &ov in body.cells.owned_vertices(o) {
-                    let p = other(ov);
-                    if !boxes_near(&(p, p), &bt, margin) {
-                        continue;
-                    }
-                    let pair = point_triangle(&p, &x[0], &x[1], &x[2]);
-                    let w = [pair.weights[1], pair.weights[2], pair.weights[3]];
-                    let side = Side::triangle(tri, w, e);
-                    self.static_pair(
-                        acc,
-                        ct,
-                        &pair,
-                        (ct.thickness, PairSource::Body(b)),
-                        &side,
-                        found,
-                    );
-                }
-                for edge in own.owned_edges(t) {
-                    let (a, bb) = (vertex_position(acc, edge[0]), vertex_position(acc, edge[1]));
-                    for oe in body.cells.owned_edges(o) {
-                        let (oa, ob) = (other(oe[0]), other(oe[1]));
-                        if apart(&[a, bb], &[oa, ob], margin) {
-                            continue;
-                        }
-                        let pair = edge_edge(&a, &bb, &oa, &ob);
-                        let eps = mollifier_threshold(&a, &bb, &oa, &ob);
-                        let (m, gm) = edge_mollifier(&a, &bb, &oa, &ob, eps);
-                        let mut side = Side::edge(*edge, [pair.weights[0], pair.weights[1]], e);
-                        side.mollifier = (m, [gm[0], gm[1], Vector3::zeros()]);
-                        self.static_pair(
-                            acc,
-                            ct,
-                            &pair,
-                            (ct.thickness, PairSource::Body(b)),
-                            &side,
-                            found,
-                        );
-                    }
-                }
+                self.body_cells(acc, ct, geo, (b, t, o as usize), found);
             }
         }
     }
 
+    /// The ribbon's cell `t` against cell `o` of other body `b`: the vertices each owns
+    /// against the other's triangle, their owned edges against each other.
+    pub(super) fn body_cells(
+        &self,
+        acc: &mut Accumulator,
+        ct: &ContactTerms,
+        geo: &CellGeometry,
+        (b, t, o): (usize, usize, usize),
+        found: &mut Found,
+    ) {
+        let body = &ct.obstacles.bodies[b];
+        let margin = ct.thickness + ct.activation;
+        let own = &ct.cells;
+        let bt = geo.boxes[t];
+        if !boxes_near(&bt, &body.boxes[o], margin) {
+            return;
+        }
+        for &v in own.owned_vertices(t) {
+            let p = vertex_position(acc, v);
+            if boxes_near(&(p, p), &body.boxes[o], margin) {
+                self.body_vertex_triangle(acc, ct, (b, v, t / 2, o), found);
+            }
+        }
+        for &ov in body.cells.owned_vertices(o) {
+            let p = body.vertices[ov as usize];
+            if boxes_near(&(p, p), &bt, margin) {
+                self.body_triangle_vertex(acc, ct, (b, ov, t), found);
+            }
+        }
+        for &edge in own.owned_edges(t) {
+            for &oe in body.cells.owned_edges(o) {
+                self.body_edges(acc, ct, (b, edge, t / 2, oe), found);
+            }
+        }
+    }
+
+    /// Rim vertex `v` (carried by element `e`) against cell `o` of body `b`.
+    pub(super) fn body_vertex_triangle(
+        &self,
+        acc: &mut Accumulator,
+        ct: &ContactTerms,
+        (b, v, e, o): (usize, u32, usize, usize),
+        found: &mut Found,
+    ) {
+        let body = &ct.obstacles.bodies[b];
+        let ox = body.cells.triangles[o].map(|w| body.vertices[w as usize]);
+        let p = vertex_position(acc, v);
+        let pair = point_triangle(&p, &ox[0], &ox[1], &ox[2]);
+        let source = (ct.thickness, PairSource::Body(b));
+        self.static_pair(acc, ct, &pair, source, &Side::vertex(v, e), found);
+    }
+
+    /// Vertex `ov` of body `b` against the ribbon's cell `t`.
+    pub(super) fn body_triangle_vertex(
+        &self,
+        acc: &mut Accumulator,
+        ct: &ContactTerms,
+        (b, ov, t): (usize, u32, usize),
+        found: &mut Found,
+    ) {
+        let p = ct.obstacles.bodies[b].vertices[ov as usize];
+        let tri = ct.cells.triangles[t];
+        let x = tri.map(|v| vertex_position(acc, v));
+        let pair = point_triangle(&p, &x[0], &x[1], &x[2]);
+        let w = [pair.weights[1], pair.weights[2], pair.weights[3]];
+        let source = (ct.thickness, PairSource::Body(b));
+        self.static_pair(
+            acc,
+            ct,
+            &pair,
+            source,
+            &Side::triangle(tri, w, t / 2),
+            found,
+        );
+    }
+
+    /// The ribbon's edge (carried by element `e`) against edge `oe` of body `b`.
+    pub(super) fn body_edges(
+        &self,
+        acc: &mut Accumulator,
+        ct: &ContactTerms,
+        (b, edge, e, oe): (usize, [u32; 2], usize, [u32; 2]),
+        found: &mut Found,
+    ) {
+        let body = &ct.obstacles.bodies[b];
+        let (a, bb) = (vertex_position(acc, edge[0]), vertex_position(acc, edge[1]));
+        let (oa, ob) = (body.vertices[oe[0] as usize], body.vertices[oe[1] as usize]);
+        if apart(&[a, bb], &[oa, ob], ct.thickness + ct.activation) {
+            return;
+        }
+        let pair = edge_edge(&a, &bb, &oa, &ob);
+        let eps = mollifier_threshold(&a, &bb, &oa, &ob);
+        let (m, gm) = edge_mollifier(&a, &bb, &oa, &ob, eps);
+        let mut side = Side::edge(edge, [pair.weights[0], pair.weights[1]], e);
+        side.mollifier = (m, [gm[0], gm[1], Vector3::zeros()]);
+        let source = (ct.thickness, PairSource::Body(b));
+        self.static_pair(acc, ct, &pair, source, &side, found);
+    }
+
     /// A pair with the ribbon's points in `side` against something static (`source`),
     /// at distance `pair.distance` keeping `offset` (m).
-    fn static_pair(
+    pub(super) fn static_pair(
         &self,
         acc: &mut Accumulator,
         ct: &ContactTerms,
@@ -510,7 +596,7 @@ impl Objective<'_> {
 
     /// Adds the gradient `db` ∂s/∂x of the points of `side` and returns
     /// u = Σ w_i J_i^T n over the element's (twist, c_e, c_{e+1}).
-    fn side_gradient(
+    pub(super) fn side_gradient(
         &self,
         acc: &mut Accumulator,
         found: &mut Found,
@@ -544,7 +630,7 @@ impl Objective<'_> {
     /// (nothing for other pairs). Its second-order terms are left out of the Newton
     /// matrix: they act only on nearly parallel edges, which the point-triangle pairs
     /// hold.
-    fn mollifier_gradient(
+    pub(super) fn mollifier_gradient(
         &self,
         acc: &mut Accumulator,
         found: &mut Found,
@@ -574,7 +660,7 @@ impl Objective<'_> {
     }
 
     /// Material position of rim vertex (j, top) at the current creases.
-    fn rim_material(&self, acc: &Accumulator, j: usize, top: bool) -> Point3 {
+    pub(super) fn rim_material(&self, acc: &Accumulator, j: usize, top: bool) -> Point3 {
         let c = acc.coords.crease_direction[j];
         if top {
             self.strip.material_top(j, c)
@@ -585,7 +671,7 @@ impl Objective<'_> {
 
     /// The local column (6 or 7) and world direction ∂x/∂c_j of rim vertex (j, top)
     /// carried by element e, if it slides (not on the square end creases).
-    fn sliding_column(
+    pub(super) fn sliding_column(
         &self,
         acc: &Accumulator,
         e: usize,
@@ -613,7 +699,7 @@ const CONTACT_GEOMETRIC_STIFFNESS: bool = true;
 /// the geometric stiffness, its wrench is also kept in `wrench` so that the chain's
 /// geometric terms leave it out (they read the elements' summed forces): the contact
 /// terms then enter the Newton matrix by their Gauss-Newton part alone.
-fn add_force(
+pub(super) fn add_force(
     acc: &mut Accumulator,
     wrench: &mut [Vec8],
     e: usize,
@@ -669,7 +755,7 @@ pub(super) fn vertex_position(acc: &Accumulator, v: u32) -> Vector3 {
 /// The element carrying mesh vertex v: that of the cell owning it (two cells per
 /// element).
 #[inline]
-fn element_of_vertex(ct: &ContactTerms, v: u32) -> usize {
+pub(super) fn element_of_vertex(ct: &ContactTerms, v: u32) -> usize {
     (ct.vertex_cell[v as usize] / 2) as usize
 }
 
@@ -684,7 +770,7 @@ pub(super) fn station_gap(a: (f64, f64), b: (f64, f64), period: Option<f64>) -> 
 }
 
 /// J^T a for a point x with sliding column `sigma` (column, ∂x/∂c): [x × a; a; σ · a].
-fn jacobian_row(x: &Vector3, a: &Vector3, sigma: Option<(usize, Vector3)>) -> Vec8 {
+pub(super) fn jacobian_row(x: &Vector3, a: &Vector3, sigma: Option<(usize, Vector3)>) -> Vec8 {
     let mut r = Vec8::zeros();
     let m = x.cross(a);
     for k in 0..3 {
@@ -695,201 +781,4 @@ fn jacobian_row(x: &Vector3, a: &Vector3, sigma: Option<(usize, Vector3)>) -> Ve
         r[col] = s.dot(a);
     }
     r
-}
-
-impl Objective<'_> {
-    /// Pairs between non-neighbouring cells of the ribbon itself: a sort-and-sweep over
-    /// the cell boxes, then the vertex-triangle and edge-edge pairs the two cells own
-    /// whose stations are more than the neighbour skip apart.
-    fn self_pairs(
-        &self,
-        acc: &mut Accumulator,
-        ct: &ContactTerms,
-        geo: &CellGeometry,
-        found: &mut Found,
-    ) {
-        let axis = ct.obstacles.axis;
-        let margin = ct.thickness + ct.activation;
-        let cells = &ct.cells;
-        for i in 0..geo.order.len() {
-            let t1 = geo.order[i] as usize;
-            let top = geo.boxes[t1].1[axis] + margin;
-            for &t2 in &geo.order[i + 1..] {
-                let t2 = t2 as usize;
-                if geo.boxes[t2].0[axis] > top {
-                    break;
-                }
-                if t1 / 2 == t2 / 2 || !boxes_near(&geo.boxes[t1], &geo.boxes[t2], margin) {
-                    continue;
-                }
-                let (u1, u2) = (geo.cell_u[t1], geo.cell_u[t2]);
-                let span = (u1.1 - u1.0) + (u2.1 - u2.0);
-                if station_gap(u1, u2, ct.period) + span <= ct.skip {
-                    continue;
-                }
-                self.cell_pair(acc, ct, geo, (t1, t2), found);
-                self.cell_pair(acc, ct, geo, (t2, t1), found);
-                for e1 in cells.owned_edges(t1) {
-                    for e2 in cells.owned_edges(t2) {
-                        self.self_edge_pair(acc, ct, geo, (*e1, t1 / 2), (*e2, t2 / 2), found);
-                    }
-                }
-            }
-        }
-    }
-
-    /// The vertices cell `a` owns against cell `b`'s triangle.
-    fn cell_pair(
-        &self,
-        acc: &mut Accumulator,
-        ct: &ContactTerms,
-        geo: &CellGeometry,
-        (a, b): (usize, usize),
-        found: &mut Found,
-    ) {
-        let tri = ct.cells.triangles[b];
-        let tu = tri.map(|v| geo.vertex_u[v as usize]);
-        let tri_u = (tu[0].min(tu[1]).min(tu[2]), tu[0].max(tu[1]).max(tu[2]));
-        let x = tri.map(|v| vertex_position(acc, v));
-        for &v in ct.cells.owned_vertices(a) {
-            let vu = geo.vertex_u[v as usize];
-            if station_gap((vu, vu), tri_u, ct.period) <= ct.skip {
-                continue;
-            }
-            let p = vertex_position(acc, v);
-            if !boxes_near(&(p, p), &geo.boxes[b], ct.thickness + ct.activation) {
-                continue;
-            }
-            let pair = point_triangle(&p, &x[0], &x[1], &x[2]);
-            let w = [pair.weights[1], pair.weights[2], pair.weights[3]];
-            let (first, second) = (Side::vertex(v, a / 2), Side::triangle(tri, w, b / 2));
-            self.self_pair(acc, ct, &pair, &first, &second, found);
-        }
-    }
-
-    fn self_edge_pair(
-        &self,
-        acc: &mut Accumulator,
-        ct: &ContactTerms,
-        geo: &CellGeometry,
-        (e1, el1): ([u32; 2], usize),
-        (e2, el2): ([u32; 2], usize),
-        found: &mut Found,
-    ) {
-        let u = |e: [u32; 2]| {
-            let (a, b) = (geo.vertex_u[e[0] as usize], geo.vertex_u[e[1] as usize]);
-            (a.min(b), a.max(b))
-        };
-        if station_gap(u(e1), u(e2), ct.period) <= ct.skip {
-            return;
-        }
-        let p = |v: u32| vertex_position(acc, v);
-        let x = [p(e1[0]), p(e1[1]), p(e2[0]), p(e2[1])];
-        if apart(&x[..2], &x[2..], ct.thickness + ct.activation) {
-            return;
-        }
-        let pair = edge_edge(&x[0], &x[1], &x[2], &x[3]);
-        let eps = mollifier_threshold(&x[0], &x[1], &x[2], &x[3]);
-        let (m, gm) = edge_mollifier(&x[0], &x[1], &x[2], &x[3], eps);
-        let mut first = Side::edge(e1, [pair.weights[0], pair.weights[1]], el1);
-        let mut second = Side::edge(e2, [pair.weights[2], pair.weights[3]], el2);
-        first.mollifier = (m, [gm[0], gm[1], Vector3::zeros()]);
-        second.mollifier = (m, [gm[2], gm[3], Vector3::zeros()]);
-        self.self_pair(acc, ct, &pair, &first, &second, found);
-    }
-
-    /// A pair between two parts of the ribbon (sides on two elements): gradient through
-    /// both elements, Hessian as a [`PairTerm`].
-    fn self_pair(
-        &self,
-        acc: &mut Accumulator,
-        ct: &ContactTerms,
-        pair: &Closest,
-        first: &Side,
-        second: &Side,
-        found: &mut Found,
-    ) {
-        let s = pair.distance - ct.thickness;
-        if !found.enter(s, ct.activation, PairSource::Itself) {
-            return;
-        }
-        let (b, db, ddb) = barrier(s, ct.activation);
-        let m = first.mollifier.0;
-        found.value += ct.weight * m * b;
-        if !acc.forces {
-            return;
-        }
-        let u1 = self.side_gradient(acc, found, first, &pair.normal, ct.weight * m * db);
-        let u2 = self.side_gradient(acc, found, second, &pair.normal, ct.weight * m * db);
-        self.mollifier_gradient(acc, found, first, ct.weight * b);
-        self.mollifier_gradient(acc, found, second, ct.weight * b);
-        if acc.ws_hessian.is_some() {
-            found.pairs.push(PairTerm {
-                e1: first.element as u32,
-                e2: second.element as u32,
-                u1,
-                u2,
-                weight: ct.weight * m * ddb,
-            });
-        }
-    }
-
-    /// IPC's lagged friction D = μλ f0(|T^T (x - x̂ - Δc)|) of every lagged contact;
-    /// returns its value, J.
-    fn friction_terms(&self, acc: &mut Accumulator, ct: &ContactTerms, wrench: &mut [Vec8]) -> f64 {
-        let mut value = 0.0;
-        let hist = self.history;
-        for f in &ct.friction {
-            let (j, top) = ((f.vertex / 2) as usize, f.vertex % 2 == 1);
-            let x = vertex_position(acc, f.vertex);
-            let material = self.rim_material(acc, j, top);
-            // the same material point at the start of the step (the resampling R)
-            let (us, xs) = if top {
-                (&hist.u_top, &hist.x_top)
-            } else {
-                (&hist.u_bottom, &hist.x_bottom)
-            };
-            let (previous, slope) = interpolate(us, xs, material.x, j);
-            let slip = x - previous - f.shift;
-            let u = [f.tangent[0].dot(&slip), f.tangent[1].dot(&slip)];
-            let y = (u[0] * u[0] + u[1] * u[1]).sqrt();
-            let (f0, f1_over_y, df1) = friction_mollifier(y, ct.friction_slip);
-            value += f.mu_lambda * f0;
-            if !acc.forces {
-                continue;
-            }
-            let e = element_of_vertex(ct, f.vertex);
-            let gamma = (f.tangent[0] * u[0] + f.tangent[1] * u[1]) * (f.mu_lambda * f1_over_y);
-            let du = sliding_rate(self.strip.width, top);
-            add_force(acc, wrench, e, &material, &x, &gamma, (j, du));
-            let column = self.sliding_column(acc, e, j, top);
-            if let Some((col, _)) = column {
-                // x̂ slides along the old rim with c_j too
-                let local = -gamma.dot(&slope) * du;
-                if col == 6 {
-                    acc.add_local(e, local, 0.0);
-                } else {
-                    acc.add_local(e, 0.0, local);
-                }
-            }
-            if let Some(hs) = acc.ws_hessian.as_deref_mut() {
-                // the 2x2 Hessian of f0 has eigen-directions along the slip (f1') and
-                // across it (f1/y), both >= 0
-                let (along, across) = if y > 0.0 {
-                    (
-                        (f.tangent[0] * u[0] + f.tangent[1] * u[1]) / y,
-                        (f.tangent[1] * u[0] - f.tangent[0] * u[1]) / y,
-                    )
-                } else {
-                    (f.tangent[0], f.tangent[1])
-                };
-                let sigma = column.map(|(col, s)| (col, s - slope * du));
-                for (dir, eig) in [(along, df1), (across, f1_over_y)] {
-                    let a = jacobian_row(&x, &dir, sigma);
-                    hs[e] += a * a.transpose() * (f.mu_lambda * eig);
-                }
-            }
-        }
-        value
-    }
 }

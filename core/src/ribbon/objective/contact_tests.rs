@@ -378,3 +378,63 @@ fn the_safe_step_stops_a_falling_ribbon_a_tenth_of_its_gap_above_the_ground() {
     });
     assert_eq!(up, 1.0);
 }
+
+/// f, the pairs inside the barrier and the gradient at q, from the last checked path's
+/// candidates (`cached`) or the broad phase.
+fn evaluated(
+    obj: &Objective,
+    ws: &mut Workspace,
+    q: &[f64],
+    cached: bool,
+) -> (f64, usize, Vec<f64>) {
+    let mut g = vec![0.0; q.len()];
+    ws.set_on_checked_path(cached);
+    let f = obj.evaluate(q, ws, Some((&mut g, GradientMode::Adjoint)), None);
+    ws.set_on_checked_path(false);
+    (f, ws.contact.active, g)
+}
+
+#[test]
+fn evaluations_on_a_checked_path_read_the_broad_phases_pairs() {
+    // the fold (self, collider-feature and ground pairs) moved along a random path of a
+    // few cm: at every point of it up to the safe fraction the candidates give the same
+    // pairs as the broad phase (only their summation order differs)
+    let (strip, terms, history, q0, base, ct) = folded();
+    let obj = Objective::new(strip, true, &terms, &history, base).with_contact(Some(&ct));
+    let mut ws = Workspace::default();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(61);
+    let d: Vec<f64> = (0..q0.len())
+        .map(|_| rng.random_range(-0.05..0.05))
+        .collect();
+    let at = |a: f64| -> Vec<f64> { q0.iter().zip(&d).map(|(x, y)| x + a * y).collect() };
+    let fraction = obj.safe_step_fraction(&mut ws, &mut |a, out| out.copy_from_slice(&at(a)));
+    assert!(fraction > 0.0, "no step along the path");
+    for k in 0..=8 {
+        let q = at(fraction * k as f64 / 8.0);
+        let (f_full, active_full, g_full) = evaluated(&obj, &mut ws, &q, false);
+        let (f_cached, active_cached, g_cached) = evaluated(&obj, &mut ws, &q, true);
+        assert!(active_full > 0, "point {k}: nothing inside the barrier");
+        assert_eq!(active_cached, active_full, "point {k}: pairs");
+        assert!(
+            (f_cached - f_full).abs() <= 1e-12 * f_full.abs(),
+            "point {k}: f"
+        );
+        let scale = g_full.iter().fold(0.0, |m: f64, x| m.max(x.abs()));
+        let worst = g_full
+            .iter()
+            .zip(&g_cached)
+            .fold(0.0, |m: f64, (a, b)| m.max((a - b).abs()));
+        assert!(
+            worst <= 1e-12 * scale,
+            "point {k}: gradient off by {worst:.2e} of {scale:.2e}"
+        );
+    }
+    // the check fails when the candidates are not the path's (none at all here)
+    ws.contact.candidates = Default::default();
+    let (_, active_full, _) = evaluated(&obj, &mut ws, &q0, false);
+    let (_, active_cached, _) = evaluated(&obj, &mut ws, &q0, true);
+    assert!(
+        active_cached < active_full,
+        "{active_cached} against {active_full}"
+    );
+}

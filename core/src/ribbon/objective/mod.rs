@@ -28,7 +28,9 @@
 
 mod accumulate;
 pub mod chain;
+mod contact_candidates;
 mod contact_ccd;
+mod contact_self;
 pub mod contact_terms;
 #[cfg(test)]
 mod contact_tests;

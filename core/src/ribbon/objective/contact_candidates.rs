@@ -1,0 +1,340 @@
+//! The pairs a line search's path admits (docs/contact_barrier.md, "Cost"): found once
+//! per line search, from the boxes the ribbon's cells sweep along the checked path, and
+//! read by every evaluation on that path instead of the broad phase.
+//!
+//! IPC computes its constraint set once per line search the same way. The path's
+//! meshes are the collision check's samples (α = 0 to the safe fraction) with each
+//! vertex grown by its margin for the curve's deviation from straight pieces; a pair
+//! whose boxes stay farther apart than the barrier's reach (plus ŝ of slack) along the
+//! whole path is inactive at every trial, so leaving it out changes nothing. The
+//! evaluation still tests each candidate's exact gap: the same pairs enter, only their
+//! summation order differs from the broad phase's.
+
+use super::accumulate::Accumulator;
+use super::contact_terms::{CellGeometry, ContactTerms, Found};
+use super::Objective;
+use crate::contact::barrier::{edge_edge, point_triangle};
+use crate::contact::obstacles::{apart, boxes_near, sort_boxes, window};
+use crate::geometry::Vector3;
+
+type Aabb = (Vector3, Vector3);
+
+/// Candidate pairs of one line search (kept buffers: no allocation once warm).
+#[derive(Clone, Debug, Default)]
+pub struct Candidates {
+    /// (collider solid, rim vertex).
+    solid: Vec<(u32, u32)>,
+    /// (collider point, edge or triangle; ribbon cell).
+    point: Vec<(u32, u32)>,
+    edge: Vec<(u32, u32)>,
+    triangle: Vec<(u32, u32)>,
+    /// Against other bodies: (body, rim vertex, its element, their cell), (body, their
+    /// vertex, own cell), (body, own edge, its element, their edge).
+    body_vertex: Vec<(u32, u32, u32, u32)>,
+    body_triangle: Vec<(u32, u32, u32)>,
+    body_edge: Vec<(u32, [u32; 2], u32, [u32; 2])>,
+    /// The ribbon against itself: (rim vertex, its element, cell), (edge, its element,
+    /// edge, its element).
+    own_vertex: Vec<(u32, u32, u32)>,
+    own_edge: Vec<([u32; 2], u32, [u32; 2], u32)>,
+    /// The cells' swept boxes, sorted along the obstacles' axis, and the widest, m.
+    boxes: Vec<Aabb>,
+    order: Vec<u32>,
+    widest: f64,
+}
+
+impl Candidates {
+    /// Every pair that may come within the barrier's reach while each rim vertex stays
+    /// in its box of `vertex_boxes` (m; mesh order), starting from `x0`: the cells'
+    /// swept boxes pick cell pairs, and of their primitive pairs those whose distance at
+    /// the start, less the most their points can move inside their boxes, is within
+    /// reach.
+    pub(super) fn build(&mut self, ct: &ContactTerms, vertex_boxes: &[Aabb], x0: &[Vector3]) {
+        let obs = &ct.obstacles;
+        let axis = obs.axis;
+        let slack = ct.activation;
+        self.boxes.clear();
+        for tri in &ct.cells.triangles {
+            let b = tri.iter().fold(empty(), |(lo, hi), &v| {
+                let (a, b) = vertex_boxes[v as usize];
+                (lo.inf(&a), hi.sup(&b))
+            });
+            self.boxes.push(b);
+        }
+        sort_boxes(&self.boxes, axis, &mut self.order);
+        self.widest = self
+            .boxes
+            .iter()
+            .fold(0.0, |w: f64, (lo, hi)| w.max(hi[axis] - lo[axis]));
+        self.solids(ct, vertex_boxes, slack);
+        self.features(ct, slack);
+        let moves = |v: u32| {
+            let (lo, hi) = vertex_boxes[v as usize];
+            (hi - lo).norm()
+        };
+        let probe = Probe {
+            ct,
+            x0,
+            moves: &moves,
+            reach: ct.thickness + ct.activation + slack,
+        };
+        self.bodies(&probe);
+        self.own_vertex.clear();
+        self.own_edge.clear();
+        if ct.self_contact {
+            self.own_cells(&probe);
+        }
+    }
+
+    /// Rim vertices that may come within reach of a collider solid: the signed distance
+    /// is 1-Lipschitz, so a vertex box whose centre is farther than its half diagonal
+    /// plus the reach stays out.
+    fn solids(&mut self, ct: &ContactTerms, vertex_boxes: &[Aabb], slack: f64) {
+        let obs = &ct.obstacles;
+        let reach = 0.5 * ct.thickness + ct.activation + slack;
+        self.solid.clear();
+        for (k, solid) in obs.solids.iter().enumerate() {
+            for (v, b) in vertex_boxes.iter().enumerate() {
+                if let Some(aabb) = &solid.aabb {
+                    if !boxes_near(b, aabb, reach) {
+                        continue;
+                    }
+                }
+                let centre = (b.0 + b.1) * 0.5;
+                let (sd, _) = obs.solid_distance(solid, &centre);
+                if sd - 0.5 * (b.1 - b.0).norm() <= reach {
+                    self.solid.push((k as u32, v as u32));
+                }
+            }
+        }
+    }
+
+    /// Collider points, edges and triangles against the cells' swept boxes.
+    fn features(&mut self, ct: &ContactTerms, slack: f64) {
+        let obs = &ct.obstacles;
+        let near = |lo: &Vector3, hi: &Vector3, margin: f64, k: usize, out: &mut Vec<_>| {
+            let range = window(
+                &self.boxes,
+                &self.order,
+                obs.axis,
+                self.widest,
+                lo[obs.axis],
+                hi[obs.axis],
+                margin,
+            );
+            for &t in &self.order[range] {
+                if boxes_near(&self.boxes[t as usize], &(*lo, *hi), margin) {
+                    out.push((k as u32, t));
+                }
+            }
+        };
+        let reach = ct.activation + slack;
+        self.point.clear();
+        for (k, f) in obs.points.iter().enumerate() {
+            near(&f.lo, &f.hi, f.offset + reach, k, &mut self.point);
+        }
+        self.edge.clear();
+        for (k, f) in obs.edges.iter().enumerate() {
+            near(&f.lo, &f.hi, f.offset + reach, k, &mut self.edge);
+        }
+        self.triangle.clear();
+        for (k, f) in obs.triangles.iter().enumerate() {
+            near(&f.lo, &f.hi, f.offset + reach, k, &mut self.triangle);
+        }
+    }
+
+    /// The cells against the other bodies' (static) cells.
+    fn bodies(&mut self, probe: &Probe) {
+        let ct = probe.ct;
+        let obs = &ct.obstacles;
+        let margin = probe.reach;
+        self.body_vertex.clear();
+        self.body_triangle.clear();
+        self.body_edge.clear();
+        for (b, body) in obs.bodies.iter().enumerate() {
+            for t in 0..self.boxes.len() {
+                let bt = &self.boxes[t];
+                if !boxes_near(bt, &(body.lo, body.hi), margin) {
+                    continue;
+                }
+                let range = window(
+                    &body.boxes,
+                    &body.order,
+                    obs.axis,
+                    body.widest,
+                    bt.0[obs.axis],
+                    bt.1[obs.axis],
+                    margin,
+                );
+                let near: Vec<usize> = body.order[range]
+                    .iter()
+                    .map(|&o| o as usize)
+                    .filter(|&o| boxes_near(bt, &body.boxes[o], margin))
+                    .collect();
+                for o in near {
+                    self.body_pairs(probe, b, t, o);
+                }
+            }
+        }
+    }
+
+    /// The primitive pairs of own cell `t` and cell `o` of body `b` within reach.
+    fn body_pairs(&mut self, probe: &Probe, b: usize, t: usize, o: usize) {
+        let (ct, x0) = (probe.ct, probe.x0);
+        let body = &ct.obstacles.bodies[b];
+        let other = |v: u32| body.vertices[v as usize];
+        let e = (t / 2) as u32;
+        let own = &ct.cells;
+        let ox = body.cells.triangles[o].map(other);
+        for &v in own.owned_vertices(t) {
+            let (p, m) = (x0[v as usize], (probe.moves)(v));
+            if apart(&[p], &ox, probe.reach + m) {
+                continue;
+            }
+            let d = point_triangle(&p, &ox[0], &ox[1], &ox[2]).distance;
+            if d - m <= probe.reach {
+                self.body_vertex.push((b as u32, v, e, o as u32));
+            }
+        }
+        let tri = own.triangles[t];
+        let x = tri.map(|v| x0[v as usize]);
+        let most = tri.iter().fold(0.0, |m: f64, &v| m.max((probe.moves)(v)));
+        for &ov in body.cells.owned_vertices(o) {
+            if apart(&[other(ov)], &x, probe.reach + most) {
+                continue;
+            }
+            let d = point_triangle(&other(ov), &x[0], &x[1], &x[2]).distance;
+            if d - most <= probe.reach {
+                self.body_triangle.push((b as u32, ov, t as u32));
+            }
+        }
+        for &edge in own.owned_edges(t) {
+            let (a, bb) = (x0[edge[0] as usize], x0[edge[1] as usize]);
+            let most = (probe.moves)(edge[0]).max((probe.moves)(edge[1]));
+            for &oe in body.cells.owned_edges(o) {
+                if apart(&[a, bb], &[other(oe[0]), other(oe[1])], probe.reach + most) {
+                    continue;
+                }
+                let d = edge_edge(&a, &bb, &other(oe[0]), &other(oe[1])).distance;
+                if d - most <= probe.reach {
+                    self.body_edge.push((b as u32, edge, e, oe));
+                }
+            }
+        }
+    }
+
+    /// Pairs of the ribbon's own cells on different elements (sort and sweep), then
+    /// their primitive pairs within reach.
+    fn own_cells(&mut self, probe: &Probe) {
+        let axis = probe.ct.obstacles.axis;
+        let margin = probe.reach;
+        for i in 0..self.order.len() {
+            let t1 = self.order[i] as usize;
+            let top = self.boxes[t1].1[axis] + margin;
+            for k in i + 1..self.order.len() {
+                let t2 = self.order[k] as usize;
+                if self.boxes[t2].0[axis] > top {
+                    break;
+                }
+                if t1 / 2 != t2 / 2 && boxes_near(&self.boxes[t1], &self.boxes[t2], margin) {
+                    self.own_pairs(probe, t1, t2);
+                }
+            }
+        }
+    }
+
+    /// The primitive pairs of own cells `t1` and `t2` within reach (the neighbour skip
+    /// is the evaluation's: stations move with the creases).
+    fn own_pairs(&mut self, probe: &Probe, t1: usize, t2: usize) {
+        let (ct, x0) = (probe.ct, probe.x0);
+        let cells = &ct.cells;
+        for (a, b) in [(t1, t2), (t2, t1)] {
+            let tri = cells.triangles[b];
+            let x = tri.map(|v| x0[v as usize]);
+            let most = tri.iter().fold(0.0, |m: f64, &v| m.max((probe.moves)(v)));
+            for &v in cells.owned_vertices(a) {
+                let (p, m) = (x0[v as usize], most + (probe.moves)(v));
+                if apart(&[p], &x, probe.reach + m) {
+                    continue;
+                }
+                let d = point_triangle(&p, &x[0], &x[1], &x[2]).distance;
+                if d - m <= probe.reach {
+                    self.own_vertex.push((v, (a / 2) as u32, b as u32));
+                }
+            }
+        }
+        let most = |e: [u32; 2]| (probe.moves)(e[0]).max((probe.moves)(e[1]));
+        for &e1 in cells.owned_edges(t1) {
+            for &e2 in cells.owned_edges(t2) {
+                let p = |v: u32| x0[v as usize];
+                let (a, b) = ([p(e1[0]), p(e1[1])], [p(e2[0]), p(e2[1])]);
+                let m = most(e1) + most(e2);
+                if apart(&a, &b, probe.reach + m) {
+                    continue;
+                }
+                let d = edge_edge(&a[0], &a[1], &b[0], &b[1]).distance;
+                if d - m <= probe.reach {
+                    self.own_edge
+                        .push((e1, (t1 / 2) as u32, e2, (t2 / 2) as u32));
+                }
+            }
+        }
+    }
+}
+
+/// What the primitive tests of a build share: the start mesh, how far each vertex can
+/// move on the path (m) and the reach a pair must stay beyond (m).
+struct Probe<'a> {
+    ct: &'a ContactTerms,
+    x0: &'a [Vector3],
+    moves: &'a dyn Fn(u32) -> f64,
+    reach: f64,
+}
+
+fn empty() -> Aabb {
+    (
+        Vector3::repeat(f64::INFINITY),
+        Vector3::repeat(f64::NEG_INFINITY),
+    )
+}
+
+impl Objective<'_> {
+    /// The contact pairs of the candidates (each tested exactly, as the broad phase's).
+    pub(super) fn candidate_pairs(
+        &self,
+        acc: &mut Accumulator,
+        ct: &ContactTerms,
+        geo: &CellGeometry,
+        c: &Candidates,
+        found: &mut Found,
+    ) {
+        for &(k, v) in &c.solid {
+            self.vertex_solid(acc, ct, k as usize, v, found);
+        }
+        for &(k, t) in &c.point {
+            self.point_feature(acc, ct, k as usize, t as usize, found);
+        }
+        for &(k, t) in &c.edge {
+            self.edge_feature(acc, ct, k as usize, t as usize, found);
+        }
+        for &(k, t) in &c.triangle {
+            self.triangle_feature(acc, ct, k as usize, t as usize, found);
+        }
+        for &(b, v, e, o) in &c.body_vertex {
+            self.body_vertex_triangle(acc, ct, (b as usize, v, e as usize, o as usize), found);
+        }
+        for &(b, ov, t) in &c.body_triangle {
+            self.body_triangle_vertex(acc, ct, (b as usize, ov, t as usize), found);
+        }
+        for &(b, edge, e, oe) in &c.body_edge {
+            self.body_edges(acc, ct, (b as usize, edge, e as usize, oe), found);
+        }
+        for &(v, e, b) in &c.own_vertex {
+            self.own_vertex_triangle(acc, ct, geo, (v, e as usize, b as usize), found);
+        }
+        for &(e1, el1, e2, el2) in &c.own_edge {
+            let (first, second) = ((e1, el1 as usize), (e2, el2 as usize));
+            self.self_edge_pair(acc, ct, geo, first, second, found);
+        }
+    }
+}
