@@ -779,8 +779,7 @@ impl ContactBody for RibbonSim {
         self.contact_step(base, dt, |c, step| c.gap_at(env, step, &q))
     }
 
-    /// The meshes of the last step's line searches, its start and its end (recorded
-    /// by the steps' collision checks).
+    /// The last step's start, end and line searches' paths (the collision checks').
     fn swept_boxes(&self) -> &[(Vector3, Vector3)] {
         self.solver.workspace.swept_boxes()
     }

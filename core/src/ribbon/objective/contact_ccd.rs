@@ -126,7 +126,7 @@ impl Workspace {
     /// Whether the next evaluations lie on the last checked path (then they read its
     /// candidate pairs instead of running the broad phase).
     pub fn set_on_checked_path(&mut self, on: bool) {
-        self.contact.use_candidates = on;
+        self.use_candidates = on;
     }
     /// Add `mesh` (mesh order, m) to the swept record.
     pub fn add_swept(&mut self, mesh: &[Vector3]) {
@@ -165,8 +165,7 @@ impl Objective<'_> {
             // where the path up to the safe fraction goes: the swept record and the
             // pairs its evaluations may meet
             ws.ccd.record_path(last);
-            ws.contact
-                .candidates
+            ws.candidates
                 .build(ct, &ws.ccd.vertex_boxes, &ws.ccd.samples[0].x);
         }
         fraction

@@ -13,7 +13,6 @@
 use std::sync::Arc;
 
 use super::accumulate::{sliding_rate, Accumulator};
-use super::contact_candidates::Candidates;
 use super::{Objective, Vec8};
 use crate::contact::barrier::{
     barrier, edge_edge, edge_mollifier, mollifier_threshold, point_triangle, Closest, PairSource,
@@ -122,11 +121,11 @@ pub struct ContactWorkspace {
     pub collider_force: Vec<f64>,
     /// A pair's dense gradient (the dense baseline's Hessian).
     pub(super) dense_g: Vec<f64>,
-    /// The pairs the last checked line-search path admits, and whether the next
-    /// evaluation may use them instead of the broad phase (it lies on that path).
-    pub(super) candidates: Candidates,
-    pub(super) use_candidates: bool,
 }
+
+/// Finds an evaluation's pairs instead of the broad phase (the candidates of a checked
+/// line-search path, `contact_candidates`).
+pub(super) type PairFinder<'c> = &'c dyn Fn(&mut Accumulator, &CellGeometry, &mut Found);
 
 /// The ribbon's side of a pair: its points (mesh vertices), their weights in the
 /// gap's gradient (∂s/∂x_i = w_i n), how many, and the element carrying them all.
@@ -208,7 +207,12 @@ impl Objective<'_> {
     /// The contact terms at the frames in `acc`: their value (+∞ when a pair has
     /// crossed or touches), gradient and Hessian blocks through `acc`, cross-element
     /// pairs into `cw.pairs`.
-    pub(super) fn contact_terms(&self, acc: &mut Accumulator, cw: &mut ContactWorkspace) -> f64 {
+    pub(super) fn contact_terms(
+        &self,
+        acc: &mut Accumulator,
+        cw: &mut ContactWorkspace,
+        cached: Option<PairFinder>,
+    ) -> f64 {
         let Some(ct) = self.contact else {
             return 0.0;
         };
@@ -219,8 +223,7 @@ impl Objective<'_> {
         }
         cw.collider_force.clear();
         cw.collider_force.resize(ct.obstacles.poses.len(), 0.0);
-        let cached = cw.use_candidates;
-        self.cell_geometry(acc, ct, &mut cw.cells, !cached);
+        self.cell_geometry(acc, ct, &mut cw.cells, cached.is_none());
         let geo = &cw.cells;
         let mut found = Found {
             value: 0.0,
@@ -232,9 +235,9 @@ impl Objective<'_> {
             collider_force: &mut cw.collider_force,
             wrench: &mut cw.wrench,
         };
-        if cached {
+        if let Some(find) = cached {
             // the pairs the line search's path admits (`contact_candidates`)
-            self.candidate_pairs(acc, ct, geo, &cw.candidates, &mut found);
+            find(acc, geo, &mut found);
         } else {
             self.vertex_solid_pairs(acc, ct, &mut found);
             self.collider_feature_pairs(acc, ct, geo, &mut found);

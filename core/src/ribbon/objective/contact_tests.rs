@@ -430,7 +430,7 @@ fn evaluations_on_a_checked_path_read_the_broad_phases_pairs() {
         );
     }
     // the check fails when the candidates are not the path's (none at all here)
-    ws.contact.candidates = Default::default();
+    ws.candidates = Default::default();
     let (_, active_full, _) = evaluated(&obj, &mut ws, &q0, false);
     let (_, active_cached, _) = evaluated(&obj, &mut ws, &q0, true);
     assert!(

@@ -49,6 +49,7 @@ use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
 use crate::geometry::{Matrix3, Pose, Twist, Vector3};
 use accumulate::{Accumulator, PointGradient, SecondOrder};
 
+use contact_terms::{CellGeometry, Found, PairFinder};
 pub use contact_terms::{ContactTerms, ContactWorkspace, FrictionLag, PairTerm};
 pub use gradient::GradientMode;
 pub(crate) use kinetic::interpolate;
@@ -101,6 +102,10 @@ pub struct Workspace {
     pub contact: ContactWorkspace,
     /// The line search's collision checks' buffers (`contact_ccd`).
     ccd: contact_ccd::CcdScratch,
+    /// The pairs the last checked line-search path admits, and whether the next
+    /// evaluation may read them instead of the broad phase (it lies on that path).
+    candidates: contact_candidates::Candidates,
+    use_candidates: bool,
 }
 
 impl Default for Coordinates {
@@ -278,7 +283,14 @@ impl<'a> Objective<'a> {
             parts.constraint +=
                 self.equality(&mut acc, &mut ws.cross_blocks, eq, lambda, t.penalty);
         }
-        parts.contact = self.contact_terms(&mut acc, &mut ws.contact);
+        let candidates = &ws.candidates;
+        let find = |acc: &mut Accumulator, geo: &CellGeometry, found: &mut Found| {
+            if let Some(ct) = self.contact {
+                self.candidate_pairs(acc, ct, geo, candidates, found);
+            }
+        };
+        let cached: Option<PairFinder> = ws.use_candidates.then_some(&find);
+        parts.contact = self.contact_terms(&mut acc, &mut ws.contact, cached);
         parts
     }
 }
