@@ -21,8 +21,8 @@ use super::HandleSpec;
 use crate::contact::{ContactEnv, ContactReport, OtherMesh};
 use crate::geometry::{Point3, Pose, Vector3};
 
-/// Mesh vertices per box of a body's coarse outline (a few cm of a ribbon).
-const CHUNK: usize = 16;
+/// Mesh vertices per box of a body's outline (two stations of a ribbon: one element).
+const CHUNK: usize = 4;
 
 type Aabb = (Vector3, Vector3);
 

@@ -1,17 +1,21 @@
 //! The pairs a line search's path admits (docs/contact_barrier.md, "Cost"): found once
-//! per line search, from the boxes the ribbon's cells sweep along the checked path, and
-//! read by every evaluation on that path instead of the broad phase.
+//! per line search from the sampled path, then read by the collision check's pieces and
+//! by every evaluation on the path instead of a broad phase.
 //!
 //! IPC computes its constraint set once per line search the same way. The path's
-//! meshes are the collision check's samples (α = 0 to the safe fraction) with each
-//! vertex grown by its margin for the curve's deviation from straight pieces; a pair
-//! whose boxes stay farther apart than the barrier's reach (plus ŝ of slack) along the
-//! whole path is inactive at every trial, so leaving it out changes nothing. The
-//! evaluation still tests each candidate's exact gap: the same pairs enter, only their
-//! summation order differs from the broad phase's.
+//! meshes are the collision check's samples (α = 0 to the sampled end) with each vertex
+//! grown by its margin for the curve's deviation from straight pieces. Cell pairs come
+//! from those boxes (sort and sweep, other bodies' windows); of their primitive pairs
+//! (vertex-triangle, edge-edge) a pair is kept unless its distance at the start, less
+//! the most its points can approach each other on the path (for two parts of one
+//! ribbon: their relative displacement, small where they move together), is beyond the
+//! barrier's reach plus ŝ of slack, or its rim stations stay within the neighbour skip
+//! all along the path. A pair left out is inactive at every trial and cannot reach a
+//! collision floor: the evaluations test each kept pair's exact gap, so the same pairs
+//! enter as with the broad phase; only their summation order differs.
 
 use super::accumulate::Accumulator;
-use super::contact_terms::{CellGeometry, ContactTerms, Found};
+use super::contact_terms::{station_gap, CellGeometry, ContactTerms, Found};
 use super::Objective;
 use crate::contact::barrier::{edge_edge, point_triangle};
 use crate::contact::obstacles::{apart, boxes_near, sort_boxes, window};
@@ -19,24 +23,27 @@ use crate::geometry::Vector3;
 
 type Aabb = (Vector3, Vector3);
 
+/// The most two points of the given vertex sets approach each other along a path, m.
+pub(super) type Approach<'a> = &'a dyn Fn(&[u32], &[u32]) -> f64;
+
 /// Candidate pairs of one line search (kept buffers: no allocation once warm).
 #[derive(Clone, Debug, Default)]
 pub struct Candidates {
     /// (collider solid, rim vertex).
-    solid: Vec<(u32, u32)>,
+    pub(super) solid: Vec<(u32, u32)>,
     /// (collider point, edge or triangle; ribbon cell).
-    point: Vec<(u32, u32)>,
-    edge: Vec<(u32, u32)>,
-    triangle: Vec<(u32, u32)>,
+    pub(super) point: Vec<(u32, u32)>,
+    pub(super) edge: Vec<(u32, u32)>,
+    pub(super) triangle: Vec<(u32, u32)>,
     /// Against other bodies: (body, rim vertex, its element, their cell), (body, their
     /// vertex, own cell), (body, own edge, its element, their edge).
-    body_vertex: Vec<(u32, u32, u32, u32)>,
-    body_triangle: Vec<(u32, u32, u32)>,
-    body_edge: Vec<(u32, [u32; 2], u32, [u32; 2])>,
+    pub(super) body_vertex: Vec<(u32, u32, u32, u32)>,
+    pub(super) body_triangle: Vec<(u32, u32, u32)>,
+    pub(super) body_edge: Vec<(u32, [u32; 2], u32, [u32; 2])>,
     /// The ribbon against itself: (rim vertex, its element, cell), (edge, its element,
     /// edge, its element).
-    own_vertex: Vec<(u32, u32, u32)>,
-    own_edge: Vec<([u32; 2], u32, [u32; 2], u32)>,
+    pub(super) own_vertex: Vec<(u32, u32, u32)>,
+    pub(super) own_edge: Vec<([u32; 2], u32, [u32; 2], u32)>,
     /// The cells' swept boxes, sorted along the obstacles' axis, and the widest, m.
     boxes: Vec<Aabb>,
     order: Vec<u32>,
@@ -49,10 +56,18 @@ impl Candidates {
     /// swept boxes pick cell pairs, and of their primitive pairs those whose distance at
     /// the start, less the most their points can move inside their boxes, is within
     /// reach.
-    pub(super) fn build(&mut self, ct: &ContactTerms, vertex_boxes: &[Aabb], x0: &[Vector3]) {
+    /// `extra` (m) widens the reach for the collision check's floors (twice the
+    /// largest margin of the path's curvature).
+    pub(super) fn build(
+        &mut self,
+        ct: &ContactTerms,
+        (vertex_boxes, x0): (&[Aabb], &[Vector3]),
+        (relative, stations): (Approach, &[(f64, f64)]),
+        extra: f64,
+    ) {
         let obs = &ct.obstacles;
         let axis = obs.axis;
-        let slack = ct.activation;
+        let slack = ct.activation + extra;
         self.boxes.clear();
         for tri in &ct.cells.triangles {
             let b = tri.iter().fold(empty(), |(lo, hi), &v| {
@@ -76,6 +91,8 @@ impl Candidates {
             ct,
             x0,
             moves: &moves,
+            relative,
+            stations,
             reach: ct.thickness + ct.activation + slack,
         };
         self.bodies(&probe);
@@ -153,7 +170,8 @@ impl Candidates {
         self.body_edge.clear();
         for (b, body) in obs.bodies.iter().enumerate() {
             for t in 0..self.boxes.len() {
-                let bt = &self.boxes[t];
+                let bt = self.boxes[t];
+                let bt = &bt;
                 if !boxes_near(bt, &(body.lo, body.hi), margin) {
                     continue;
                 }
@@ -166,13 +184,10 @@ impl Candidates {
                     bt.1[obs.axis],
                     margin,
                 );
-                let near: Vec<usize> = body.order[range]
-                    .iter()
-                    .map(|&o| o as usize)
-                    .filter(|&o| boxes_near(bt, &body.boxes[o], margin))
-                    .collect();
-                for o in near {
-                    self.body_pairs(probe, b, t, o);
+                for &o in &body.order[range] {
+                    if boxes_near(bt, &body.boxes[o as usize], margin) {
+                        self.body_pairs(probe, b, t, o as usize);
+                    }
                 }
             }
         }
@@ -186,6 +201,13 @@ impl Candidates {
         let e = (t / 2) as u32;
         let own = &ct.cells;
         let ox = body.cells.triangles[o].map(other);
+        let tri = own.triangles[t];
+        let x = tri.map(|v| x0[v as usize]);
+        let most = tri.iter().fold(0.0, |m: f64, &v| m.max((probe.moves)(v)));
+        let ((ca, ra), (cb, rb)) = (sphere(&x), sphere(&ox));
+        if (ca - cb).norm() - ra - rb > probe.reach + most {
+            return;
+        }
         for &v in own.owned_vertices(t) {
             let (p, m) = (x0[v as usize], (probe.moves)(v));
             if apart(&[p], &ox, probe.reach + m) {
@@ -196,9 +218,6 @@ impl Candidates {
                 self.body_vertex.push((b as u32, v, e, o as u32));
             }
         }
-        let tri = own.triangles[t];
-        let x = tri.map(|v| x0[v as usize]);
-        let most = tri.iter().fold(0.0, |m: f64, &v| m.max((probe.moves)(v)));
         for &ov in body.cells.owned_vertices(o) {
             if apart(&[other(ov)], &x, probe.reach + most) {
                 continue;
@@ -245,16 +264,52 @@ impl Candidates {
 
     /// The primitive pairs of own cells `t1` and `t2` within reach (the neighbour skip
     /// is the evaluation's: stations move with the creases).
+    ///
+    /// Two parts of one ribbon mostly move together: the most their points approach
+    /// each other along the path (`Probe::relative`) is far less than what each moves,
+    /// so cells near along the ribbon but not in space drop out here.
     fn own_pairs(&mut self, probe: &Probe, t1: usize, t2: usize) {
         let (ct, x0) = (probe.ct, probe.x0);
         let cells = &ct.cells;
+        let (tri1, tri2) = (cells.triangles[t1], cells.triangles[t2]);
+        let start = |t: [u32; 3]| t.map(|v| x0[v as usize]);
+        let ((ca, ra), (cb, rb)) = (sphere(&start(tri1)), sphere(&start(tri2)));
+        let most = |t: [u32; 3]| t.iter().fold(0.0, |m: f64, &v| m.max((probe.moves)(v)));
+        if (ca - cb).norm() - ra - rb > probe.reach + most(tri1) + most(tri2) {
+            return;
+        }
+        let approach = (probe.relative)(&tri1, &tri2);
+        if apart(&start(tri1), &start(tri2), probe.reach + approach) {
+            return;
+        }
+        let stations = |vs: &[u32]| {
+            vs.iter().fold(
+                (f64::INFINITY, f64::NEG_INFINITY, 0.0),
+                |(lo, hi, sh): (f64, f64, f64), &v| {
+                    let (u, shift) = probe.stations[v as usize];
+                    (lo.min(u), hi.max(u), sh.max(shift))
+                },
+            )
+        };
+        // within the neighbour skip all along the path (stations move with the creases,
+        // at most `shift`): the evaluations never take it
+        let skipped = |a: &[u32], b: &[u32]| {
+            let ((alo, ahi, ash), (blo, bhi, bsh)) = (stations(a), stations(b));
+            station_gap((alo, ahi), (blo, bhi), ct.period) + ash + bsh <= ct.skip
+        };
         for (a, b) in [(t1, t2), (t2, t1)] {
             let tri = cells.triangles[b];
             let x = tri.map(|v| x0[v as usize]);
             let most = tri.iter().fold(0.0, |m: f64, &v| m.max((probe.moves)(v)));
+            let (centre, radius) = sphere(&x);
             for &v in cells.owned_vertices(a) {
-                let (p, m) = (x0[v as usize], most + (probe.moves)(v));
-                if apart(&[p], &x, probe.reach + m) {
+                if skipped(&[v], &tri) {
+                    continue;
+                }
+                let (p, m) = (x0[v as usize], approach.min(most + (probe.moves)(v)));
+                if (p - centre).norm() - radius > probe.reach + m
+                    || apart(&[p], &x, probe.reach + m)
+                {
                     continue;
                 }
                 let d = point_triangle(&p, &x[0], &x[1], &x[2]).distance;
@@ -266,10 +321,14 @@ impl Candidates {
         let most = |e: [u32; 2]| (probe.moves)(e[0]).max((probe.moves)(e[1]));
         for &e1 in cells.owned_edges(t1) {
             for &e2 in cells.owned_edges(t2) {
+                if skipped(&e1, &e2) {
+                    continue;
+                }
                 let p = |v: u32| x0[v as usize];
                 let (a, b) = ([p(e1[0]), p(e1[1])], [p(e2[0]), p(e2[1])]);
-                let m = most(e1) + most(e2);
-                if apart(&a, &b, probe.reach + m) {
+                let m = approach.min(most(e1) + most(e2));
+                let ((ca, ra), (cb, rb)) = (sphere(&a), sphere(&b));
+                if (ca - cb).norm() - ra - rb > probe.reach + m || apart(&a, &b, probe.reach + m) {
                     continue;
                 }
                 let d = edge_edge(&a[0], &a[1], &b[0], &b[1]).distance;
@@ -288,7 +347,18 @@ struct Probe<'a> {
     ct: &'a ContactTerms,
     x0: &'a [Vector3],
     moves: &'a dyn Fn(u32) -> f64,
+    /// The most two points of the given sets approach each other along the path, m.
+    relative: &'a dyn Fn(&[u32], &[u32]) -> f64,
+    /// Per vertex: its rim station at the start and the most it moves along the path, m.
+    stations: &'a [(f64, f64)],
     reach: f64,
+}
+
+/// A sphere holding the points `x`: their centroid and the largest distance from it, m.
+fn sphere(x: &[Vector3]) -> (Vector3, f64) {
+    let centre = x.iter().fold(Vector3::zeros(), |c, p| c + p) / x.len() as f64;
+    let radius = x.iter().fold(0.0, |r: f64, p| r.max((p - centre).norm()));
+    (centre, radius)
 }
 
 fn empty() -> Aabb {

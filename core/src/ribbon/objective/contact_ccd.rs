@@ -8,12 +8,14 @@
 //! whose deviation (∝ 1/K^2) is a small part of ŝ, and each piece's straight motion is
 //! checked with the deviation added to every pair's minimum separation. A pair keeps at
 //! least a tenth of its gap (of ŝ if its gap is larger): additive CCD's conservative
-//! rescaling (Li et al. 2021).
+//! rescaling (Li et al. 2021). The pairs followed are the path's candidates
+//! (`contact_candidates`), found once per sampled path.
 
+use super::contact_candidates::Candidates;
 use super::contact_terms::{station_gap, ContactTerms};
 use super::{Objective, Workspace};
 use crate::contact::barrier::{advance_convex, advance_from, edge_edge, point_triangle};
-use crate::contact::obstacles::{bounds, boxes_near, sort_boxes, window, Obstacles};
+use crate::contact::obstacles::{bounds, ObstacleSolid};
 use crate::geometry::Vector3;
 use crate::ribbon::reconstruct::{reconstruct, Coordinates, Frames};
 
@@ -41,8 +43,6 @@ pub(crate) struct CcdScratch {
     /// Per vertex: twice its path's deviation from a straight piece, m (the margin
     /// its pairs add to their minimum separation).
     margin: Vec<f64>,
-    boxes: Vec<(Vector3, Vector3)>,
-    order: Vec<u32>,
     /// Boxes of every mesh the checked paths passed through since the last
     /// [`Workspace::reset_swept`], per run of [`SWEPT_CHUNK`] vertices, m: where the
     /// ribbon went during a step (the world steps ribbons whose swept boxes stay apart
@@ -50,6 +50,8 @@ pub(crate) struct CcdScratch {
     swept: Vec<(Vector3, Vector3)>,
     /// Per vertex: its box over the last checked path (up to the safe fraction), m.
     vertex_boxes: Vec<(Vector3, Vector3)>,
+    /// Per vertex: its rim station at the path's start and the most it moves, m.
+    stations: Vec<(f64, f64)>,
 }
 
 /// Mesh vertices per swept box (8 stations of a ribbon: 8 elements' worth, a few cm).
@@ -63,10 +65,9 @@ impl Default for CcdScratch {
             q: Vec::new(),
             samples: Vec::new(),
             margin: Vec::new(),
-            boxes: Vec::new(),
-            order: Vec::new(),
             swept: Vec::new(),
             vertex_boxes: Vec::new(),
+            stations: Vec::new(),
         }
     }
 }
@@ -87,9 +88,9 @@ impl CcdScratch {
         }
     }
 
-    /// Samples 0..=`last` of the checked path: each vertex's box over them, grown by
-    /// its margin, into `vertex_boxes` and the swept boxes.
-    fn record_path(&mut self, last: usize) {
+    /// Each vertex's box over samples 0..=`last` of the path, grown by its margin, into
+    /// `vertex_boxes`.
+    fn record_boxes(&mut self, last: usize) {
         let vertices = self.samples[0].x.len();
         self.vertex_boxes.clear();
         self.vertex_boxes.extend((0..vertices).map(|v| {
@@ -103,7 +104,13 @@ impl CcdScratch {
             );
             (lo - m, hi + m)
         }));
-        let chunks = vertices.div_ceil(SWEPT_CHUNK);
+    }
+
+    /// Samples 0..=`last` of the checked path (up to the safe fraction) into the swept
+    /// boxes.
+    fn record_path(&mut self, last: usize) {
+        self.record_boxes(last);
+        let chunks = self.vertex_boxes.len().div_ceil(SWEPT_CHUNK);
         let empty = (
             Vector3::repeat(f64::INFINITY),
             Vector3::repeat(f64::NEG_INFINITY),
@@ -160,13 +167,12 @@ impl Objective<'_> {
         let Some(ct) = self.contact else {
             return 1.0;
         };
-        let (fraction, last) = self.checked_fraction(ct, &mut ws.ccd, path);
+        // (the candidates of the last path sampled: the evaluations' pairs on the part of
+        // it up to the safe fraction too)
+        let (fraction, last) = self.checked_fraction(ct, &mut ws.ccd, &mut ws.candidates, path);
         if let Some(last) = last {
-            // where the path up to the safe fraction goes: the swept record and the
-            // pairs its evaluations may meet
+            // where the path up to the safe fraction goes: the swept record
             ws.ccd.record_path(last);
-            ws.candidates
-                .build(ct, &ws.ccd.vertex_boxes, &ws.ccd.samples[0].x);
         }
         fraction
     }
@@ -176,6 +182,7 @@ impl Objective<'_> {
         &self,
         ct: &ContactTerms,
         scratch: &mut CcdScratch,
+        candidates: &mut Candidates,
         path: &mut dyn FnMut(f64, &mut [f64]),
     ) -> (f64, Option<usize>) {
         let mut alpha = 1.0;
@@ -201,9 +208,25 @@ impl Objective<'_> {
                     }
                 }
             }
+            // every pair that can come within reach on the whole sampled path, once
+            scratch.record_boxes(pieces);
+            let most = scratch.margin.iter().copied().fold(0.0, f64::max);
+            let (samples, margin) = (&scratch.samples[..=pieces], &scratch.margin);
+            let relative = |a: &[u32], b: &[u32]| relative_approach(samples, margin, a, b);
+            scratch.stations.clear();
+            scratch
+                .stations
+                .extend(samples[0].u.iter().enumerate().map(|(v, &u0)| {
+                    let shift = samples[1..]
+                        .iter()
+                        .fold(0.0, |m: f64, s| m.max((s.u[v] - u0).abs()));
+                    (u0, shift)
+                }));
+            let boxes = (&scratch.vertex_boxes[..], &samples[0].x[..]);
+            candidates.build(ct, boxes, (&relative, &scratch.stations), 2.0 * most);
             let mut cramped = None;
             for i in 0..pieces {
-                let r = piece(ct, scratch, i);
+                let r = piece(ct, candidates, scratch, i);
                 if r.cramped {
                     cramped = Some(r.shrink);
                 }
@@ -281,6 +304,24 @@ fn chord_deviation(scratch: &mut CcdScratch) -> f64 {
     0.5 * scratch.margin.iter().copied().fold(0.0, f64::max)
 }
 
+/// The most points of `a` and of `b` approach each other along the sampled path (the
+/// relative displacement since sample 0 is affine on each piece, so its norm peaks at
+/// the samples), plus both sets' largest margins for the curve between them, m.
+fn relative_approach(samples: &[Sample], margin: &[f64], a: &[u32], b: &[u32]) -> f64 {
+    let x0 = &samples[0].x;
+    let mut most: f64 = 0.0;
+    for s in &samples[1..] {
+        for &i in a {
+            let di = s.x[i as usize] - x0[i as usize];
+            for &j in b {
+                most = most.max((di - (s.x[j as usize] - x0[j as usize])).norm());
+            }
+        }
+    }
+    let bent = |vs: &[u32]| vs.iter().fold(0.0, |m: f64, &v| m.max(margin[v as usize]));
+    most + bent(a) + bent(b)
+}
+
 /// The gap a pair of gap `g0` may close to on this piece: a tenth of g0 (of ŝ if
 /// smaller) plus its points' `margin` for the deviation from a straight motion.
 #[inline]
@@ -288,77 +329,31 @@ fn floor(g0: f64, activation: f64, margin: f64) -> f64 {
     (1.0 - CLOSE) * g0.min(activation) + margin
 }
 
-/// The straight motion from sample `i` to `i + 1`: the safe fraction of it.
-fn piece(ct: &ContactTerms, scratch: &mut CcdScratch, i: usize) -> PieceResult {
-    let obs = &ct.obstacles;
-    let axis = obs.axis;
-    let CcdScratch {
-        samples,
-        margin,
-        boxes,
-        order,
-        ..
-    } = scratch;
-    let (a, b) = (&samples[i], &samples[i + 1]);
+/// The straight motion from sample `i` to `i + 1`: the safe fraction of it, over the
+/// path's candidate pairs.
+fn piece(ct: &ContactTerms, c: &Candidates, scratch: &CcdScratch, i: usize) -> PieceResult {
+    let (a, b) = (&scratch.samples[i], &scratch.samples[i + 1]);
     let mut result = PieceResult {
         t: 1.0,
         cramped: false,
         shrink: 1.0,
     };
-    let motion = Motion { a, b, margin };
-    // the cheap pairs first: every later pair is only followed up to the earliest
-    // fraction found so far (the horizon), over boxes swept that far
-    solids(ct, obs, &motion, &mut result);
-    let widest = sweep(ct, &motion, result.t, axis, boxes, order);
-    let swept = Swept {
-        boxes,
-        order,
-        widest,
-        axis,
+    let m = Motion {
+        a,
+        b,
+        margin: &scratch.margin,
     };
-    features(ct, obs, &motion, &swept, &mut result);
-    for body in 0..obs.bodies.len() {
-        other_body(ct, obs, body, &motion, &swept, &mut result);
+    // the cheap pairs first: every later pair is only followed up to the earliest
+    // fraction found so far (the horizon)
+    for &(k, v) in &c.solid {
+        solid(ct, &ct.obstacles.solids[k as usize], v, &m, &mut result);
     }
+    features(ct, c, &m, &mut result);
+    other_bodies(ct, c, &m, &mut result);
     if ct.self_contact && result.t > 0.0 {
-        let widest = sweep(ct, &motion, result.t, axis, boxes, order);
-        let swept = Swept {
-            boxes,
-            order,
-            widest,
-            axis,
-        };
-        self_pairs(ct, &motion, &swept, &mut result);
+        self_pairs(ct, c, &m, &mut result);
     }
     result
-}
-
-/// The cells' boxes swept over [0, `horizon`] of the piece, sorted along `axis`;
-/// returns the widest extent along it, m.
-fn sweep(
-    ct: &ContactTerms,
-    m: &Motion,
-    horizon: f64,
-    axis: usize,
-    boxes: &mut Vec<(Vector3, Vector3)>,
-    order: &mut Vec<u32>,
-) -> f64 {
-    boxes.clear();
-    for tri in &ct.cells.triangles {
-        let pts = [
-            m.a.x[tri[0] as usize],
-            m.a.x[tri[1] as usize],
-            m.a.x[tri[2] as usize],
-            m.at(tri[0], horizon),
-            m.at(tri[1], horizon),
-            m.at(tri[2], horizon),
-        ];
-        boxes.push(bounds(&pts));
-    }
-    sort_boxes(boxes, axis, order);
-    boxes
-        .iter()
-        .fold(0.0, |w: f64, (lo, hi)| w.max(hi[axis] - lo[axis]))
 }
 
 /// The two ends of a straight piece of the path and every vertex's margin for the
@@ -419,33 +414,6 @@ impl Motion<'_> {
     }
 }
 
-/// The ribbon's swept cell boxes, sorted along `axis`.
-struct Swept<'s> {
-    boxes: &'s [(Vector3, Vector3)],
-    order: &'s [u32],
-    widest: f64,
-    axis: usize,
-}
-
-impl Swept<'_> {
-    fn near(&self, b: &(Vector3, Vector3), margin: f64) -> impl Iterator<Item = usize> + '_ {
-        let range = window(
-            self.boxes,
-            self.order,
-            self.axis,
-            self.widest,
-            b.0[self.axis],
-            b.1[self.axis],
-            margin,
-        );
-        let b = *b;
-        self.order[range]
-            .iter()
-            .map(|&t| t as usize)
-            .filter(move |&t| boxes_near(&self.boxes[t], &b, margin))
-    }
-}
-
 /// The distance between two boxes, m (0 when they overlap).
 fn box_distance(a: &(Vector3, Vector3), b: &(Vector3, Vector3)) -> f64 {
     let mut d2 = 0.0;
@@ -475,46 +443,43 @@ fn record(result: &mut PieceResult, g0: f64, floor: f64, margin: f64, t: f64) {
     }
 }
 
-/// Every vertex against every solid: the signed distance is convex along a line.
-fn solids(ct: &ContactTerms, obs: &Obstacles, m: &Motion, result: &mut PieceResult) {
+/// Vertex `v` against a solid: the signed distance is convex along a line.
+fn solid(ct: &ContactTerms, solid: &ObstacleSolid, v: u32, m: &Motion, result: &mut PieceResult) {
+    let obs = &ct.obstacles;
     let half = 0.5 * ct.thickness;
-    for solid in &obs.solids {
-        for v in 0..m.a.x.len() as u32 {
-            let (x0, x1) = (m.a.x[v as usize], m.b.x[v as usize]);
-            // Nothing can pass through a half-space and come out on the other side:
-            // its pairs need no margin for the path's bending between the samples (the
-            // samples themselves are checked, and every evaluation rejects a vertex
-            // inside). A bounded solid can be tunnelled through.
-            let margin = if solid.aabb.is_some() {
-                m.margin[v as usize]
-            } else {
-                0.0
-            };
-            if let Some((lo, hi)) = &solid.aabb {
-                let reach = half + ct.activation + margin;
-                let (slo, shi) = bounds(&[x0, x1]);
-                if (0..3).any(|d| slo[d] > hi[d] + reach || shi[d] < lo[d] - reach) {
-                    continue;
-                }
-            }
-            let delta = x1 - x0;
-            let gap = |t: f64| {
-                let (sd, n) = obs.solid_distance(solid, &(x0 + delta * t));
-                (sd - half, n.dot(&delta))
-            };
-            let g0 = gap(0.0).0;
-            let f = floor(g0, ct.activation, margin);
-            if g0 - delta.norm() * result.t > f {
-                continue;
-            }
-            let t = if f < g0 {
-                advance_convex(gap, f, result.t)
-            } else {
-                0.0
-            };
-            record(result, g0, f, margin, t);
+    let (x0, x1) = (m.a.x[v as usize], m.b.x[v as usize]);
+    // Nothing can pass through a half-space and come out on the other side: its pairs
+    // need no margin for the path's bending between the samples (the samples themselves
+    // are checked, and every evaluation rejects a vertex inside). A bounded solid can be
+    // tunnelled through.
+    let margin = if solid.aabb.is_some() {
+        m.margin[v as usize]
+    } else {
+        0.0
+    };
+    if let Some((lo, hi)) = &solid.aabb {
+        let reach = half + ct.activation + margin;
+        let (slo, shi) = bounds(&[x0, x1]);
+        if (0..3).any(|d| slo[d] > hi[d] + reach || shi[d] < lo[d] - reach) {
+            return;
         }
     }
+    let delta = x1 - x0;
+    let gap = |t: f64| {
+        let (sd, n) = obs.solid_distance(solid, &(x0 + delta * t));
+        (sd - half, n.dot(&delta))
+    };
+    let g0 = gap(0.0).0;
+    let f = floor(g0, ct.activation, margin);
+    if g0 - delta.norm() * result.t > f {
+        return;
+    }
+    let t = if f < g0 {
+        advance_convex(gap, f, result.t)
+    } else {
+        0.0
+    };
+    record(result, g0, f, margin, t);
 }
 
 /// A pair's gap along the piece from `gap`, its rate bound and its margin.
@@ -540,112 +505,65 @@ fn pair_toi(
 }
 
 /// The colliders' points, edges and mesh triangles against the moving ribbon.
-fn features(
-    ct: &ContactTerms,
-    obs: &Obstacles,
-    m: &Motion,
-    swept: &Swept,
-    result: &mut PieceResult,
-) {
-    let cells = &ct.cells;
-    let most = m.margin.iter().copied().fold(0.0, f64::max);
-    let reach = |offset: f64| offset + (1.0 - CLOSE) * ct.activation + most;
-    for f in &obs.points {
-        for t in swept.near(&(f.lo, f.hi), reach(f.offset)) {
-            let tri = cells.triangles[t];
+fn features(ct: &ContactTerms, c: &Candidates, m: &Motion, result: &mut PieceResult) {
+    let (obs, cells) = (&ct.obstacles, &ct.cells);
+    for &(k, t) in &c.point {
+        let (f, tri) = (&obs.points[k as usize], cells.triangles[t as usize]);
+        let gap = |s: f64| {
+            let x = tri.map(|v| m.at(v, s));
+            point_triangle(&f.x[0], &x[0], &x[1], &x[2]).distance - f.offset
+        };
+        pair_toi(ct, gap, m.most(&tri), m.bent(&tri), result);
+    }
+    for &(k, t) in &c.edge {
+        let f = &obs.edges[k as usize];
+        for e in cells.owned_edges(t as usize) {
             let gap = |s: f64| {
-                let x = tri.map(|v| m.at(v, s));
-                point_triangle(&f.x[0], &x[0], &x[1], &x[2]).distance - f.offset
+                edge_edge(&f.x[0], &f.x[1], &m.at(e[0], s), &m.at(e[1], s)).distance - f.offset
             };
-            pair_toi(ct, gap, m.most(&tri), m.bent(&tri), result);
+            pair_toi(ct, gap, m.most(e), m.bent(e), result);
         }
     }
-    for f in &obs.edges {
-        for t in swept.near(&(f.lo, f.hi), reach(f.offset)) {
-            for e in cells.owned_edges(t) {
-                let gap = |s: f64| {
-                    edge_edge(&f.x[0], &f.x[1], &m.at(e[0], s), &m.at(e[1], s)).distance - f.offset
-                };
-                pair_toi(ct, gap, m.most(e), m.bent(e), result);
-            }
-        }
-    }
-    for f in &obs.triangles {
-        for t in swept.near(&(f.lo, f.hi), reach(f.offset)) {
-            for &v in cells.owned_vertices(t) {
-                let gap = |s: f64| {
-                    point_triangle(&m.at(v, s), &f.x[0], &f.x[1], &f.x[2]).distance - f.offset
-                };
-                pair_toi(ct, gap, m.travel(v), m.margin[v as usize], result);
-            }
+    for &(k, t) in &c.triangle {
+        let f = &obs.triangles[k as usize];
+        for &v in cells.owned_vertices(t as usize) {
+            let gap =
+                |s: f64| point_triangle(&m.at(v, s), &f.x[0], &f.x[1], &f.x[2]).distance - f.offset;
+            pair_toi(ct, gap, m.travel(v), m.margin[v as usize], result);
         }
     }
 }
 
-/// The moving ribbon against another (static) ribbon.
-fn other_body(
-    ct: &ContactTerms,
-    obs: &Obstacles,
-    body: usize,
-    m: &Motion,
-    swept: &Swept,
-    result: &mut PieceResult,
-) {
-    let body = &obs.bodies[body];
-    let most = m.margin.iter().copied().fold(0.0, f64::max);
-    let reach = ct.thickness + (1.0 - CLOSE) * ct.activation + most;
-    let own = &ct.cells;
-    let other = |v: u32| body.vertices[v as usize];
-    for t in swept.near(&(body.lo, body.hi), reach) {
-        let bt = swept.boxes[t];
-        let range = window(
-            &body.boxes,
-            &body.order,
-            swept.axis,
-            body.widest,
-            bt.0[swept.axis],
-            bt.1[swept.axis],
-            reach,
-        );
-        let tri = own.triangles[t];
-        for &o in &body.order[range] {
-            let o = o as usize;
-            if !boxes_near(&bt, &body.boxes[o], reach) {
-                continue;
-            }
-            let ox = body.cells.triangles[o].map(other);
-            for &v in own.owned_vertices(t) {
-                let gap = |s: f64| {
-                    point_triangle(&m.at(v, s), &ox[0], &ox[1], &ox[2]).distance - ct.thickness
-                };
-                pair_toi(ct, gap, m.travel(v), m.margin[v as usize], result);
-            }
-            for &ov in body.cells.owned_vertices(o) {
-                let p = other(ov);
-                let gap = |s: f64| {
-                    let x = tri.map(|v| m.at(v, s));
-                    point_triangle(&p, &x[0], &x[1], &x[2]).distance - ct.thickness
-                };
-                pair_toi(ct, gap, m.most(&tri), m.bent(&tri), result);
-            }
-            for e in own.owned_edges(t) {
-                for oe in body.cells.owned_edges(o) {
-                    let (p, q) = (other(oe[0]), other(oe[1]));
-                    let gap = |s: f64| {
-                        edge_edge(&m.at(e[0], s), &m.at(e[1], s), &p, &q).distance - ct.thickness
-                    };
-                    pair_toi(ct, gap, m.most(e), m.bent(e), result);
-                }
-            }
-        }
+/// The moving ribbon against the other (static) ribbons.
+fn other_bodies(ct: &ContactTerms, c: &Candidates, m: &Motion, result: &mut PieceResult) {
+    let bodies = &ct.obstacles.bodies;
+    let h = ct.thickness;
+    for &(b, v, _, o) in &c.body_vertex {
+        let body = &bodies[b as usize];
+        let ox = body.cells.triangles[o as usize].map(|w| body.vertices[w as usize]);
+        let gap = |s: f64| point_triangle(&m.at(v, s), &ox[0], &ox[1], &ox[2]).distance - h;
+        pair_toi(ct, gap, m.travel(v), m.margin[v as usize], result);
+    }
+    for &(b, ov, t) in &c.body_triangle {
+        let p = bodies[b as usize].vertices[ov as usize];
+        let tri = ct.cells.triangles[t as usize];
+        let gap = |s: f64| {
+            let x = tri.map(|v| m.at(v, s));
+            point_triangle(&p, &x[0], &x[1], &x[2]).distance - h
+        };
+        pair_toi(ct, gap, m.most(&tri), m.bent(&tri), result);
+    }
+    for &(b, e, _, oe) in &c.body_edge {
+        let body = &bodies[b as usize];
+        let (p, q) = (body.vertices[oe[0] as usize], body.vertices[oe[1] as usize]);
+        let gap = |s: f64| edge_edge(&m.at(e[0], s), &m.at(e[1], s), &p, &q).distance - h;
+        pair_toi(ct, gap, m.most(&e), m.bent(&e), result);
     }
 }
 
 /// The ribbon against itself: the pairs whose stations (at the piece's start) are more
 /// than the neighbour skip apart.
-fn self_pairs(ct: &ContactTerms, m: &Motion, swept: &Swept, result: &mut PieceResult) {
-    let most = m.margin.iter().copied().fold(0.0, f64::max);
-    let reach = ct.thickness + (1.0 - CLOSE) * ct.activation + 2.0 * most;
+fn self_pairs(ct: &ContactTerms, c: &Candidates, m: &Motion, result: &mut PieceResult) {
     let cells = &ct.cells;
     let u = |vs: &[u32]| {
         vs.iter()
@@ -654,67 +572,39 @@ fn self_pairs(ct: &ContactTerms, m: &Motion, swept: &Swept, result: &mut PieceRe
                 (lo.min(x), hi.max(x))
             })
     };
-    for i in 0..swept.order.len() {
-        let t1 = swept.order[i] as usize;
-        let top = swept.boxes[t1].1[swept.axis] + reach;
-        for &t2 in &swept.order[i + 1..] {
-            let t2 = t2 as usize;
-            if swept.boxes[t2].0[swept.axis] > top {
-                break;
-            }
-            if t1 / 2 == t2 / 2 || !boxes_near(&swept.boxes[t1], &swept.boxes[t2], reach) {
-                continue;
-            }
-            let (tri1, tri2) = (cells.triangles[t1], cells.triangles[t2]);
-            let (u1, u2) = (u(&tri1), u(&tri2));
-            if station_gap(u1, u2, ct.period) + (u1.1 - u1.0) + (u2.1 - u2.0) <= ct.skip {
-                continue;
-            }
-            // the cells' distance at the start less the most their points approach
-            // each other (their relative displacement): far enough, no pair of theirs
-            // can reach the barrier
-            let start = |t: [u32; 3]| bounds(&t.map(|v| m.a.x[v as usize]));
-            let apart = box_distance(&start(tri1), &start(tri2));
-            let approach = m.relative(&tri1, &tri2) * result.t + m.bent(&tri1) + m.bent(&tri2);
-            if apart - approach > ct.thickness + (1.0 - CLOSE) * ct.activation {
-                continue;
-            }
-            for (a, b) in [(t1, t2), (t2, t1)] {
-                let tri = cells.triangles[b];
-                for &v in cells.owned_vertices(a) {
-                    if station_gap(u(&[v]), u(&tri), ct.period) <= ct.skip
-                        || m.apart(&[v], &tri, ct, result.t)
-                    {
-                        continue;
-                    }
-                    let gap = |s: f64| {
-                        let x = tri.map(|w| m.at(w, s));
-                        point_triangle(&m.at(v, s), &x[0], &x[1], &x[2]).distance - ct.thickness
-                    };
-                    let margin = m.margin[v as usize] + m.bent(&tri);
-                    pair_toi(ct, gap, m.relative(&[v], &tri), margin, result);
-                }
-            }
-            for e1 in cells.owned_edges(t1) {
-                for e2 in cells.owned_edges(t2) {
-                    if station_gap(u(e1), u(e2), ct.period) <= ct.skip
-                        || m.apart(e1, e2, ct, result.t)
-                    {
-                        continue;
-                    }
-                    let gap = |s: f64| {
-                        edge_edge(
-                            &m.at(e1[0], s),
-                            &m.at(e1[1], s),
-                            &m.at(e2[0], s),
-                            &m.at(e2[1], s),
-                        )
-                        .distance
-                            - ct.thickness
-                    };
-                    pair_toi(ct, gap, m.relative(e1, e2), m.bent(e1) + m.bent(e2), result);
-                }
-            }
+    for &(v, _, b) in &c.own_vertex {
+        let tri = cells.triangles[b as usize];
+        if station_gap(u(&[v]), u(&tri), ct.period) <= ct.skip || m.apart(&[v], &tri, ct, result.t)
+        {
+            continue;
         }
+        let gap = |s: f64| {
+            let x = tri.map(|w| m.at(w, s));
+            point_triangle(&m.at(v, s), &x[0], &x[1], &x[2]).distance - ct.thickness
+        };
+        let margin = m.margin[v as usize] + m.bent(&tri);
+        pair_toi(ct, gap, m.relative(&[v], &tri), margin, result);
+    }
+    for &(e1, _, e2, _) in &c.own_edge {
+        if station_gap(u(&e1), u(&e2), ct.period) <= ct.skip || m.apart(&e1, &e2, ct, result.t) {
+            continue;
+        }
+        let gap = |s: f64| {
+            edge_edge(
+                &m.at(e1[0], s),
+                &m.at(e1[1], s),
+                &m.at(e2[0], s),
+                &m.at(e2[1], s),
+            )
+            .distance
+                - ct.thickness
+        };
+        pair_toi(
+            ct,
+            gap,
+            m.relative(&e1, &e2),
+            m.bent(&e1) + m.bent(&e2),
+            result,
+        );
     }
 }
