@@ -23,8 +23,8 @@ use crate::geometry::Vector3;
 
 type Aabb = (Vector3, Vector3);
 
-/// The most two points of the given vertex sets approach each other along a path, m.
-pub(super) type Approach<'a> = &'a dyn Fn(&[u32], &[u32]) -> f64;
+/// The most points of two cells approach each other along a path, m.
+pub(super) type Approach<'a> = &'a dyn Fn(usize, usize) -> f64;
 
 /// Candidate pairs of one line search (kept buffers: no allocation once warm).
 #[derive(Clone, Debug, Default)]
@@ -278,7 +278,7 @@ impl Candidates {
         if (ca - cb).norm() - ra - rb > probe.reach + most(tri1) + most(tri2) {
             return;
         }
-        let approach = (probe.relative)(&tri1, &tri2);
+        let approach = (probe.relative)(t1, t2);
         if apart(&start(tri1), &start(tri2), probe.reach + approach) {
             return;
         }
@@ -347,8 +347,8 @@ struct Probe<'a> {
     ct: &'a ContactTerms,
     x0: &'a [Vector3],
     moves: &'a dyn Fn(u32) -> f64,
-    /// The most two points of the given sets approach each other along the path, m.
-    relative: &'a dyn Fn(&[u32], &[u32]) -> f64,
+    /// The most points of two cells approach each other along the path, m.
+    relative: Approach<'a>,
     /// Per vertex: its rim station at the start and the most it moves along the path, m.
     stations: &'a [(f64, f64)],
     reach: f64,

@@ -52,6 +52,9 @@ pub(crate) struct CcdScratch {
     vertex_boxes: Vec<(Vector3, Vector3)>,
     /// Per vertex: its rim station at the path's start and the most it moves, m.
     stations: Vec<(f64, f64)>,
+    /// Per cell: its centroid's displacements and spread along the path
+    /// (`cell_motions`).
+    cell_motion: Vec<(Vector3, f64)>,
 }
 
 /// Mesh vertices per swept box (8 stations of a ribbon: 8 elements' worth, a few cm).
@@ -68,6 +71,7 @@ impl Default for CcdScratch {
             swept: Vec::new(),
             vertex_boxes: Vec::new(),
             stations: Vec::new(),
+            cell_motion: Vec::new(),
         }
     }
 }
@@ -88,20 +92,26 @@ impl CcdScratch {
         }
     }
 
-    /// Each vertex's box over samples 0..=`last` of the path, grown by its margin, into
-    /// `vertex_boxes`.
-    fn record_boxes(&mut self, last: usize) {
+    /// Each vertex's box over samples 0..=`last` of the path and the point a share `t`
+    /// of the way to sample `last + 1`, grown by its margin, into `vertex_boxes`.
+    fn record_boxes(&mut self, last: usize, t: f64) {
         let vertices = self.samples[0].x.len();
+        let next = self.samples.get(last + 1).map(|s| &s.x);
         self.vertex_boxes.clear();
         self.vertex_boxes.extend((0..vertices).map(|v| {
             let m = Vector3::repeat(self.margin.get(v).copied().unwrap_or(0.0));
-            let (lo, hi) = self.samples[..=last].iter().fold(
+            let (mut lo, mut hi) = self.samples[..=last].iter().fold(
                 (
                     Vector3::repeat(f64::INFINITY),
                     Vector3::repeat(f64::NEG_INFINITY),
                 ),
                 |(lo, hi), s| (lo.inf(&s.x[v]), hi.sup(&s.x[v])),
             );
+            if let (Some(next), true) = (next, t > 0.0) {
+                let p = self.samples[last].x[v];
+                let q = p + (next[v] - p) * t;
+                (lo, hi) = (lo.inf(&q), hi.sup(&q));
+            }
             (lo - m, hi + m)
         }));
     }
@@ -109,7 +119,7 @@ impl CcdScratch {
     /// Samples 0..=`last` of the checked path (up to the safe fraction) into the swept
     /// boxes.
     fn record_path(&mut self, last: usize) {
-        self.record_boxes(last);
+        self.record_boxes(last, 0.0);
         let chunks = self.vertex_boxes.len().div_ceil(SWEPT_CHUNK);
         let empty = (
             Vector3::repeat(f64::INFINITY),
@@ -208,11 +218,16 @@ impl Objective<'_> {
                     }
                 }
             }
-            // every pair that can come within reach on the whole sampled path, once
-            scratch.record_boxes(pieces);
+            // every pair that can come within reach on the sampled path, once, up to
+            // where the solids (cheap: a signed distance per vertex) cut it: a landing's
+            // step sweeps little of what it would
+            let (last, t) = solids_horizon(ct, scratch, pieces);
+            scratch.record_boxes(last, t);
             let most = scratch.margin.iter().copied().fold(0.0, f64::max);
-            let (samples, margin) = (&scratch.samples[..=pieces], &scratch.margin);
-            let relative = |a: &[u32], b: &[u32]| relative_approach(samples, margin, a, b);
+            let (samples, margin) = (&scratch.samples[..=last + 1], &scratch.margin);
+            cell_motions(ct, samples, margin, &mut scratch.cell_motion);
+            let (motion, k) = (&scratch.cell_motion, samples.len());
+            let relative = |t1: usize, t2: usize| relative_approach(motion, k, t1, t2);
             scratch.stations.clear();
             scratch
                 .stations
@@ -304,22 +319,47 @@ fn chord_deviation(scratch: &mut CcdScratch) -> f64 {
     0.5 * scratch.margin.iter().copied().fold(0.0, f64::max)
 }
 
-/// The most points of `a` and of `b` approach each other along the sampled path (the
-/// relative displacement since sample 0 is affine on each piece, so its norm peaks at
-/// the samples), plus both sets' largest margins for the curve between them, m.
-fn relative_approach(samples: &[Sample], margin: &[f64], a: &[u32], b: &[u32]) -> f64 {
+/// Per cell, along the sampled path: its centroid's displacement since sample 0 at each
+/// sample after it, then the most any of its points strays from that (its turning and
+/// bending, plus its largest curvature margin), m; `k` + 1 entries per cell (k samples).
+fn cell_motions(
+    ct: &ContactTerms,
+    samples: &[Sample],
+    margin: &[f64],
+    out: &mut Vec<(Vector3, f64)>,
+) {
+    out.clear();
     let x0 = &samples[0].x;
-    let mut most: f64 = 0.0;
-    for s in &samples[1..] {
-        for &i in a {
-            let di = s.x[i as usize] - x0[i as usize];
-            for &j in b {
-                most = most.max((di - (s.x[j as usize] - x0[j as usize])).norm());
+    for tri in &ct.cells.triangles {
+        let centre =
+            |x: &[Vector3]| tri.iter().fold(Vector3::zeros(), |c, &v| c + x[v as usize]) / 3.0;
+        let c0 = centre(x0);
+        let mut spread: f64 = 0.0;
+        let start = out.len();
+        for s in &samples[1..] {
+            let dc = centre(&s.x) - c0;
+            for &v in tri {
+                let dv = s.x[v as usize] - x0[v as usize];
+                spread = spread.max((dv - dc).norm());
             }
+            out.push((dc, 0.0));
         }
+        let bent = tri.iter().fold(0.0, |m: f64, &v| m.max(margin[v as usize]));
+        out.push((Vector3::zeros(), spread + bent));
+        debug_assert_eq!(out.len() - start, samples.len());
     }
-    let bent = |vs: &[u32]| vs.iter().fold(0.0, |m: f64, &v| m.max(margin[v as usize]));
-    most + bent(a) + bent(b)
+}
+
+/// The most points of cells `t1` and `t2` approach each other along the path (the
+/// relative displacement of their centroids, affine on each piece so largest at the
+/// samples, plus both cells' spreads), m, from [`cell_motions`] over `k` samples.
+fn relative_approach(motion: &[(Vector3, f64)], k: usize, t1: usize, t2: usize) -> f64 {
+    let (a, b) = (&motion[t1 * k..(t1 + 1) * k], &motion[t2 * k..(t2 + 1) * k]);
+    let most = a[..k - 1]
+        .iter()
+        .zip(&b[..k - 1])
+        .fold(0.0, |m: f64, (p, q)| m.max((p.0 - q.0).norm()));
+    most + a[k - 1].1 + b[k - 1].1
 }
 
 /// The gap a pair of gap `g0` may close to on this piece: a tenth of g0 (of ŝ if
@@ -441,6 +481,32 @@ fn record(result: &mut PieceResult, g0: f64, floor: f64, margin: f64, t: f64) {
     } else {
         result.t = result.t.min(t);
     }
+}
+
+/// Where the solids alone cut the sampled path of `pieces` pieces: the piece and the
+/// share of it (the last piece and 1 when they do not).
+fn solids_horizon(ct: &ContactTerms, scratch: &CcdScratch, pieces: usize) -> (usize, f64) {
+    for i in 0..pieces {
+        let m = Motion {
+            a: &scratch.samples[i],
+            b: &scratch.samples[i + 1],
+            margin: &scratch.margin,
+        };
+        let mut result = PieceResult {
+            t: 1.0,
+            cramped: false,
+            shrink: 1.0,
+        };
+        for s in &ct.obstacles.solids {
+            for v in 0..m.a.x.len() as u32 {
+                solid(ct, s, v, &m, &mut result);
+            }
+        }
+        if result.t < 1.0 {
+            return (i, result.t);
+        }
+    }
+    (pieces - 1, 1.0)
 }
 
 /// Vertex `v` against a solid: the signed distance is convex along a line.
