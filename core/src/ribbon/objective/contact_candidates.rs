@@ -168,7 +168,15 @@ impl Candidates {
         self.body_vertex.clear();
         self.body_triangle.clear();
         self.body_edge.clear();
+        // the whole swept ribbon first: most other bodies are far from all of it
+        let whole = self
+            .boxes
+            .iter()
+            .fold(empty(), |(lo, hi), b| (lo.inf(&b.0), hi.sup(&b.1)));
         for (b, body) in obs.bodies.iter().enumerate() {
+            if !boxes_near(&whole, &(body.lo, body.hi), margin) {
+                continue;
+            }
             for t in 0..self.boxes.len() {
                 let bt = self.boxes[t];
                 let bt = &bt;
