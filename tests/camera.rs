@@ -30,11 +30,9 @@ fn frame_in_pool(s: &Scene, camera: usize, threads: usize) -> Frame {
     snapshot.capture(&s.world);
     let mut r = Renderer::new(cam.camera, world_colliders(&s.world));
     let key = cam.noise_key(s.source.seed, s.world.steps_taken());
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    pool.install(|| r.render(&snapshot, &fixed_pose(s, camera), &key).clone())
+    common::on_threads(threads, || {
+        r.render(&snapshot, &fixed_pose(s, camera), &key).clone()
+    })
 }
 
 #[test]

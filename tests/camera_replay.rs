@@ -66,11 +66,7 @@ fn topic<'a>(r: &'a ReplayReport, name: &str) -> &'a TopicReport {
 
 /// Replay `bag` with the camera drawn on a rayon pool of `threads`.
 fn replay_on(bag: &Path, threads: usize) -> ReplayReport {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .unwrap();
-    pool.install(|| replay(bag, &ReplayOptions::default()).unwrap())
+    common::on_threads(threads, || replay(bag, &ReplayOptions::default()).unwrap())
 }
 
 #[test]

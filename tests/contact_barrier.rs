@@ -663,21 +663,13 @@ fn bodies_stepped_side_by_side_are_stepped_again_when_they_meet() {
 #[test]
 fn barrier_steps_do_not_depend_on_the_thread_count() {
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("a thread pool");
-        pool.install(|| {
+        common::on_threads(threads, || {
             let mut s = load("ribbon_mobius_chain", &["duration=0.3"]);
             let mut side_by_side = 0;
             for _ in 0..(s.duration / s.world.dt()).round() as usize {
                 side_by_side += s.world.step(&[]).contact.expect("contact").side_by_side;
             }
-            let bits: Vec<u64> = (0..s.world.objects().len())
-                .flat_map(|o| s.world.mesh(o).vertices.clone())
-                .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
-                .collect();
-            (bits, side_by_side)
+            (common::vertex_bits(&s), side_by_side)
         })
     };
     let ((one, side_by_side), (two, _)) = (run(1), run(2));

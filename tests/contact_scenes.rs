@@ -223,28 +223,14 @@ fn friction_holds_below_the_friction_angle_and_slides_above() {
 #[test]
 fn results_do_not_depend_on_the_thread_count() {
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .expect("a thread pool");
-        pool.install(|| {
+        common::on_threads(threads, || {
             let mut s = load("ribbon_double_chain", &["duration=0.15", PROJECTION]);
             let steps = (s.duration / s.world.dt()).round() as usize;
             let mut contacts = 0;
             for _ in 0..steps {
                 contacts += s.world.step(&[]).contact.unwrap().report.contacts;
             }
-            let bits: Vec<u64> = (0..s.world.objects().len())
-                .flat_map(|o| {
-                    s.world
-                        .mesh(o)
-                        .vertices
-                        .iter()
-                        .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
-                        .collect::<Vec<_>>()
-                })
-                .collect();
-            (bits, contacts)
+            (common::vertex_bits(&s), contacts)
         })
     };
     let (one, contacts) = run(1);

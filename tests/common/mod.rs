@@ -109,3 +109,20 @@ pub fn rewrite(src: &Path, dst: &Path, mut edit: impl FnMut(&BagMessage) -> Opti
     }
     out.close().unwrap();
 }
+
+/// `work` run on a rayon pool of `threads` threads (the thread-count checks).
+pub fn on_threads<T: Send>(threads: usize, work: impl FnOnce() -> T + Send) -> T {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a thread pool")
+        .install(work)
+}
+
+/// Every vertex coordinate of every object of `scene`, as bits (bit-identical checks).
+pub fn vertex_bits(scene: &Scene) -> Vec<u64> {
+    (0..scene.world.objects().len())
+        .flat_map(|o| scene.world.mesh(o).vertices.iter())
+        .flat_map(|v| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits()])
+        .collect()
+}

@@ -296,6 +296,19 @@ pub fn edge_mollifier(
     (m, [-da, da, -db, db])
 }
 
+/// An edge-edge pair's closest points and its mollifier with the threshold of
+/// [`mollifier_threshold`]: (closest points, m, ∇m over p1, p2, q1, q2).
+pub fn mollified_edge_edge(
+    p1: &Vector3,
+    p2: &Vector3,
+    q1: &Vector3,
+    q2: &Vector3,
+) -> (Closest, f64, [Vector3; 4]) {
+    let eps = mollifier_threshold(p1, p2, q1, q2);
+    let (m, gm) = edge_mollifier(p1, p2, q1, q2, eps);
+    (edge_edge(p1, p2, q1, q2), m, gm)
+}
+
 /// ε of [`edge_mollifier`] for edges of rest lengths |a|, |b| (a ribbon is isometric and
 /// a collider rigid: their current lengths, which no motion changes).
 pub fn mollifier_threshold(p1: &Vector3, p2: &Vector3, q1: &Vector3, q2: &Vector3) -> f64 {

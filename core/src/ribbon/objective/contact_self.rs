@@ -11,8 +11,7 @@ use super::contact_terms::{
 use super::kinetic::interpolate;
 use super::{Objective, Vec8};
 use crate::contact::barrier::{
-    barrier, edge_edge, edge_mollifier, friction_mollifier, mollifier_threshold, point_triangle,
-    Closest, PairSource,
+    barrier, friction_mollifier, mollified_edge_edge, point_triangle, Closest, PairSource,
 };
 use crate::contact::obstacles::{apart, boxes_near};
 use crate::geometry::Vector3;
@@ -135,9 +134,7 @@ impl Objective<'_> {
         if apart(&x[..2], &x[2..], ct.thickness + ct.activation) {
             return;
         }
-        let pair = edge_edge(&x[0], &x[1], &x[2], &x[3]);
-        let eps = mollifier_threshold(&x[0], &x[1], &x[2], &x[3]);
-        let (m, gm) = edge_mollifier(&x[0], &x[1], &x[2], &x[3], eps);
+        let (pair, m, gm) = mollified_edge_edge(&x[0], &x[1], &x[2], &x[3]);
         let mut first = Side::edge(e1, [pair.weights[0], pair.weights[1]], el1);
         let mut second = Side::edge(e2, [pair.weights[2], pair.weights[3]], el2);
         first.mollifier = (m, [gm[0], gm[1], Vector3::zeros()]);

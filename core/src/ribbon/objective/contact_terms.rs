@@ -14,9 +14,7 @@ use std::sync::Arc;
 
 use super::accumulate::{sliding_rate, Accumulator};
 use super::{Objective, Vec8};
-use crate::contact::barrier::{
-    barrier, edge_edge, edge_mollifier, mollifier_threshold, point_triangle, Closest, PairSource,
-};
+use crate::contact::barrier::{barrier, mollified_edge_edge, point_triangle, Closest, PairSource};
 use crate::contact::obstacles::{
     apart, bounds, boxes_near, sort_boxes, window, CellMesh, Obstacles,
 };
@@ -403,9 +401,7 @@ impl Objective<'_> {
             if apart(&f.x, &[a, b], f.offset + ct.activation) {
                 continue;
             }
-            let pair = edge_edge(&f.x[0], &f.x[1], &a, &b);
-            let eps = mollifier_threshold(&f.x[0], &f.x[1], &a, &b);
-            let (m, gm) = edge_mollifier(&f.x[0], &f.x[1], &a, &b, eps);
+            let (pair, m, gm) = mollified_edge_edge(&f.x[0], &f.x[1], &a, &b);
             let mut side = Side::edge(*e, [pair.weights[2], pair.weights[3]], t / 2);
             side.mollifier = (m, [gm[2], gm[3], Vector3::zeros()]);
             let source = PairSource::Collider(f.collider);
@@ -557,9 +553,7 @@ impl Objective<'_> {
         if apart(&[a, bb], &[oa, ob], ct.thickness + ct.activation) {
             return;
         }
-        let pair = edge_edge(&a, &bb, &oa, &ob);
-        let eps = mollifier_threshold(&a, &bb, &oa, &ob);
-        let (m, gm) = edge_mollifier(&a, &bb, &oa, &ob, eps);
+        let (pair, m, gm) = mollified_edge_edge(&a, &bb, &oa, &ob);
         let mut side = Side::edge(edge, [pair.weights[0], pair.weights[1]], e);
         side.mollifier = (m, [gm[0], gm[1], Vector3::zeros()]);
         let source = (ct.thickness, PairSource::Body(b));
