@@ -18,7 +18,7 @@ use super::accumulate::Accumulator;
 use super::contact_terms::{station_gap, CellGeometry, ContactTerms, Found};
 use super::Objective;
 use crate::contact::barrier::{edge_edge, point_triangle};
-use crate::contact::obstacles::{apart, boxes_near, sort_boxes, window};
+use crate::contact::obstacles::{apart, bounds, boxes_near, sort_boxes, window};
 use crate::geometry::Vector3;
 
 type Aabb = (Vector3, Vector3);
@@ -48,6 +48,83 @@ pub struct Candidates {
     boxes: Vec<Aabb>,
     order: Vec<u32>,
     widest: f64,
+    starts: Starts,
+}
+
+/// The own mesh at the start of the path, per vertex, cell and edge (kept buffers).
+#[derive(Clone, Debug, Default)]
+struct Starts {
+    /// Per vertex: the diagonal of its box on the path (the most it moves), m.
+    moves: Vec<f64>,
+    /// Per cell of `ct.cells`.
+    cells: Vec<PartStart<3>>,
+    /// Per edge of `ct.cells.edges`.
+    edges: Vec<PartStart<2>>,
+}
+
+/// A cell or an edge at the start of the path.
+#[derive(Clone, Copy, Debug)]
+struct PartStart<const N: usize> {
+    /// Its corners, m.
+    x: [Vector3; N],
+    /// A sphere holding them (centre, radius), m.
+    sphere: (Vector3, f64),
+    /// Their box, m.
+    bounds: Aabb,
+    /// The most any corner moves on the path, m.
+    most: f64,
+    /// Their rim stations (lowest, highest) and the most any shifts on the path, m.
+    stations: (f64, f64, f64),
+}
+
+impl Starts {
+    fn fill(
+        &mut self,
+        ct: &ContactTerms,
+        vertex_boxes: &[Aabb],
+        x0: &[Vector3],
+        stations: &[(f64, f64)],
+    ) {
+        self.moves.clear();
+        self.moves
+            .extend(vertex_boxes.iter().map(|(lo, hi)| (hi - lo).norm()));
+        let moves = &self.moves;
+        let part = |vs: [u32; 3]| part_start(vs, x0, moves, stations);
+        self.cells.clear();
+        self.cells
+            .extend(ct.cells.triangles.iter().map(|&t| part(t)));
+        let part = |vs: [u32; 2]| part_start(vs, x0, moves, stations);
+        self.edges.clear();
+        self.edges.extend(ct.cells.edges.iter().map(|&e| part(e)));
+    }
+}
+
+fn part_start<const N: usize>(
+    vs: [u32; N],
+    x0: &[Vector3],
+    moves: &[f64],
+    stations: &[(f64, f64)],
+) -> PartStart<N> {
+    let x = vs.map(|v| x0[v as usize]);
+    PartStart {
+        x,
+        sphere: sphere(&x),
+        bounds: bounds(&x),
+        most: vs.iter().fold(0.0, |m: f64, &v| m.max(moves[v as usize])),
+        stations: station_range(stations, &vs),
+    }
+}
+
+/// The rim stations of vertices `vs` at the start (lowest, highest) and the most any of
+/// them shifts along the path, m.
+fn station_range(stations: &[(f64, f64)], vs: &[u32]) -> (f64, f64, f64) {
+    vs.iter().fold(
+        (f64::INFINITY, f64::NEG_INFINITY, 0.0),
+        |(lo, hi, sh): (f64, f64, f64), &v| {
+            let (u, shift) = stations[v as usize];
+            (lo.min(u), hi.max(u), sh.max(shift))
+        },
+    )
 }
 
 impl Candidates {
@@ -83,14 +160,14 @@ impl Candidates {
             .fold(0.0, |w: f64, (lo, hi)| w.max(hi[axis] - lo[axis]));
         self.solids(ct, vertex_boxes, slack);
         self.features(ct, slack);
-        let moves = |v: u32| {
-            let (lo, hi) = vertex_boxes[v as usize];
-            (hi - lo).norm()
-        };
+        // each cell's and edge's start, bounds and motion once: a cell meets dozens of
+        // others' cells (and its neighbours') in a build
+        let mut starts = std::mem::take(&mut self.starts);
+        starts.fill(ct, vertex_boxes, x0, stations);
         let probe = Probe {
             ct,
             x0,
-            moves: &moves,
+            starts: &starts,
             relative,
             stations,
             reach: ct.thickness + ct.activation + slack,
@@ -101,6 +178,7 @@ impl Candidates {
         if ct.self_contact {
             self.own_cells(&probe);
         }
+        self.starts = starts;
     }
 
     /// Rim vertices that may come within reach of a collider solid: the signed distance
@@ -203,22 +281,22 @@ impl Candidates {
 
     /// The primitive pairs of own cell `t` and cell `o` of body `b` within reach.
     fn body_pairs(&mut self, probe: &Probe, b: usize, t: usize, o: usize) {
-        let (ct, x0) = (probe.ct, probe.x0);
+        let (ct, starts) = (probe.ct, probe.starts);
         let body = &ct.obstacles.bodies[b];
         let other = |v: u32| body.vertices[v as usize];
         let e = (t / 2) as u32;
         let own = &ct.cells;
         let ox = body.cells.triangles[o].map(other);
-        let tri = own.triangles[t];
-        let x = tri.map(|v| x0[v as usize]);
-        let most = tri.iter().fold(0.0, |m: f64, &v| m.max((probe.moves)(v)));
-        let ((ca, ra), (cb, rb)) = (sphere(&x), sphere(&ox));
+        let cell = &starts.cells[t];
+        let (x, most) = (&cell.x, cell.most);
+        let ((ca, ra), (cb, rb)) = (cell.sphere, sphere(&ox));
         if (ca - cb).norm() - ra - rb > probe.reach + most {
             return;
         }
+        let obounds = bounds(&ox);
         for &v in own.owned_vertices(t) {
-            let (p, m) = (x0[v as usize], (probe.moves)(v));
-            if apart(&[p], &ox, probe.reach + m) {
+            let (p, m) = (probe.x0[v as usize], starts.moves[v as usize]);
+            if !boxes_near(&(p, p), &obounds, probe.reach + m) {
                 continue;
             }
             let d = point_triangle(&p, &ox[0], &ox[1], &ox[2]).distance;
@@ -227,17 +305,18 @@ impl Candidates {
             }
         }
         for &ov in body.cells.owned_vertices(o) {
-            if apart(&[other(ov)], &x, probe.reach + most) {
+            let q = other(ov);
+            if !boxes_near(&(q, q), &cell.bounds, probe.reach + most) {
                 continue;
             }
-            let d = point_triangle(&other(ov), &x[0], &x[1], &x[2]).distance;
+            let d = point_triangle(&q, &x[0], &x[1], &x[2]).distance;
             if d - most <= probe.reach {
                 self.body_triangle.push((b as u32, ov, t as u32));
             }
         }
-        for &edge in own.owned_edges(t) {
-            let (a, bb) = (x0[edge[0] as usize], x0[edge[1] as usize]);
-            let most = (probe.moves)(edge[0]).max((probe.moves)(edge[1]));
+        for k in own.edge_start[t] as usize..own.edge_start[t + 1] as usize {
+            let (edge, start) = (own.edges[k], &starts.edges[k]);
+            let ([a, bb], most) = (start.x, start.most);
             for &oe in body.cells.owned_edges(o) {
                 if apart(&[a, bb], &[other(oe[0]), other(oe[1])], probe.reach + most) {
                     continue;
@@ -277,46 +356,34 @@ impl Candidates {
     /// each other along the path (`Probe::relative`) is far less than what each moves,
     /// so cells near along the ribbon but not in space drop out here.
     fn own_pairs(&mut self, probe: &Probe, t1: usize, t2: usize) {
-        let (ct, x0) = (probe.ct, probe.x0);
+        let (ct, starts) = (probe.ct, probe.starts);
         let cells = &ct.cells;
-        let (tri1, tri2) = (cells.triangles[t1], cells.triangles[t2]);
-        let start = |t: [u32; 3]| t.map(|v| x0[v as usize]);
-        let ((ca, ra), (cb, rb)) = (sphere(&start(tri1)), sphere(&start(tri2)));
-        let most = |t: [u32; 3]| t.iter().fold(0.0, |m: f64, &v| m.max((probe.moves)(v)));
-        if (ca - cb).norm() - ra - rb > probe.reach + most(tri1) + most(tri2) {
+        let (c1, c2) = (&starts.cells[t1], &starts.cells[t2]);
+        let ((ca, ra), (cb, rb)) = (c1.sphere, c2.sphere);
+        if (ca - cb).norm() - ra - rb > probe.reach + c1.most + c2.most {
             return;
         }
         let approach = (probe.relative)(t1, t2);
-        if apart(&start(tri1), &start(tri2), probe.reach + approach) {
+        if !boxes_near(&c1.bounds, &c2.bounds, probe.reach + approach) {
             return;
         }
-        let stations = |vs: &[u32]| {
-            vs.iter().fold(
-                (f64::INFINITY, f64::NEG_INFINITY, 0.0),
-                |(lo, hi, sh): (f64, f64, f64), &v| {
-                    let (u, shift) = probe.stations[v as usize];
-                    (lo.min(u), hi.max(u), sh.max(shift))
-                },
-            )
-        };
         // within the neighbour skip all along the path (stations move with the creases,
         // at most `shift`): the evaluations never take it
-        let skipped = |a: &[u32], b: &[u32]| {
-            let ((alo, ahi, ash), (blo, bhi, bsh)) = (stations(a), stations(b));
+        let skipped = |(alo, ahi, ash): (f64, f64, f64), (blo, bhi, bsh): (f64, f64, f64)| {
             station_gap((alo, ahi), (blo, bhi), ct.period) + ash + bsh <= ct.skip
         };
         for (a, b) in [(t1, t2), (t2, t1)] {
-            let tri = cells.triangles[b];
-            let x = tri.map(|v| x0[v as usize]);
-            let most = tri.iter().fold(0.0, |m: f64, &v| m.max((probe.moves)(v)));
-            let (centre, radius) = sphere(&x);
+            let cell = &starts.cells[b];
+            let (x, (centre, radius)) = (&cell.x, cell.sphere);
             for &v in cells.owned_vertices(a) {
-                if skipped(&[v], &tri) {
+                let (u, shift) = probe.stations[v as usize];
+                if skipped((u, u, shift), cell.stations) {
                     continue;
                 }
-                let (p, m) = (x0[v as usize], approach.min(most + (probe.moves)(v)));
+                let p = probe.x0[v as usize];
+                let m = approach.min(cell.most + starts.moves[v as usize]);
                 if (p - centre).norm() - radius > probe.reach + m
-                    || apart(&[p], &x, probe.reach + m)
+                    || !boxes_near(&(p, p), &cell.bounds, probe.reach + m)
                 {
                     continue;
                 }
@@ -326,23 +393,27 @@ impl Candidates {
                 }
             }
         }
-        let most = |e: [u32; 2]| (probe.moves)(e[0]).max((probe.moves)(e[1]));
-        for &e1 in cells.owned_edges(t1) {
-            for &e2 in cells.owned_edges(t2) {
-                if skipped(&e1, &e2) {
+        let edges = |t: usize| cells.edge_start[t] as usize..cells.edge_start[t + 1] as usize;
+        for k1 in edges(t1) {
+            let e1 = &starts.edges[k1];
+            for k2 in edges(t2) {
+                let e2 = &starts.edges[k2];
+                if skipped(e1.stations, e2.stations) {
                     continue;
                 }
-                let p = |v: u32| x0[v as usize];
-                let (a, b) = ([p(e1[0]), p(e1[1])], [p(e2[0]), p(e2[1])]);
-                let m = approach.min(most(e1) + most(e2));
-                let ((ca, ra), (cb, rb)) = (sphere(&a), sphere(&b));
-                if (ca - cb).norm() - ra - rb > probe.reach + m || apart(&a, &b, probe.reach + m) {
+                let m = approach.min(e1.most + e2.most);
+                let ((ca, ra), (cb, rb)) = (e1.sphere, e2.sphere);
+                if (ca - cb).norm() - ra - rb > probe.reach + m
+                    || !boxes_near(&e1.bounds, &e2.bounds, probe.reach + m)
+                {
                     continue;
                 }
+                let (a, b) = (e1.x, e2.x);
                 let d = edge_edge(&a[0], &a[1], &b[0], &b[1]).distance;
                 if d - m <= probe.reach {
+                    let (first, second) = (cells.edges[k1], cells.edges[k2]);
                     self.own_edge
-                        .push((e1, (t1 / 2) as u32, e2, (t2 / 2) as u32));
+                        .push((first, (t1 / 2) as u32, second, (t2 / 2) as u32));
                 }
             }
         }
@@ -354,7 +425,8 @@ impl Candidates {
 struct Probe<'a> {
     ct: &'a ContactTerms,
     x0: &'a [Vector3],
-    moves: &'a dyn Fn(u32) -> f64,
+    /// The own mesh's parts at the start and how far they move.
+    starts: &'a Starts,
     /// The most points of two cells approach each other along the path, m.
     relative: Approach<'a>,
     /// Per vertex: its rim station at the start and the most it moves along the path, m.
