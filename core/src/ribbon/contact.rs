@@ -75,12 +75,11 @@ impl RibbonContact {
             ..*env
         };
         let mut total = SolveOutcome::default();
-        let axis = self.terms.obstacles.axis;
         let mut tau = advance_colliders(&mut self.terms, &env, &self.mesh, 0.0, &self.travel);
         let mut rounds = 0;
         loop {
             rounds += 1;
-            self.terms.obstacles.update(&env, tau, axis);
+            self.terms.obstacles.move_colliders(&env, tau);
             let outcome = step.solver.solve(
                 step.strip,
                 step.floating,
@@ -366,11 +365,10 @@ fn advance_colliders(
     if rate == 0.0 || tau0 >= 1.0 {
         return 1.0;
     }
-    let axis = terms.obstacles.axis;
     let mut tau = tau0;
     let mut floor = None;
     for _ in 0..64 {
-        terms.obstacles.update(env, tau, axis);
+        terms.obstacles.move_colliders(env, tau);
         let g = moving_gap(terms, travel, mesh);
         let f = *floor.get_or_insert(0.1 * g.min(terms.activation));
         if g <= f * (1.0 + 1e-3) || g <= 0.0 {
