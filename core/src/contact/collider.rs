@@ -216,6 +216,17 @@ impl ColliderGeometry {
         Some((sd, pose.rotation * n))
     }
 
+    /// A half-space's boundary plane in the world at `pose`: its outward unit normal n
+    /// and offset d (m), the signed distance of x being n . x - d; None for other
+    /// solids. One rotation per pose instead of one per point queried.
+    pub(crate) fn world_plane(&self, pose: &Pose) -> Option<(Vector3, f64)> {
+        let Some(Solid::HalfSpace(h)) = &self.solid else {
+            return None;
+        };
+        let n = pose.rotation * h.normal.into_inner();
+        Some((n, n.dot(&pose.translation.vector)))
+    }
+
     /// Ribbon vertex moving from `x0` (collider at `pose0`) to `x1` (collider at
     /// `pose1`) against the solid: the entry point when the motion enters it, else the
     /// closest surface point when the end is closer than `distance` (m).

@@ -120,6 +120,8 @@ pub struct ObstacleSolid {
     pub pose: Pose,
     /// World box of the solid, m (None: a half-space).
     pub aabb: Option<(Vector3, Vector3)>,
+    /// A half-space's world plane (outward normal, offset n . x on it, m).
+    pub plane: Option<(Vector3, f64)>,
 }
 
 /// A static point, edge or triangle of a collider (world, m) with the gap offset it
@@ -257,6 +259,7 @@ impl Obstacles {
                     collider: k,
                     pose: *pose,
                     aabb: geometry.solid_aabb(pose),
+                    plane: geometry.world_plane(pose),
                 });
             }
             let world = |i: u32| (pose * geometry.vertices[i as usize]).coords;
@@ -284,6 +287,9 @@ impl Obstacles {
     /// Signed distance (m) of world point `x` to solid `s` and its outward normal.
     #[inline]
     pub fn solid_distance(&self, s: &ObstacleSolid, x: &Vector3) -> (f64, Vector3) {
+        if let Some((n, offset)) = s.plane {
+            return (n.dot(x) - offset, n);
+        }
         self.geometry[s.collider]
             .signed_distance(&s.pose, x)
             .expect("an obstacle solid has a solid")
