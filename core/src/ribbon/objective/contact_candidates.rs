@@ -99,6 +99,8 @@ impl Starts {
     }
 }
 
+/// Part `vs` (a cell's or an edge's vertices) at the start `x0`, with its vertices'
+/// motions (m) and rim stations.
 fn part_start<const N: usize>(
     vs: [u32; N],
     x0: &[Vector3],
