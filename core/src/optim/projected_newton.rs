@@ -10,6 +10,7 @@ use faer::{MatMut, Par};
 use nalgebra::DMatrix;
 
 use super::projected_gradient_inf;
+use super::slab::Slab;
 
 /// A box-constrained problem with a Hessian model.
 pub trait BoxProblem {
@@ -159,6 +160,19 @@ pub struct ProjectedNewton<M: NewtonMatrix = Dense> {
     factorizations: u32,
     /// Where the last line search started ([`BoxProblem::max_step_fraction`]).
     first_alpha: f64,
+    /// One slab |Σ_S x_i| <= b besides the box, held exactly ([`Self::set_slab`]).
+    slab: Option<Slab>,
+    /// The slab's multiplier τ in P(x - g) at the current x (0 without a slab): a
+    /// variable of S on a bound is held where g_i + τ pushes it out.
+    slab_tau: f64,
+    /// H_FF^{-1} a (a the slab's indicator on the free set), for the face's step.
+    face_w: Vec<f64>,
+    /// P(x - g) (the projected gradient's point).
+    point: Vec<f64>,
+    /// Whether a line-search cut (alpha < 1) leaves the damping as it is instead of
+    /// raising it 10x ([`Self::set_cut_keeps_damping`]).
+    cut_keeps_damping: bool,
+    face_by_gradient: bool,
 }
 
 /// Relative tolerance of "on a bound": x_i <= lower_i + eps (1 + |lower_i|).
@@ -238,8 +252,59 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
     pub fn fresh_with_history(&self) -> Self {
         ProjectedNewton {
             first_damping: self.first_damping,
+            slab: self.slab.clone(),
+            cut_keeps_damping: self.cut_keeps_damping,
             ..Self::new()
         }
+    }
+
+    /// Hold one slab |Σ_S x_i| <= b besides the box in the next solves (None: the box
+    /// alone): the start, every trial point and the projected gradient are projected
+    /// onto box and slab ([`Slab::project`]); where x is on a face and the Newton step
+    /// would cross it, the step is the model's minimizer on the face (one more solve
+    /// with the same factorization).
+    pub fn set_slab(&mut self, slab: Option<Slab>) {
+        self.slab = slab;
+        self.face_by_gradient = std::env::var_os("FACE_BY_STEP").is_none();
+    }
+
+    /// Whether a line-search cut (alpha < 1) leaves the damping as it is (true) or
+    /// raises it 10x (false, the default).
+    pub fn set_cut_keeps_damping(&mut self, keep: bool) {
+        self.cut_keeps_damping = keep;
+    }
+
+    /// `y` projected onto [lower, upper] and the slab (if any).
+    fn project(&self, y: &mut [f64], lower: &[f64], upper: &[f64]) {
+        match &self.slab {
+            Some(slab) => {
+                slab.project(y, lower, upper, 0.0);
+            }
+            None => {
+                for i in 0..y.len() {
+                    y[i] = y[i].clamp(lower[i], upper[i]);
+                }
+            }
+        }
+    }
+
+    /// ||P(x - g) - x||_inf, P onto box and slab; sets `slab_tau`.
+    fn projected_gradient(&mut self, x: &[f64], lower: &[f64], upper: &[f64]) -> f64 {
+        let Some(slab) = &self.slab else {
+            self.slab_tau = 0.0;
+            return projected_gradient_inf(x, &self.g, lower, upper);
+        };
+        let mut p = std::mem::take(&mut self.point);
+        p.clear();
+        p.extend(x.iter().zip(&self.g).map(|(a, b)| a - b));
+        self.slab_tau = slab.project(&mut p, lower, upper, 0.0);
+        let norm = p
+            .iter()
+            .zip(x)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        self.point = p;
+        norm
     }
 
     /// Minimize `problem` over the box [lower, upper] from `x` (clamped into the box),
@@ -310,9 +375,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         self.factorizations = 0;
         self.indefinite_at = 0.0;
         self.trial.resize(n, 0.0);
-        for i in 0..n {
-            x[i] = x[i].clamp(lower[i], upper[i]);
-        }
+        self.project(x, lower, upper);
         let mut state = IterationState {
             f: problem.evaluate(x, Some(&mut self.g), None),
             pg: 0.0,
@@ -322,7 +385,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
             chord: false,
             first: true,
         };
-        state.pg = projected_gradient_inf(x, &self.g, lower, upper);
+        state.pg = self.projected_gradient(x, lower, upper);
         state
     }
 
@@ -369,11 +432,20 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         if let Some(next) = self.after_search(problem, x, state, accepted, alpha) {
             return next;
         }
+        if std::env::var_os("PN_TRACE").is_some() {
+            let face = self.slab.as_ref().map(|s| s.face(x)).unwrap_or(0.0);
+            let sum = self.slab.as_ref().map(|s| s.sum(x)).unwrap_or(0.0);
+            eprintln!(
+                "it {} f {:.10e} df {:.3e} pg {:.3e} free {} damp {:.1e} esc {} fb {} alpha {:.2e} face {} sum {:.6} tau {:.2e} pred {:.2e}",
+                state.iterations, state.f, f_new - state.f, state.pg, self.free.len(), self.damping,
+                direction.escalated, direction.fallback, alpha, face, sum, self.slab_tau, predicted
+            );
+        }
         // a step cut short by the problem's admissible fraction is as full as it can be
         self.adapt_damping(alpha / self.first_alpha, direction.escalated);
         let f_old = state.f;
         self.accept(problem, x, alpha, f_new, state);
-        state.pg = projected_gradient_inf(x, &self.g, lower, upper);
+        state.pg = self.projected_gradient(x, lower, upper);
         // (chord steps only at the start of a call: within one, Newton steps
         // converge in fewer evaluations)
         state.chord &= state.pg <= 0.25 * pg_before;
@@ -435,11 +507,16 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
 
     /// The free set at x: every variable except those at a bound with the gradient
     /// pointing out of the box.
+    ///
+    /// With a slab, on its range the gradient is g_i + τ (τ the slab's multiplier in
+    /// P(x - g)): what the projection onto box and slab moves it by.
     fn free_set(&mut self, x: &[f64], lower: &[f64], upper: &[f64]) {
         self.free.clear();
+        let range = self.slab.as_ref().map(|s| s.range.clone()).unwrap_or(0..0);
         for i in 0..x.len() {
-            let at_lower = x[i] <= lower[i] + BOUND_EPS * (1.0 + lower[i].abs()) && self.g[i] > 0.0;
-            let at_upper = x[i] >= upper[i] - BOUND_EPS * (1.0 + upper[i].abs()) && self.g[i] < 0.0;
+            let g = self.g[i] + if range.contains(&i) { self.slab_tau } else { 0.0 };
+            let at_lower = x[i] <= lower[i] + BOUND_EPS * (1.0 + lower[i].abs()) && g > 0.0;
+            let at_upper = x[i] >= upper[i] - BOUND_EPS * (1.0 + upper[i].abs()) && g < 0.0;
             if !(at_lower || at_upper) {
                 self.free.push(i);
             }
@@ -485,6 +562,9 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
                 }
                 self.damped_newton_step(m, &mut direction)
             };
+            if direction.ok && !direction.fallback {
+                direction.ok = self.hold_face(x);
+            }
             if !direction.ok || binding == 3 {
                 break;
             }
@@ -497,6 +577,60 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
             }
         }
         direction
+    }
+
+    /// Where x is on a face of the slab and the step in `self.reduced` crosses it: the
+    /// model's minimizer on the face instead, d - ν w with w = H_FF^{-1} a (a the
+    /// slab's indicator on the free set) and ν = a.d / a.w, so that a.d = 0 (the same
+    /// factorization, one more solve). False if that solve fails.
+    fn hold_face(&mut self, x: &[f64]) -> bool {
+        let Some(slab) = &self.slab else { return true };
+        let face = slab.face(x);
+        let range = slab.range.clone();
+        if face == 0.0 {
+            return true;
+        }
+        let across: f64 = self
+            .free
+            .iter()
+            .zip(&self.reduced)
+            .filter(|(i, _)| range.contains(i))
+            .map(|(_, d)| d)
+            .sum();
+        // held where the gradient pushes through the face (τ in P(x - g) has its
+        // sign), as a box bound is held by its gradient, whatever the step does
+        let hold = if self.face_by_gradient {
+            self.slab_tau * face > 0.0
+        } else {
+            across * face > 0.0
+        };
+        if !hold || across == 0.0 {
+            return true;
+        }
+        let mut w = std::mem::take(&mut self.face_w);
+        w.clear();
+        w.extend(
+            self.free
+                .iter()
+                .map(|i| if range.contains(i) { 1.0 } else { 0.0 }),
+        );
+        let ok = self.h.solve(&self.free, &mut w);
+        let aw: f64 = self
+            .free
+            .iter()
+            .zip(&w)
+            .filter(|(i, _)| range.contains(i))
+            .map(|(_, v)| v)
+            .sum();
+        let ok = ok && aw > 0.0;
+        if ok {
+            let nu = across / aw;
+            for (d, wi) in self.reduced.iter_mut().zip(&w) {
+                *d -= nu * wi;
+            }
+        }
+        self.face_w = w;
+        ok
     }
 
     /// Newton step on the Hessian; where it is indefinite, more damping; where even
@@ -575,17 +709,27 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
             for (k, &i) in self.free.iter().enumerate() {
                 self.trial[i] = (x[i] + alpha * self.reduced[k]).clamp(lower[i], upper[i]);
             }
+            if let Some(slab) = &self.slab {
+                // (x is feasible and held variables stay: only the free ones of S move)
+                slab.project(&mut self.trial, lower, upper, 0.0);
+            }
             state.evaluations += 1;
             f_new = if trial == 0 {
                 problem.evaluate(&self.trial, Some(&mut self.g_trial), None)
             } else {
                 problem.evaluate(&self.trial, None, None)
             };
-            let decrease: f64 = self
-                .free
-                .iter()
-                .map(|&i| self.g[i] * (self.trial[i] - x[i]))
-                .sum();
+            let decrease: f64 = if self.slab.is_some() {
+                // the slab's projection may move held variables of S too
+                (0..x.len())
+                    .map(|i| self.g[i] * (self.trial[i] - x[i]))
+                    .sum()
+            } else {
+                self.free
+                    .iter()
+                    .map(|&i| self.g[i] * (self.trial[i] - x[i]))
+                    .sum()
+            };
             if f_new.is_finite() && f_new <= state.f + 1e-4 * decrease {
                 return (true, alpha, f_new);
             }
@@ -616,7 +760,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
                     .max(1e-12);
                 self.indefinite_at *= 0.1;
             }
-        } else {
+        } else if !self.cut_keeps_damping {
             self.damping = (self.damping * 10.0).min(1e6);
         }
     }

@@ -144,6 +144,9 @@ struct ZProblem<'o, 'w> {
     z_scratch: Vec<f64>,
     /// The last path the contact hook checked.
     path: CheckedPath,
+    /// The chain matrix's saddle-free pivot floor (`ChainModel::set_saddle_free`); 0:
+    /// off.
+    saddle_floor: f64,
 }
 
 /// The path z(α) = clamp(z0 + α d, lower, upper), α in [0, alpha], that the last line
@@ -354,6 +357,7 @@ impl BoxProblem for ZChain<'_, '_, '_> {
         problem
             .objective
             .chain_model(problem.workspace, &mut h.model);
+        h.model.set_saddle_free(problem.saddle_floor);
         #[cfg(any(test, feature = "test-hooks"))]
         if problem.newton_matrix_error != 0.0 {
             h.model.perturb_local_blocks(problem.newton_matrix_error);
@@ -502,7 +506,8 @@ impl StepSolver {
         }
         // The trust-region solver holds the end crease exactly (a slab), so it has no
         // augmented-Lagrangian term, and no multiplier, there.
-        objective_terms.end_crease_exact = settings.kind == SolverKind::TrustRegion;
+        objective_terms.end_crease_exact = settings.kind == SolverKind::TrustRegion
+            || (settings.kind == SolverKind::Chain && settings.chain_variant.end_crease_exact);
         if objective_terms.end_crease_exact {
             objective_terms.end_crease_multipliers = [0.0, 0.0];
         }
@@ -621,6 +626,7 @@ impl StepSolver {
             newton_matrix_error: self.newton_matrix_error,
             z_scratch: std::mem::take(&mut self.z_scratch),
             path: std::mem::take(&mut self.path),
+            saddle_floor: 0.0,
         };
         problem.path.valid = false;
         let result = match settings.kind {
@@ -641,12 +647,12 @@ impl StepSolver {
                 };
                 problem.second_order = true;
                 let n = objective.layout.segments;
+                // |c_{n-1}| = |Σ_k z_k| <= Δc_max, held exactly
+                let slab = (n >= 2).then(|| Slab {
+                    range: objective.layout.c(1)..objective.layout.c(n - 1) + 1,
+                    bound: objective.terms.crease_bound,
+                });
                 let r = if settings.kind == SolverKind::TrustRegion {
-                    // |c_{n-1}| = |Σ_k z_k| <= Δc_max, held exactly
-                    let slab = (n >= 2).then(|| Slab {
-                        range: objective.layout.c(1)..objective.layout.c(n - 1) + 1,
-                        bound: objective.terms.crease_bound,
-                    });
                     self.trust.minimize(
                         &mut ZChain(&mut problem),
                         &mut self.z,
@@ -656,6 +662,16 @@ impl StepSolver {
                         &opts,
                     )
                 } else if settings.kind == SolverKind::Chain {
+                    let variant = settings.chain_variant;
+                    self.chain
+                        .set_slab(slab.filter(|_| variant.end_crease_exact));
+                    self.chain.set_cut_keeps_damping(variant.cut_keeps_shift);
+                    if variant.saddle_free {
+                        problem.saddle_floor = std::env::var("SF_FLOOR")
+                            .ok()
+                            .and_then(|v| v.parse().ok())
+                            .unwrap_or(1e-6);
+                    }
                     self.chain.minimize(
                         &mut ZChain(&mut problem),
                         &mut self.z,
