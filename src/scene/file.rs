@@ -15,9 +15,8 @@ use super::robot_file::RobotCollidersFile;
 use super::{Outputs, Scene, SceneError};
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::ribbon::{
-    Imperfection, RibbonForce, RibbonInitialShape, RibbonParams, RibbonSim, SolverKind,
-    ChainVariant,
-    SolverSettings,
+    ChainVariant, Imperfection, RibbonForce, RibbonInitialShape, RibbonParams, RibbonSim,
+    SolverKind, SolverSettings,
 };
 use crate::sim::{HandleSpec, ObjectSim, World};
 

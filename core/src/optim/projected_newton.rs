@@ -430,15 +430,6 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         if let Some(next) = self.after_search(problem, x, state, accepted, alpha) {
             return next;
         }
-        if std::env::var_os("PN_TRACE").is_some() {
-            let face = self.slab.as_ref().map(|s| s.face(x)).unwrap_or(0.0);
-            let sum = self.slab.as_ref().map(|s| s.sum(x)).unwrap_or(0.0);
-            eprintln!(
-                "it {} f {:.10e} df {:.3e} pg {:.3e} free {} damp {:.1e} esc {} fb {} alpha {:.2e} face {} sum {:.6} tau {:.2e} pred {:.2e}",
-                state.iterations, state.f, f_new - state.f, state.pg, self.free.len(), self.damping,
-                direction.escalated, direction.fallback, alpha, face, sum, self.slab_tau, predicted
-            );
-        }
         // a step cut short by the problem's admissible fraction is as full as it can be
         self.adapt_damping(alpha / self.first_alpha, direction.escalated);
         let f_old = state.f;
@@ -512,7 +503,12 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         self.free.clear();
         let range = self.slab.as_ref().map(|s| s.range.clone()).unwrap_or(0..0);
         for i in 0..x.len() {
-            let g = self.g[i] + if range.contains(&i) { self.slab_tau } else { 0.0 };
+            let g = self.g[i]
+                + if range.contains(&i) {
+                    self.slab_tau
+                } else {
+                    0.0
+                };
             let at_lower = x[i] <= lower[i] + BOUND_EPS * (1.0 + lower[i].abs()) && g > 0.0;
             let at_upper = x[i] >= upper[i] - BOUND_EPS * (1.0 + upper[i].abs()) && g < 0.0;
             if !(at_lower || at_upper) {

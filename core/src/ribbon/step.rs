@@ -46,6 +46,13 @@ pub const PENALTY_GROWTH: f64 = 10.0;
 /// Cholesky in f64 resolves.
 pub const MAX_PENALTY_GROWTH: f64 = 100.0;
 
+/// `solver.saddle_free` (issue 47): a chain pivot's eigenvalues are floored at this
+/// fraction of its stage's largest entry (pivot and coupling rows) when replaced by
+/// their absolute values, which bounds the sweep's feedback gains K = -Q_uu^-1 Q_ux by
+/// 1 / 1e-6 (flipped pivots without a floor cascaded to |d| ~ 1e114 on 2026-12-02).
+/// Not tuned: the variant is not the default (docs/ribbon_chain_solver.md, 2026-12-07).
+const SADDLE_FREE_FLOOR: f64 = 1e-6;
+
 /// What one step's solve did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SolveOutcome {
@@ -667,10 +674,7 @@ impl StepSolver {
                         .set_slab(slab.filter(|_| variant.end_crease_exact));
                     self.chain.set_cut_keeps_damping(variant.cut_keeps_shift);
                     if variant.saddle_free {
-                        problem.saddle_floor = std::env::var("SF_FLOOR")
-                            .ok()
-                            .and_then(|v| v.parse().ok())
-                            .unwrap_or(1e-6);
+                        problem.saddle_floor = SADDLE_FREE_FLOOR;
                     }
                     self.chain.minimize(
                         &mut ZChain(&mut problem),
