@@ -23,6 +23,7 @@
 use nalgebra::{Cholesky, Matrix2, SMatrix, SVector};
 
 mod pairs;
+mod pivot;
 mod product;
 
 use super::hessian::geometric_suffix_sums;
@@ -108,8 +109,6 @@ pub struct ChainModel {
     /// Saddle-free pivots (issue 47, [`Self::set_saddle_free`]): the floor of a
     /// modified pivot's eigenvalues relative to its stage's scale; 0: off.
     saddle_floor: f64,
-    /// Pivots the last factorization modified so.
-    modified_pivots: usize,
 }
 
 impl Objective<'_> {
@@ -199,19 +198,6 @@ impl Objective<'_> {
 }
 
 impl ChainModel {
-    /// Saddle-free pivots in the next factorizations (issue 47): a crease's 2x2 pivot
-    /// whose least eigenvalue is below `floor` times its stage's scale (the largest
-    /// entry of its pivot and coupling rows) is replaced by its eigenvalues' absolute
-    /// values, floored there, instead of failing the factorization. 0: off.
-    pub fn set_saddle_free(&mut self, floor: f64) {
-        self.saddle_floor = floor;
-    }
-
-    /// Pivots the last factorization replaced by their absolute values.
-    pub fn modified_pivots(&self) -> usize {
-        self.modified_pivots
-    }
-
     /// Test-only: every crease's local 2x2 block (bending, regularizer, its own
     /// geometric terms) scaled by 1 + `relative`, a subtly wrong Newton matrix for the
     /// negative controls of the solver comparisons.
@@ -529,7 +515,6 @@ impl ChainModel {
     /// The chain's own factorization (no loop closure): see [`Self::factor`].
     fn factor_chain(&mut self, free: &[bool], shift: &[f64]) -> bool {
         let n = self.segments;
-        self.modified_pivots = 0;
         self.free.clear();
         self.free.extend_from_slice(free);
         self.gain.clear();
@@ -557,11 +542,9 @@ impl ChainModel {
             let pinned = self.hold_failing && self.pinned.get(k).copied().unwrap_or(false);
             let inverse = if self.saddle_floor > 0.0 && !self.hold_failing {
                 let scale = quu.amax().max(qux.amax());
-                let (inv, modified) = saddle_free_inverse_2x2(&quu, self.saddle_floor * scale);
-                self.modified_pivots += usize::from(modified);
-                inv
+                pivot::saddle_free_inverse_2x2(&quu, self.saddle_floor * scale)
             } else {
-                spd_inverse_2x2(&quu)
+                pivot::spd_inverse_2x2(&quu)
             };
             let inv = match (pinned, inverse) {
                 (false, Some(inv)) => inv,
@@ -803,42 +786,6 @@ impl ChainModel {
         }
         out.iter().all(|v| v.is_finite())
     }
-}
-
-/// The inverse of |m| with its eigenvalues floored at `floor`: m = V diag(λ) V^T ->
-/// V diag(1 / max(|λ|, floor)) V^T, and whether m was modified (an eigenvalue below
-/// `floor`). None if not finite.
-fn saddle_free_inverse_2x2(m: &Matrix2<f64>, floor: f64) -> (Option<Matrix2<f64>>, bool) {
-    let (a, b, d) = (m[(0, 0)], m[(0, 1)], m[(1, 1)]);
-    let half = 0.5 * (a - d);
-    let root = (half * half + b * b).sqrt();
-    let mean = 0.5 * (a + d);
-    let least = mean - root;
-    if least > floor {
-        return (spd_inverse_2x2(m), false);
-    }
-    if !(least.is_finite() && floor.is_finite()) {
-        return (None, true);
-    }
-    let eigen = m.symmetric_eigen();
-    let mut inv = Matrix2::zeros();
-    for i in 0..2 {
-        let v = eigen.eigenvectors.column(i);
-        let l = eigen.eigenvalues[i].abs().max(floor).max(f64::MIN_POSITIVE);
-        inv += v * v.transpose() / l;
-    }
-    (Some(inv), true)
-}
-
-/// The inverse of a symmetric 2x2 matrix if it is positive definite (both Cholesky
-/// pivots positive), else None.
-fn spd_inverse_2x2(m: &Matrix2<f64>) -> Option<Matrix2<f64>> {
-    let (a, b, d) = (m[(0, 0)], m[(0, 1)], m[(1, 1)]);
-    let det = a * d - b * b;
-    if !(a > 0.0 && det > 0.0 && det.is_finite()) {
-        return None;
-    }
-    Some(Matrix2::new(d, -b, -b, a) / det)
 }
 
 /// The chain model as the projected Newton method's matrix: the damping and the held
