@@ -8,20 +8,33 @@
 //!
 //! Arguments: the scene's name in config/scenes, n (every ribbon's elements), the
 //! duration in s, the two solver kinds, optionally every ribbon's `solver.tolerance`
-//! (both solvers; default: the scene's).
+//! (both solvers; default: the scene's). A kind `chain+exact`, `chain+saddle`,
+//! `chain+cut` (or several, `chain+exact+cut`) is the chain solver with the issue 47
+//! variants `solver.end_crease_exact`, `solver.saddle_free`, `solver.cut_keeps_shift`.
 
 use developable_sim::metrics::{rms_distance, strip_samples};
-use developable_sim::ribbon::{RibbonSim, SolverKind};
+use developable_sim::ribbon::{ChainVariant, RibbonSim, SolverKind};
 use developable_sim::scene::{self, Scene};
 
-fn kind(name: &str) -> Result<SolverKind, String> {
-    match name {
-        "chain" => Ok(SolverKind::Chain),
-        "gauss_newton" => Ok(SolverKind::GaussNewton),
-        "trust_region" => Ok(SolverKind::TrustRegion),
-        "lbfgsb" => Ok(SolverKind::Lbfgsb),
-        other => Err(format!("unknown solver kind {other}")),
+fn kind(name: &str) -> Result<(SolverKind, ChainVariant), String> {
+    let mut parts = name.split('+');
+    let kind = match parts.next().unwrap_or("") {
+        "chain" => SolverKind::Chain,
+        "gauss_newton" => SolverKind::GaussNewton,
+        "trust_region" => SolverKind::TrustRegion,
+        "lbfgsb" => SolverKind::Lbfgsb,
+        other => return Err(format!("unknown solver kind {other}")),
+    };
+    let mut variant = ChainVariant::default();
+    for part in parts {
+        match part {
+            "exact" => variant.end_crease_exact = true,
+            "saddle" => variant.saddle_free = true,
+            "cut" => variant.cut_keeps_shift = true,
+            other => return Err(format!("unknown chain variant {other}")),
+        }
     }
+    Ok((kind, variant))
 }
 
 fn load(name: &str, n: usize) -> Result<Scene, Box<dyn std::error::Error>> {
@@ -38,10 +51,11 @@ fn load(name: &str, n: usize) -> Result<Scene, Box<dyn std::error::Error>> {
     Ok(scene::load(&path, &[format!("ribbon.segments={n}")])?)
 }
 
-fn set_kind(s: &mut Scene, kind: SolverKind) {
+fn set_kind(s: &mut Scene, (kind, variant): (SolverKind, ChainVariant)) {
     for i in 0..s.world.objects().len() {
         if let Some(r) = s.world.object_as_mut::<RibbonSim>(i) {
             r.params.solver.kind = kind;
+            r.params.solver.chain_variant = variant;
         }
     }
 }

@@ -15,8 +15,8 @@ use super::robot_file::RobotCollidersFile;
 use super::{Outputs, Scene, SceneError};
 use crate::geometry::{Point2, Pose, Vector3};
 use crate::ribbon::{
-    Imperfection, RibbonForce, RibbonInitialShape, RibbonParams, RibbonSim, SolverKind,
-    SolverSettings,
+    ChainVariant, Imperfection, RibbonForce, RibbonInitialShape, RibbonParams, RibbonSim,
+    SolverKind, SolverSettings,
 };
 use crate::sim::{HandleSpec, ObjectSim, World};
 
@@ -123,6 +123,17 @@ pub struct SolverFile {
     /// on snap-through events).
     #[serde(default)]
     pub extrapolate: bool,
+    /// Issue 47 variants of `chain` (measured, not the default; the other kinds ignore
+    /// them): the end crease held exactly by a slab projection.
+    #[serde(default)]
+    pub end_crease_exact: bool,
+    /// `chain`: pivots of the sweep that are not positive definite get their
+    /// eigenvalues' absolute values (saddle-free) instead of a larger global shift.
+    #[serde(default)]
+    pub saddle_free: bool,
+    /// `chain`: a line-search cut leaves the damping as it is (instead of x10).
+    #[serde(default)]
+    pub cut_keeps_shift: bool,
 }
 fn d_constraint_tol() -> f64 {
     1e-6
@@ -153,6 +164,9 @@ impl Default for SolverFile {
             max_outer_iterations: d_outer_max(),
             constraint_tolerance: d_constraint_tol(),
             extrapolate: false,
+            end_crease_exact: false,
+            saddle_free: false,
+            cut_keeps_shift: false,
         }
     }
 }
@@ -492,6 +506,11 @@ impl SceneFile {
             constraint_tolerance: ck
                 .positive("solver.constraint_tolerance", s.constraint_tolerance)?,
             extrapolate: s.extrapolate,
+            chain_variant: ChainVariant {
+                end_crease_exact: s.end_crease_exact,
+                saddle_free: s.saddle_free,
+                cut_keeps_shift: s.cut_keeps_shift,
+            },
         })
     }
 }

@@ -23,7 +23,8 @@ pub mod step;
 
 pub use handle_terms::HandleRef;
 pub use params::{
-    BaseMode, ClampRule, KineticModel, LoopKind, RibbonParams, SolverKind, SolverSettings,
+    BaseMode, ChainVariant, ClampRule, KineticModel, LoopKind, RibbonParams, SolverKind,
+    SolverSettings,
 };
 pub use reconstruct::{Coordinates, Frames, Strip};
 pub use sim::{Imperfection, RibbonForce, RibbonInitialShape, RibbonSim};

@@ -102,6 +102,26 @@ pub struct SolverSettings {
     pub constraint_tolerance: f64,
     /// Start each step from q + (q - q_previous) (linear extrapolation) instead of q.
     pub extrapolate: bool,
+    /// Issue 47 variants of [`SolverKind::Chain`] (each off by default; the other
+    /// kinds ignore them; docs/ribbon_chain_solver.md, 2026-12-07).
+    pub chain_variant: ChainVariant,
+}
+
+/// Variants of the damped projected Newton method on the chain model (issue 47),
+/// selectable for measurement; all off is the default solver.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ChainVariant {
+    /// Hold the end crease |c_{n-1}| = |Σ z_k| <= Δc_max exactly (the trust region's
+    /// slab: projection onto box and slab, its face held in the Newton step) instead
+    /// of by the augmented-Lagrangian term (no mu in the Newton matrix there).
+    pub end_crease_exact: bool,
+    /// Saddle-free pivots: where the chain's sweep meets a 2x2 pivot that is not
+    /// positive definite (or nearly singular), its eigenvalues are replaced by their
+    /// absolute values (floored) instead of raising the global shift.
+    pub saddle_free: bool,
+    /// A line-search cut (alpha < 1) leaves the Levenberg-Marquardt shift as it is
+    /// instead of multiplying it by 10.
+    pub cut_keeps_shift: bool,
 }
 
 impl Default for SolverSettings {
@@ -115,6 +135,7 @@ impl Default for SolverSettings {
             max_outer_iterations: 20,
             constraint_tolerance: 1e-6,
             extrapolate: false,
+            chain_variant: ChainVariant::default(),
         }
     }
 }

@@ -46,6 +46,13 @@ pub const PENALTY_GROWTH: f64 = 10.0;
 /// Cholesky in f64 resolves.
 pub const MAX_PENALTY_GROWTH: f64 = 100.0;
 
+/// `solver.saddle_free` (issue 47): a chain pivot's eigenvalues are floored at this
+/// fraction of its stage's largest entry (pivot and coupling rows) when replaced by
+/// their absolute values, which bounds the sweep's feedback gains K = -Q_uu^-1 Q_ux by
+/// 1 / 1e-6 (flipped pivots without a floor cascaded to |d| ~ 1e114 on 2026-12-02).
+/// Not tuned: the variant is not the default (docs/ribbon_chain_solver.md, 2026-12-07).
+const SADDLE_FREE_FLOOR: f64 = 1e-6;
+
 /// What one step's solve did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct SolveOutcome {
@@ -144,6 +151,9 @@ struct ZProblem<'o, 'w> {
     z_scratch: Vec<f64>,
     /// The last path the contact hook checked.
     path: CheckedPath,
+    /// The chain matrix's saddle-free pivot floor (`ChainModel::set_saddle_free`); 0:
+    /// off.
+    saddle_floor: f64,
 }
 
 /// The path z(α) = clamp(z0 + α d, lower, upper), α in [0, alpha], that the last line
@@ -354,6 +364,7 @@ impl BoxProblem for ZChain<'_, '_, '_> {
         problem
             .objective
             .chain_model(problem.workspace, &mut h.model);
+        h.model.set_saddle_free(problem.saddle_floor);
         #[cfg(any(test, feature = "test-hooks"))]
         if problem.newton_matrix_error != 0.0 {
             h.model.perturb_local_blocks(problem.newton_matrix_error);
@@ -502,7 +513,8 @@ impl StepSolver {
         }
         // The trust-region solver holds the end crease exactly (a slab), so it has no
         // augmented-Lagrangian term, and no multiplier, there.
-        objective_terms.end_crease_exact = settings.kind == SolverKind::TrustRegion;
+        objective_terms.end_crease_exact = settings.kind == SolverKind::TrustRegion
+            || (settings.kind == SolverKind::Chain && settings.chain_variant.end_crease_exact);
         if objective_terms.end_crease_exact {
             objective_terms.end_crease_multipliers = [0.0, 0.0];
         }
@@ -621,6 +633,7 @@ impl StepSolver {
             newton_matrix_error: self.newton_matrix_error,
             z_scratch: std::mem::take(&mut self.z_scratch),
             path: std::mem::take(&mut self.path),
+            saddle_floor: 0.0,
         };
         problem.path.valid = false;
         let result = match settings.kind {
@@ -641,12 +654,12 @@ impl StepSolver {
                 };
                 problem.second_order = true;
                 let n = objective.layout.segments;
+                // |c_{n-1}| = |Σ_k z_k| <= Δc_max, held exactly
+                let slab = (n >= 2).then(|| Slab {
+                    range: objective.layout.c(1)..objective.layout.c(n - 1) + 1,
+                    bound: objective.terms.crease_bound,
+                });
                 let r = if settings.kind == SolverKind::TrustRegion {
-                    // |c_{n-1}| = |Σ_k z_k| <= Δc_max, held exactly
-                    let slab = (n >= 2).then(|| Slab {
-                        range: objective.layout.c(1)..objective.layout.c(n - 1) + 1,
-                        bound: objective.terms.crease_bound,
-                    });
                     self.trust.minimize(
                         &mut ZChain(&mut problem),
                         &mut self.z,
@@ -656,6 +669,13 @@ impl StepSolver {
                         &opts,
                     )
                 } else if settings.kind == SolverKind::Chain {
+                    let variant = settings.chain_variant;
+                    self.chain
+                        .set_slab(slab.filter(|_| variant.end_crease_exact));
+                    self.chain.set_cut_keeps_damping(variant.cut_keeps_shift);
+                    if variant.saddle_free {
+                        problem.saddle_floor = SADDLE_FREE_FLOOR;
+                    }
                     self.chain.minimize(
                         &mut ZChain(&mut problem),
                         &mut self.z,

@@ -275,3 +275,133 @@ fn the_damped_projected_newton_method_reaches_the_same_bound_minimizers() {
         }
     }
 }
+
+/// The slab test's problem: a convex quadratic whose unconstrained minimizer has
+/// x_1 + x_2 + x_3 = 2.9 > 1, and its minimizer on the face a.x = 1 (H x + b + λ a = 0,
+/// a.x = 1), the slab |x_1 + x_2 + x_3| <= 1.
+fn slab_problem() -> (Quadratic, DVector<f64>, Slab) {
+    let h = coupled([0.5, 1.0, 3.0, 10.0]);
+    let b = -(&h * DVector::from_row_slice(&[0.2, 1.0, 0.8, 1.1]));
+    let a = DVector::from_row_slice(&[0.0, 1.0, 1.0, 1.0]);
+    let lu = h.clone().lu();
+    let y = lu.solve(&a).unwrap();
+    let lambda = (-1.0 - a.dot(&lu.solve(&b).unwrap())) / a.dot(&y);
+    let expected = -lu.solve(&(&b + &a * lambda)).unwrap();
+    let slab = Slab {
+        range: 1..4,
+        bound: 1.0,
+    };
+    (Quadratic { h, b }, expected, slab)
+}
+
+#[test]
+fn the_damped_projected_newton_method_holds_the_slab_at_the_face_minimizer() {
+    // `solver.end_crease_exact` in the damped solver: the face held in the Newton step
+    // (one more solve) and every trial projected onto box and slab
+    use crate::optim::ProjectedNewton;
+    let (mut problem, expected, slab) = slab_problem();
+    let options = NewtonOptions {
+        // above the 1e-12 relative damping's residue on the free unknowns
+        pgtol: 1e-10,
+        ..options()
+    };
+    let mut newton = ProjectedNewton::<Dense>::new();
+    newton.set_slab(Some(slab.clone()));
+    let mut x = [0.0; 4];
+    let r = newton.minimize(&mut problem, &mut x, &[-10.0; 4], &[10.0; 4], &options);
+    assert!(r.converged, "{r:?}");
+    assert!(slab.sum(&x) <= 1.0, "outside the slab: {}", slab.sum(&x));
+    assert!(
+        (slab.sum(&x) - 1.0).abs() < 4.0 * f64::EPSILON,
+        "{}",
+        slab.sum(&x)
+    );
+    // |x - x*| <= pg / lambda_min of H on the face (>= 0.5, H's least eigenvalue) =
+    // 2e-10 bounds it; measured 1.9e-12 (the last step is a Newton step on the face
+    // at a damping of 1e-9 of the diagonal)
+    for i in 0..4 {
+        assert!((x[i] - expected[i]).abs() < 1e-11, "{x:?} vs {expected}");
+    }
+    // negative control: the same solver without the slab ends outside it, at the
+    // unconstrained minimizer (so the checks above see whether the slab is held)
+    let mut x = [0.0; 4];
+    let r = ProjectedNewton::<Dense>::new().minimize(
+        &mut problem,
+        &mut x,
+        &[-10.0; 4],
+        &[10.0; 4],
+        &options,
+    );
+    assert!(r.converged, "{r:?}");
+    assert!(slab.sum(&x) > 2.8, "{}", slab.sum(&x));
+}
+
+#[test]
+fn the_damped_method_with_the_slab_ends_on_a_bound_and_a_face_of_an_indefinite_quadratic() {
+    // indefinite() (eigenvalues -2, 1, 2, 5) with x_0 in [-1, 1] and |x_1 + x_2 + x_3|
+    // <= 0.05: x_0 ends on a bound (the negative curvature's), the others at the
+    // minimizer of the reduced (positive definite) model on a face of the slab, from
+    // the KKT system [[H_FF, a], [a^T, 0]] [x_F; λ] = [-(b_F + H_F0 x_0); ±0.05] with
+    // the face's multiplier binding (H x + b + λ a = 0 with λ of the face's sign: the
+    // reduced minimizer without the slab is beyond that face)
+    use crate::optim::ProjectedNewton;
+    let slab = Slab {
+        range: 1..4,
+        bound: 0.05,
+    };
+    let lower = [-1.0, -10.0, -10.0, -10.0];
+    let upper = [1.0, 10.0, 10.0, 10.0];
+    let kkt = |x0: f64, face: f64| -> (DVector<f64>, f64) {
+        let q = indefinite();
+        let mut k = DMatrix::zeros(4, 4);
+        let mut rhs = DVector::zeros(4);
+        for r in 0..3 {
+            for c in 0..3 {
+                k[(r, c)] = q.h[(r + 1, c + 1)];
+            }
+            k[(r, 3)] = 1.0;
+            k[(3, r)] = 1.0;
+            rhs[r] = -(q.b[r + 1] + q.h[(r + 1, 0)] * x0);
+        }
+        rhs[3] = face * 0.05;
+        let s = k.lu().solve(&rhs).expect("the KKT matrix is regular");
+        (DVector::from_row_slice(&[x0, s[0], s[1], s[2]]), s[3])
+    };
+    for start in [[0.05, 0.0, 0.0, 0.0], [-0.05, 0.0, 0.0, 0.0]] {
+        let mut newton = ProjectedNewton::<Dense>::new();
+        newton.set_slab(Some(slab.clone()));
+        let mut x = start;
+        let r = newton.minimize(
+            &mut indefinite(),
+            &mut x,
+            &lower,
+            &upper,
+            &NewtonOptions {
+                pgtol: 1e-10,
+                ..options()
+            },
+        );
+        assert!(r.converged, "{r:?}");
+        assert!(x[0] == 1.0 || x[0] == -1.0, "x_0 not on a bound: {x:?}");
+        let face = slab.face(&x);
+        assert!(face != 0.0, "not on a face: {x:?}");
+        let (expected, lambda) = kkt(x[0], face);
+        assert!(lambda * face > 0.0, "the face does not bind: λ = {lambda}");
+        // |x - x*| <= pg / lambda_min of the reduced matrix on the face (>= 1, by
+        // interlacing), pg <= 1e-9 where the solve stops (its predicted decrease below
+        // f's round-off): measured 3.5e-10
+        for i in 0..4 {
+            assert!((x[i] - expected[i]).abs() < 1e-9, "{x:?} vs {expected}");
+        }
+        // negative control: without the slab the same solve ends beyond it
+        let mut y = start;
+        ProjectedNewton::<Dense>::new().minimize(
+            &mut indefinite(),
+            &mut y,
+            &lower,
+            &upper,
+            &options(),
+        );
+        assert!(slab.sum(&y).abs() > 0.1, "{y:?}");
+    }
+}

@@ -23,6 +23,7 @@
 use nalgebra::{Cholesky, Matrix2, SMatrix, SVector};
 
 mod pairs;
+mod pivot;
 mod product;
 
 use super::hessian::geometric_suffix_sums;
@@ -105,6 +106,9 @@ pub struct ChainModel {
     held_root: Option<Mat6>,
     closure_mask: Vec<bool>,
     product: product::ProductBuffers,
+    /// Saddle-free pivots (issue 47, [`Self::set_saddle_free`]): the floor of a
+    /// modified pivot's eigenvalues relative to its stage's scale; 0: off.
+    saddle_floor: f64,
 }
 
 impl Objective<'_> {
@@ -536,7 +540,13 @@ impl ChainModel {
                 }
             }
             let pinned = self.hold_failing && self.pinned.get(k).copied().unwrap_or(false);
-            let inv = match (pinned, spd_inverse_2x2(&quu)) {
+            let inverse = if self.saddle_floor > 0.0 && !self.hold_failing {
+                let scale = quu.amax().max(qux.amax());
+                pivot::saddle_free_inverse_2x2(&quu, self.saddle_floor * scale)
+            } else {
+                pivot::spd_inverse_2x2(&quu)
+            };
+            let inv = match (pinned, inverse) {
                 (false, Some(inv)) => inv,
                 (_, _) if self.hold_failing => {
                     if !pinned {
@@ -776,17 +786,6 @@ impl ChainModel {
         }
         out.iter().all(|v| v.is_finite())
     }
-}
-
-/// The inverse of a symmetric 2x2 matrix if it is positive definite (both Cholesky
-/// pivots positive), else None.
-fn spd_inverse_2x2(m: &Matrix2<f64>) -> Option<Matrix2<f64>> {
-    let (a, b, d) = (m[(0, 0)], m[(0, 1)], m[(1, 1)]);
-    let det = a * d - b * b;
-    if !(a > 0.0 && det > 0.0 && det.is_finite()) {
-        return None;
-    }
-    Some(Matrix2::new(d, -b, -b, a) / det)
 }
 
 /// The chain model as the projected Newton method's matrix: the damping and the held

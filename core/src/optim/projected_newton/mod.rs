@@ -10,6 +10,9 @@ use faer::{MatMut, Par};
 use nalgebra::DMatrix;
 
 use super::projected_gradient_inf;
+use super::slab::Slab;
+
+mod face;
 
 /// A box-constrained problem with a Hessian model.
 pub trait BoxProblem {
@@ -159,6 +162,18 @@ pub struct ProjectedNewton<M: NewtonMatrix = Dense> {
     factorizations: u32,
     /// Where the last line search started ([`BoxProblem::max_step_fraction`]).
     first_alpha: f64,
+    /// One slab |Σ_S x_i| <= b besides the box, held exactly ([`Self::set_slab`]).
+    slab: Option<Slab>,
+    /// The slab's multiplier τ in P(x - g) at the current x (0 without a slab): a
+    /// variable of S on a bound is held where g_i + τ pushes it out.
+    slab_tau: f64,
+    /// H_FF^{-1} a (a the slab's indicator on the free set), for the face's step.
+    face_w: Vec<f64>,
+    /// P(x - g) (the projected gradient's point).
+    point: Vec<f64>,
+    /// Whether a line-search cut (alpha < 1) leaves the damping as it is instead of
+    /// raising it 10x ([`Self::set_cut_keeps_damping`]).
+    cut_keeps_damping: bool,
 }
 
 /// Relative tolerance of "on a bound": x_i <= lower_i + eps (1 + |lower_i|).
@@ -238,8 +253,16 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
     pub fn fresh_with_history(&self) -> Self {
         ProjectedNewton {
             first_damping: self.first_damping,
+            slab: self.slab.clone(),
+            cut_keeps_damping: self.cut_keeps_damping,
             ..Self::new()
         }
+    }
+
+    /// Whether a line-search cut (alpha < 1) leaves the damping as it is (true) or
+    /// raises it 10x (false, the default).
+    pub fn set_cut_keeps_damping(&mut self, keep: bool) {
+        self.cut_keeps_damping = keep;
     }
 
     /// Minimize `problem` over the box [lower, upper] from `x` (clamped into the box),
@@ -310,9 +333,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         self.factorizations = 0;
         self.indefinite_at = 0.0;
         self.trial.resize(n, 0.0);
-        for i in 0..n {
-            x[i] = x[i].clamp(lower[i], upper[i]);
-        }
+        self.project(x, lower, upper);
         let mut state = IterationState {
             f: problem.evaluate(x, Some(&mut self.g), None),
             pg: 0.0,
@@ -322,7 +343,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
             chord: false,
             first: true,
         };
-        state.pg = projected_gradient_inf(x, &self.g, lower, upper);
+        state.pg = self.projected_gradient(x, lower, upper);
         state
     }
 
@@ -373,7 +394,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
         self.adapt_damping(alpha / self.first_alpha, direction.escalated);
         let f_old = state.f;
         self.accept(problem, x, alpha, f_new, state);
-        state.pg = projected_gradient_inf(x, &self.g, lower, upper);
+        state.pg = self.projected_gradient(x, lower, upper);
         // (chord steps only at the start of a call: within one, Newton steps
         // converge in fewer evaluations)
         state.chord &= state.pg <= 0.25 * pg_before;
@@ -435,11 +456,21 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
 
     /// The free set at x: every variable except those at a bound with the gradient
     /// pointing out of the box.
+    ///
+    /// With a slab, on its range the gradient is g_i + τ (τ the slab's multiplier in
+    /// P(x - g)): what the projection onto box and slab moves it by.
     fn free_set(&mut self, x: &[f64], lower: &[f64], upper: &[f64]) {
         self.free.clear();
+        let range = self.slab.as_ref().map(|s| s.range.clone()).unwrap_or(0..0);
         for i in 0..x.len() {
-            let at_lower = x[i] <= lower[i] + BOUND_EPS * (1.0 + lower[i].abs()) && self.g[i] > 0.0;
-            let at_upper = x[i] >= upper[i] - BOUND_EPS * (1.0 + upper[i].abs()) && self.g[i] < 0.0;
+            let g = self.g[i]
+                + if range.contains(&i) {
+                    self.slab_tau
+                } else {
+                    0.0
+                };
+            let at_lower = x[i] <= lower[i] + BOUND_EPS * (1.0 + lower[i].abs()) && g > 0.0;
+            let at_upper = x[i] >= upper[i] - BOUND_EPS * (1.0 + upper[i].abs()) && g < 0.0;
             if !(at_lower || at_upper) {
                 self.free.push(i);
             }
@@ -485,6 +516,9 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
                 }
                 self.damped_newton_step(m, &mut direction)
             };
+            if direction.ok && !direction.fallback {
+                direction.ok = self.hold_face(x);
+            }
             if !direction.ok || binding == 3 {
                 break;
             }
@@ -575,17 +609,30 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
             for (k, &i) in self.free.iter().enumerate() {
                 self.trial[i] = (x[i] + alpha * self.reduced[k]).clamp(lower[i], upper[i]);
             }
+            if let Some(slab) = &self.slab {
+                // onto box and slab, not onto the face the step is held on: a step
+                // whose clamps pull Σ inside may leave the face (projecting onto the face
+                // instead shifts every z_k of S alike, a stiff global motion of c, and
+                // took 10-20x the iterations, docs/ribbon_chain_solver.md 2026-12-07)
+                slab.project(&mut self.trial, lower, upper, 0.0);
+            }
             state.evaluations += 1;
             f_new = if trial == 0 {
                 problem.evaluate(&self.trial, Some(&mut self.g_trial), None)
             } else {
                 problem.evaluate(&self.trial, None, None)
             };
-            let decrease: f64 = self
-                .free
-                .iter()
-                .map(|&i| self.g[i] * (self.trial[i] - x[i]))
-                .sum();
+            let decrease: f64 = if self.slab.is_some() {
+                // the slab's projection may move held variables of S too
+                (0..x.len())
+                    .map(|i| self.g[i] * (self.trial[i] - x[i]))
+                    .sum()
+            } else {
+                self.free
+                    .iter()
+                    .map(|&i| self.g[i] * (self.trial[i] - x[i]))
+                    .sum()
+            };
             if f_new.is_finite() && f_new <= state.f + 1e-4 * decrease {
                 return (true, alpha, f_new);
             }
@@ -616,7 +663,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
                     .max(1e-12);
                 self.indefinite_at *= 0.1;
             }
-        } else {
+        } else if !self.cut_keeps_damping {
             self.damping = (self.damping * 10.0).min(1e6);
         }
     }
