@@ -20,6 +20,21 @@ pub struct Slab {
 /// Relative tolerance of "on a face": |Σ| >= bound - eps (1 + bound), as for a box bound.
 const FACE_EPS: f64 = 1e-12;
 
+/// `y` projected onto the box [lower, upper] and, if any, the slab: the feasible set of
+/// both Newton methods that can hold the end crease exactly.
+pub fn project_feasible(slab: Option<&Slab>, y: &mut [f64], lower: &[f64], upper: &[f64]) {
+    match slab {
+        Some(slab) => {
+            slab.project(y, lower, upper, 0.0);
+        }
+        None => {
+            for i in 0..y.len() {
+                y[i] = y[i].clamp(lower[i], upper[i]);
+            }
+        }
+    }
+}
+
 impl Slab {
     /// Σ_{i in S} x_i, summed from the first entry on: the same floating-point value as
     /// the ribbon's c_{n-1} = (((z_1 + z_2) + z_3) + ...) of `ribbon::step::z_to_q`.

@@ -3,6 +3,7 @@
 //! onto box and slab, the projected gradient with it, and the Newton step held on a face.
 
 use super::{projected_gradient_inf, NewtonMatrix, ProjectedNewton, Slab};
+use crate::optim::slab::project_feasible;
 
 impl<M: NewtonMatrix> ProjectedNewton<M> {
     /// Hold one slab |Σ_S x_i| <= b besides the box in the next solves (None: the box
@@ -16,16 +17,7 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
 
     /// `y` projected onto [lower, upper] and the slab (if any).
     pub(super) fn project(&self, y: &mut [f64], lower: &[f64], upper: &[f64]) {
-        match &self.slab {
-            Some(slab) => {
-                slab.project(y, lower, upper, 0.0);
-            }
-            None => {
-                for i in 0..y.len() {
-                    y[i] = y[i].clamp(lower[i], upper[i]);
-                }
-            }
-        }
+        project_feasible(self.slab.as_ref(), y, lower, upper);
     }
 
     /// ||P(x - g) - x||_inf, P onto box and slab; sets `slab_tau`.

@@ -30,7 +30,7 @@ mod model_step;
 mod tests;
 
 use super::projected_newton::{BoxProblem, NewtonMatrix, NewtonOptions, NewtonResult};
-use super::slab::Slab;
+use super::slab::{project_feasible, Slab};
 
 pub(crate) use dense::DenseModel;
 
@@ -291,16 +291,7 @@ impl<M: ModelMatrix> TrustRegion<M> {
 
     /// `y` projected onto [lower, upper] and the slab.
     fn project(&self, y: &mut [f64], lower: &[f64], upper: &[f64]) {
-        match &self.slab {
-            Some(slab) => {
-                slab.project(y, lower, upper, 0.0);
-            }
-            None => {
-                for i in 0..y.len() {
-                    y[i] = y[i].clamp(lower[i], upper[i]);
-                }
-            }
-        }
+        project_feasible(self.slab.as_ref(), y, lower, upper);
     }
 
     /// ||P(x - g) - x||_inf, P onto the box and the slab: zero exactly at a stationary
