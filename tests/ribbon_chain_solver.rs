@@ -3,8 +3,7 @@
 //! minimizer, on every ribbon scene at n = 50 and n = 100 (docs/ribbon_chain_solver.md):
 //! open ribbons, loops (mobius_band, the orientable loop of ribbon_extreme_dragging)
 //! and the multi-ribbon chains of loops with contact (double and Moebius chains):
-//! the same iterates up to round-off and the same iteration counts, except on the
-//! double chain (a measured gap, asserted as such below).
+//! the same iterates up to round-off and the same iteration counts.
 
 use developable_sim::metrics::{rms_distance, strip_samples};
 use developable_sim::ribbon::{RibbonSim, SolverKind};
@@ -111,12 +110,14 @@ const OPEN_RIBBON_SCENES: [&str; 9] = [
 /// The chain sweep and the dense Cholesky factorize the same Newton matrix in a
 /// different order, so their iterates differ by round-off only, and the stopping tests
 /// fire at the same iteration. Measured (2026-12-07): RMS at most 1.9e-15 m on the open
-/// scenes, 6.4e-13 m on the Moebius chain (its Woodbury step's capacitance matrix
-/// amplifies round-off), equal iteration counts on both. The bounds are 50x and 15x
-/// above those, 1e4 below what a solve stopped one iteration early gives, and below
-/// what a Newton matrix 1e-5 off gives (the negative controls below).
+/// scenes and 1.2e-14 m on the loops (ribbon_extreme_dragging at n = 100; the chains
+/// 5e-16 to 7.5e-16 m since the loop closure's split, commit of that date; 6.4e-13 m and
+/// a different iteration count on the double chain before), equal iteration counts on
+/// both. The bounds are 50x and 8x above those, 1e4 below what a solve stopped one
+/// iteration early gives, and below what a Newton matrix 1e-5 off gives (the negative
+/// controls below).
 const OPEN_RMS: f64 = 1e-13;
-const LOOP_RMS: f64 = 1e-11;
+const LOOP_RMS: f64 = 1e-13;
 
 #[test]
 fn chain_and_dense_reach_the_same_step_minimizer_on_every_open_ribbon_scene() {
@@ -133,10 +134,11 @@ fn chain_and_dense_reach_the_same_step_minimizer_on_every_open_ribbon_scene() {
     }
 }
 
-const LOOP_SCENES: [&str; 3] = [
+const LOOP_SCENES: [&str; 4] = [
     "mobius_band",
     "ribbon_extreme_dragging",
     "ribbon_mobius_chain",
+    "ribbon_double_chain",
 ];
 
 #[test]
@@ -177,23 +179,20 @@ fn the_moebius_chain_is_skipped_at_n_100_because_it_cannot_load_there() {
 }
 
 #[test]
-fn known_gap_the_double_chain_differs_beyond_round_off() {
-    // Open (issue 47's report): on ribbon_double_chain (two linked loops with contact)
-    // the two solvers stop at different iterations (dense 3, chain 6 at n = 50; 2 and
-    // 3 at n = 100) on points 3.2e-8 m and 4.1e-9 m apart: within the solve's
-    // tolerance, but not the same iterates. Asserted as measured so that a fix (or a
-    // worse gap) shows here: both converge, and the distance stays below 1e-7 m (3x
-    // the largest measured; not derived: the cause is not found).
-    for n in [50, 100] {
-        let (rms, converged, dense_it, chain_it) = step_distance("ribbon_double_chain", n, 3);
-        eprintln!("ribbon_double_chain n={n}: RMS {rms:.3e} m, iterations {dense_it} {chain_it}");
-        assert!(converged, "n={n}");
-        assert!(rms < 1e-7, "n={n}: RMS {rms} m");
-        assert!(
-            rms > LOOP_RMS && dense_it != chain_it,
-            "fixed? n={n}: {rms} {dense_it} {chain_it}: move it to the loop scenes"
-        );
-    }
+fn the_loop_checks_see_the_fourteen_column_closure() {
+    // negative control and regression: the double chain with the loop closure always in
+    // the 14-column Woodbury form (the chain solver before 2026-12-07, test-only hook
+    // `RibbonSim::set_fourteen_column_closure`). Its capacitance was nearly singular
+    // (eigenvalues from 2e3 down to 1e-7 in magnitude) and its solves off by 10-100x
+    // their right-hand side on the chains' links: measured then, dense 3 and chain 6
+    // iterations at n = 50 on points 3.2e-8 m apart, where the split closure now gives
+    // the dense iterates to round-off (the test above). Both checks must fail on it.
+    let (rms, converged, dense_it, chain_it) =
+        step_distance_with("ribbon_double_chain", 50, 3, |r| r.set_fourteen_column_closure(true));
+    eprintln!("14-column closure: RMS {rms:.3e} m, iterations dense {dense_it} chain {chain_it}");
+    assert!(converged);
+    assert!(rms > 1e3 * LOOP_RMS, "RMS {rms} m, not seen");
+    assert_ne!(dense_it, chain_it);
 }
 
 #[test]

@@ -291,6 +291,14 @@ impl RibbonSim {
         self.solver.newton_matrix_error = relative;
     }
 
+    /// Test-only (`test-hooks` feature): the chain solver's loop closure always in the
+    /// 14-column Woodbury form (the form before 2026-12-07; docs/ribbon_chain_solver.md),
+    /// for the negative control of the loop solver comparisons.
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub fn set_fourteen_column_closure(&mut self, on: bool) {
+        self.solver.fourteen_column_closure = on;
+    }
+
     /// One implicit-Euler step of `dt` s to time `time`; `targets[h]` is the target of
     /// world handle h (`world_from_gripper`); with `contact`, contact is part of the
     /// step (docs/contact_barrier.md).

@@ -91,6 +91,10 @@ pub struct StepSolver {
     /// (`ChainModel::perturb_local_blocks`); 0: exact.
     #[cfg(any(test, feature = "test-hooks"))]
     pub newton_matrix_error: f64,
+    /// Test-only: a loop closure always in the 14-column form
+    /// (`ChainModel::use_fourteen_column_closure`).
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub fourteen_column_closure: bool,
     z_scratch: Vec<f64>,
 }
 
@@ -106,6 +110,8 @@ impl Clone for StepSolver {
             trust: self.trust.fresh_with_history(),
             #[cfg(any(test, feature = "test-hooks"))]
             newton_matrix_error: self.newton_matrix_error,
+            #[cfg(any(test, feature = "test-hooks"))]
+            fourteen_column_closure: self.fourteen_column_closure,
             ..StepSolver::default()
         }
     }
@@ -147,6 +153,8 @@ struct ZProblem<'o, 'w> {
     second_order: bool,
     #[cfg(any(test, feature = "test-hooks"))]
     newton_matrix_error: f64,
+    #[cfg(any(test, feature = "test-hooks"))]
+    fourteen_column_closure: bool,
     /// A z on the line search's path (contact hook).
     z_scratch: Vec<f64>,
     /// The last path the contact hook checked.
@@ -368,6 +376,10 @@ impl BoxProblem for ZChain<'_, '_, '_> {
         #[cfg(any(test, feature = "test-hooks"))]
         if problem.newton_matrix_error != 0.0 {
             h.model.perturb_local_blocks(problem.newton_matrix_error);
+        }
+        #[cfg(any(test, feature = "test-hooks"))]
+        if problem.fourteen_column_closure {
+            h.model.use_fourteen_column_closure();
         }
     }
     /// The trust region's units: 1 for crease differences (crease-direction units),
@@ -631,6 +643,8 @@ impl StepSolver {
             second_order: false,
             #[cfg(any(test, feature = "test-hooks"))]
             newton_matrix_error: self.newton_matrix_error,
+            #[cfg(any(test, feature = "test-hooks"))]
+            fourteen_column_closure: self.fourteen_column_closure,
             z_scratch: std::mem::take(&mut self.z_scratch),
             path: std::mem::take(&mut self.path),
             saddle_floor: 0.0,

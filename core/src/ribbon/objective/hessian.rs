@@ -172,7 +172,7 @@ impl Objective<'_> {
         pass.base_rotation_geometric(hs);
         pass.crease_geometric(hs);
         pass.twist_local(hs);
-        for (e1, e2, block) in cross_blocks.iter() {
+        for (e1, e2, block, _) in cross_blocks.iter() {
             pass.cross_block(hs, *e1, *e2, block, scratch_left, scratch_right);
         }
         symmetrize_upper(hs, nq);

@@ -60,6 +60,25 @@ pub use terms::{Equality, NormalGuide, ObjectiveParts, PointForce, StepTerms};
 type Vec8 = SVector<f64, 8>;
 type Mat8 = SMatrix<f64, 8, 8>;
 type Mat3x8 = SMatrix<f64, 3, 8>;
+type Mat9x8 = SMatrix<f64, 9, 8>;
+
+/// A loop closure's term mu/2 |J_last y_{n-1} - J_first y_0|^2 in the Newton matrix
+/// (y_e = (twist, c_e, c_{e+1}) of element e; nine rows: two rim points and the normal,
+/// 3 each): its Gauss-Newton part is mu J_last^T J_last on element n-1's block,
+/// mu J_first^T J_first on element 0's and the cross block B = -mu J_last^T J_first. The
+/// chain solver factorizes the chain without the two diagonal blocks and adds the
+/// closure back as a positive rank-9 update (see `chain::ChainModel::factor`).
+#[derive(Clone, Copy, Debug)]
+pub struct ClosureRows {
+    pub last: Mat9x8,
+    pub first: Mat9x8,
+    /// mu, J/m^2 (the position rows; the normal's rows are dimensionless).
+    pub penalty: f64,
+}
+
+/// A cross block (e1, e2, B) of the Newton matrix between two elements and, for a loop
+/// closure, its rows.
+pub(crate) type CrossBlock = (usize, usize, Mat8, Option<ClosureRows>);
 
 /// Buffers reused across evaluations (no allocation per evaluation once warm).
 #[derive(Clone, Debug, Default)]
@@ -71,7 +90,7 @@ pub struct Workspace {
     element_gradient: Vec<Vec8>,
     element_hessian: Vec<Mat8>,
     /// Off-diagonal blocks (e1, e2, B) of the Gauss-Newton Hessian (loop closure).
-    cross_blocks: Vec<(usize, usize, Mat8)>,
+    cross_blocks: Vec<CrossBlock>,
     /// Kinetic residual D per vertex (bottom then top), m/s.
     residual_bottom: Vec<Vector3>,
     residual_top: Vec<Vector3>,

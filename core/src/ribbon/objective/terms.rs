@@ -5,7 +5,7 @@
 
 use super::accumulate::{direction_jacobian, point_jacobian, sliding_rate, Accumulator};
 use super::kinetic::add_mass_rate_coupling;
-use super::{Mat8, Objective, Workspace};
+use super::{ClosureRows, CrossBlock, Mat8, Mat9x8, Objective, Workspace};
 use crate::geometry::{Matrix3, Point2, Point3, Vector3};
 use crate::ribbon::mass::element_mass;
 use crate::ribbon::params::{KineticModel, LoopKind};
@@ -201,7 +201,7 @@ impl Objective<'_> {
     pub(super) fn equality(
         &self,
         acc: &mut Accumulator,
-        cross: &mut Vec<(usize, usize, Mat8)>,
+        cross: &mut Vec<CrossBlock>,
         eq: &Equality,
         lambda: &[f64],
         mu: f64,
@@ -290,7 +290,7 @@ impl Objective<'_> {
     fn loop_equality(
         &self,
         acc: &mut Accumulator,
-        cross: &mut Vec<(usize, usize, Mat8)>,
+        cross: &mut Vec<CrossBlock>,
         kind: LoopKind,
         lambda: &[f64],
         mu: f64,
@@ -345,6 +345,11 @@ impl Objective<'_> {
         let mut block_a = Mat8::zeros();
         let mut block_b = Mat8::zeros();
         let mut block_ab = Mat8::zeros();
+        let mut rows = ClosureRows {
+            last: Mat9x8::zeros(),
+            first: Mat9x8::zeros(),
+            penalty: mu,
+        };
         for (row, (pa, ma, pb, mb, sign, is_dir)) in pairs.iter().enumerate() {
             let ci = pa.coords - pb.coords * *sign;
             let lam = Vector3::new(lambda[3 * row], lambda[3 * row + 1], lambda[3 * row + 2]);
@@ -366,12 +371,14 @@ impl Objective<'_> {
                 block_a += ja.transpose() * ja * mu;
                 block_b += jb.transpose() * jb * mu;
                 block_ab -= ja.transpose() * jb * mu;
+                rows.last.fixed_rows_mut::<3>(3 * row).copy_from(&ja);
+                rows.first.fixed_rows_mut::<3>(3 * row).copy_from(&jb);
             }
         }
         if let Some(hs) = acc.ws_hessian.as_deref_mut() {
             hs[last] += block_a;
             hs[0] += block_b;
-            cross.push((last, 0, block_ab));
+            cross.push((last, 0, block_ab, Some(rows)));
         }
         value
     }

@@ -22,6 +22,7 @@
 
 use nalgebra::{Cholesky, Matrix2, SMatrix, SVector};
 
+mod closure;
 mod pairs;
 mod pivot;
 mod product;
@@ -72,6 +73,14 @@ pub struct ChainModel {
     closure_u: Vec<f64>,
     closure_y: Vec<f64>,
     capacitance: Option<nalgebra::SymmetricEigen<f64, nalgebra::Const<14>>>,
+    /// The same closure as an update of a softer chain (`closure`): its rows, U's rows
+    /// on the unknowns (9 or 18 of the model's dimension), Y = H_rho^{-1} U and K^{-1}
+    /// (zero-padded to 18 x 18); `closure_k` is set when the last factorization took
+    /// this form.
+    closure_rows: Option<super::ClosureRows>,
+    closure_j: Vec<f64>,
+    closure_jy: Vec<f64>,
+    closure_k: Option<SMatrix<f64, 18, 18>>,
     scratch_rhs: Vec<f64>,
     // --- factors ---
     gain: Vec<Mat2x7>,
@@ -139,12 +148,18 @@ impl Objective<'_> {
             base_blocks(ws, model);
         }
         model.closure = None;
-        for (e1, e2, b) in &ws.cross_blocks {
+        model.closure_rows = None;
+        for (e1, e2, b, rows) in &ws.cross_blocks {
             assert!(
                 (*e1, *e2) == (n - 1, 0),
                 "a cross block other than the loop closure's"
             );
             *model.closure.get_or_insert_with(Mat8::zeros) += b;
+            model.closure_rows = *rows;
+        }
+        if ws.cross_blocks.len() > 1 {
+            // (one closure's rows only: more than one keep the 14-column Woodbury)
+            model.closure_rows = None;
         }
         pairs::merge_pairs(&ws.contact.pairs, &mut model.pair_order, &mut model.pairs);
     }
@@ -198,6 +213,13 @@ impl Objective<'_> {
 }
 
 impl ChainModel {
+    /// Test-only: the loop closure in the 14-column form only (the split of `closure`
+    /// not tried), until the next [`Objective::chain_model`].
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub fn use_fourteen_column_closure(&mut self) {
+        self.closure_rows = None;
+    }
+
     /// Test-only: every crease's local 2x2 block (bending, regularizer, its own
     /// geometric terms) scaled by 1 + `relative`, a subtly wrong Newton matrix for the
     /// negative controls of the solver comparisons.
@@ -376,35 +398,48 @@ impl ChainModel {
     /// [`Self::solve_chain`]: O(n) per column.
     fn closure_columns(&mut self) {
         let Some(b) = self.closure else { return };
-        let (n, nq) = (self.segments, self.dimension());
+        let nq = self.dimension();
+        let bg = b * self.root_map();
+        let mut a = std::mem::take(&mut self.closure_a);
+        a.clear();
+        a.resize(ROOT * nq, 0.0);
+        for j in 0..ROOT {
+            let pv: Vec6 = bg.fixed_view::<6, 1>(0, j).into_owned();
+            self.last_element_adjoint(&pv, bg[(6, j)], &mut a[j * nq..(j + 1) * nq]);
+        }
+        self.closure_a = a;
+    }
+
+    /// G: element 0's y_0 = (V_0, c_0 = 0, c_1 = z_1) = G r from the root unknowns r
+    /// (8 x ROOT; the base columns are zero for a fixed base).
+    fn root_map(&self) -> Mat8x7 {
         let mut g = Mat8x7::zeros();
         for j in 0..6 {
             g.fixed_view_mut::<6, 1>(0, j)
                 .copy_from(&self.base_twists.column(j));
         }
         g[(7, 6)] = 1.0;
-        let bg = b * g;
+        g
+    }
+
+    /// P_{n-1}^T w into `col` (every unknown's entry written): the gradient of the
+    /// linear function w . y_{n-1} = pv . V_{n-1} + pc c_{n-1} (c_n = 0 is no unknown),
+    /// by the adjoint sweep of [`Self::solve_chain`], O(n).
+    fn last_element_adjoint(&self, pv: &Vec6, pc: f64, col: &mut [f64]) {
+        let n = self.segments;
         let base = if self.floating { 6 } else { 0 };
-        let mut a = std::mem::take(&mut self.closure_a);
-        a.clear();
-        a.resize(ROOT * nq, 0.0);
-        for j in 0..ROOT {
-            let col = &mut a[j * nq..(j + 1) * nq];
-            let pv: Vec6 = bg.fixed_view::<6, 1>(0, j).into_owned();
-            let mut pc = bg[(6, j)];
-            for k in (1..n).rev() {
-                let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
-                let (c, psi) = (base + k - 1, base + n - 1 + k - 1);
-                col[psi] = xp.dot(&pv);
-                pc += xc.dot(&pv);
-                col[c] = pc;
-            }
-            if self.floating {
-                let wrench = self.base_twists.transpose() * pv;
-                col[..6].copy_from_slice(wrench.as_slice());
-            }
+        let mut pc = pc;
+        for k in (1..n).rev() {
+            let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
+            let (c, psi) = (base + k - 1, base + n - 1 + k - 1);
+            col[psi] = xp.dot(pv);
+            pc += xc.dot(pv);
+            col[c] = pc;
         }
-        self.closure_a = a;
+        if self.floating {
+            let wrench = self.base_twists.transpose() * pv;
+            col[..6].copy_from_slice(wrench.as_slice());
+        }
     }
 
     /// Factorize H + diag(shift) restricted to the unknowns with `free[i]` (the others
@@ -423,6 +458,13 @@ impl ChainModel {
 
     /// [`Self::factor`] without the contact pairs.
     fn factor_chain_only(&mut self, free: &[bool], shift: &[f64]) -> bool {
+        self.failure = product::Failure::None;
+        self.held_pivots.clear();
+        self.held_root = None;
+        if self.factor_open_closure(free, shift) {
+            self.capacitance = None;
+            return true;
+        }
         self.failure = product::Failure::None;
         self.held_pivots.clear();
         self.held_root = None;
@@ -705,6 +747,9 @@ impl ChainModel {
     /// The chain's solve with its loop closure (no contact pairs). With a loop
     /// closure, Woodbury: x = x0 - Y K^{-1} U^T x0, x0 = H0^{-1} rhs.
     pub(super) fn solve_chain_only(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
+        if self.closure_k.is_some() {
+            return self.solve_open_closure(rhs, out);
+        }
         if !self.solve_chain(rhs, out) {
             return false;
         }
