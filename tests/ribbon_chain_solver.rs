@@ -188,7 +188,9 @@ fn the_loop_checks_see_the_fourteen_column_closure() {
     // iterations at n = 50 on points 3.2e-8 m apart, where the split closure now gives
     // the dense iterates to round-off (the test above). Both checks must fail on it.
     let (rms, converged, dense_it, chain_it) =
-        step_distance_with("ribbon_double_chain", 50, 3, |r| r.set_fourteen_column_closure(true));
+        step_distance_with("ribbon_double_chain", 50, 3, |r| {
+            r.set_fourteen_column_closure(true)
+        });
     eprintln!("14-column closure: RMS {rms:.3e} m, iterations dense {dense_it} chain {chain_it}");
     assert!(converged);
     assert!(rms > 1e3 * LOOP_RMS, "RMS {rms} m, not seen");

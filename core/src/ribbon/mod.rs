@@ -20,6 +20,8 @@ pub mod params;
 pub mod reconstruct;
 mod sim;
 pub mod step;
+#[cfg(any(test, feature = "test-hooks"))]
+mod test_hooks;
 
 pub use handle_terms::HandleRef;
 pub use params::{

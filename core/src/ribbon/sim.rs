@@ -73,7 +73,7 @@ pub struct RibbonSim {
     /// Whether a step was taken since the handles last changed (the multipliers are
     /// then the constraint forces of that step's final state).
     pub(super) stepped: bool,
-    solver: StepSolver,
+    pub(super) solver: StepSolver,
     q: Vec<f64>,
     mesh: SurfaceMesh,
     singular: Vec<SingularPoint>,
@@ -281,22 +281,6 @@ impl RibbonSim {
         for (x, v) in self.history.x_top.iter().zip(self.history.v_top.iter_mut()) {
             *v = omega.cross(&(x - center.coords)) + linear;
         }
-    }
-
-    /// Test-only (`test-hooks` feature): the chain solvers' Newton matrix made subtly
-    /// wrong, every crease's 2x2 block scaled by 1 + `relative` (the objective and its
-    /// gradient stay exact), for the negative controls of the solver comparisons.
-    #[cfg(any(test, feature = "test-hooks"))]
-    pub fn set_newton_matrix_error(&mut self, relative: f64) {
-        self.solver.newton_matrix_error = relative;
-    }
-
-    /// Test-only (`test-hooks` feature): the chain solver's loop closure always in the
-    /// 14-column Woodbury form (the form before 2026-12-07; docs/ribbon_chain_solver.md),
-    /// for the negative control of the loop solver comparisons.
-    #[cfg(any(test, feature = "test-hooks"))]
-    pub fn set_fourteen_column_closure(&mut self, on: bool) {
-        self.solver.fourteen_column_closure = on;
     }
 
     /// One implicit-Euler step of `dt` s to time `time`; `targets[h]` is the target of

@@ -380,68 +380,6 @@ impl ChainModel {
         &self.diagonal
     }
 
-    /// Root unknown j (0..6 the floating base, 6 z_1) as an index of the unknowns.
-    fn root_index(&self, j: usize) -> Option<usize> {
-        match j {
-            6 => Some(self.c_index(1)),
-            _ if self.floating => Some(j),
-            _ => None,
-        }
-    }
-
-    /// The loop closure's coupling y_{n-1}^T B y_0 as a low-rank matrix. Element 0
-    /// moves only with the root unknowns r: y_0 = G r, G = [[Ξ_base, 0], [0, 0],
-    /// [0, 1]] (8 x ROOT). So the coupling's matrix is C = A E^T + E A^T, with E the
-    /// columns of the unit vectors of r and A = P_{n-1}^T B G, P_{n-1} the map from
-    /// the unknowns to y_{n-1} = (V_{n-1}, c_{n-1}, c_n = 0). Column j of A is the
-    /// gradient of the linear function (B G)_j . y_{n-1}, by the adjoint sweep of
-    /// [`Self::solve_chain`]: O(n) per column.
-    fn closure_columns(&mut self) {
-        let Some(b) = self.closure else { return };
-        let nq = self.dimension();
-        let bg = b * self.root_map();
-        let mut a = std::mem::take(&mut self.closure_a);
-        a.clear();
-        a.resize(ROOT * nq, 0.0);
-        for j in 0..ROOT {
-            let pv: Vec6 = bg.fixed_view::<6, 1>(0, j).into_owned();
-            self.last_element_adjoint(&pv, bg[(6, j)], &mut a[j * nq..(j + 1) * nq]);
-        }
-        self.closure_a = a;
-    }
-
-    /// G: element 0's y_0 = (V_0, c_0 = 0, c_1 = z_1) = G r from the root unknowns r
-    /// (8 x ROOT; the base columns are zero for a fixed base).
-    fn root_map(&self) -> Mat8x7 {
-        let mut g = Mat8x7::zeros();
-        for j in 0..6 {
-            g.fixed_view_mut::<6, 1>(0, j)
-                .copy_from(&self.base_twists.column(j));
-        }
-        g[(7, 6)] = 1.0;
-        g
-    }
-
-    /// P_{n-1}^T w into `col` (every unknown's entry written): the gradient of the
-    /// linear function w . y_{n-1} = pv . V_{n-1} + pc c_{n-1} (c_n = 0 is no unknown),
-    /// by the adjoint sweep of [`Self::solve_chain`], O(n).
-    fn last_element_adjoint(&self, pv: &Vec6, pc: f64, col: &mut [f64]) {
-        let n = self.segments;
-        let base = if self.floating { 6 } else { 0 };
-        let mut pc = pc;
-        for k in (1..n).rev() {
-            let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
-            let (c, psi) = (base + k - 1, base + n - 1 + k - 1);
-            col[psi] = xp.dot(pv);
-            pc += xc.dot(pv);
-            col[c] = pc;
-        }
-        if self.floating {
-            let wrench = self.base_twists.transpose() * pv;
-            col[..6].copy_from_slice(wrench.as_slice());
-        }
-    }
-
     /// Factorize H + diag(shift) restricted to the unknowns with `free[i]` (the others
     /// are held at a zero step). False where it is not positive definite.
     ///
@@ -478,80 +416,6 @@ impl ChainModel {
         let ok = self.factor_closure(&mask);
         self.closure_mask = mask;
         ok
-    }
-
-    /// The loop closure's part of [`Self::factor`] after the chain's sweep: Woodbury's
-    /// capacitance on the free unknowns `free` and its inertia.
-    fn factor_closure(&mut self, free: &[bool]) -> bool {
-        self.capacitance = None;
-        if self.closure.is_none() {
-            return true;
-        }
-        if !self.diagonal_ready {
-            self.cached_diagonal();
-        }
-        let nq = self.dimension();
-        self.closure_u.clear();
-        self.closure_u.resize(2 * ROOT * nq, 0.0);
-        for j in 0..ROOT {
-            let (u, a) = (
-                &mut self.closure_u[j * nq..(j + 1) * nq],
-                &self.closure_a[j * nq..(j + 1) * nq],
-            );
-            for ((u, a), &f) in u.iter_mut().zip(a).zip(free) {
-                if f {
-                    *u = *a;
-                }
-            }
-            if let Some(r) = self.root_index(j).filter(|&r| free[r]) {
-                self.closure_u[(ROOT + j) * nq + r] = 1.0;
-            }
-        }
-        let mut y = std::mem::take(&mut self.closure_y);
-        y.clear();
-        y.resize(2 * ROOT * nq, 0.0);
-        for j in 0..2 * ROOT {
-            let column = &self.closure_u[j * nq..(j + 1) * nq];
-            let mut rhs = std::mem::take(&mut self.scratch_rhs);
-            rhs.clear();
-            rhs.extend_from_slice(column);
-            let ok = self.solve_chain(&rhs, &mut y[j * nq..(j + 1) * nq]);
-            self.scratch_rhs = rhs;
-            if !ok {
-                self.closure_y = y;
-                return false;
-            }
-        }
-        let mut k = Mat14::zeros();
-        for i in 0..ROOT {
-            k[(i, ROOT + i)] = 1.0;
-            k[(ROOT + i, i)] = 1.0;
-        }
-        for i in 0..2 * ROOT {
-            let ui = &self.closure_u[i * nq..(i + 1) * nq];
-            for j in 0..2 * ROOT {
-                let yj = &y[j * nq..(j + 1) * nq];
-                k[(i, j)] += ui.iter().zip(yj).map(|(a, b)| a * b).sum::<f64>();
-            }
-        }
-        self.closure_y = y;
-        let k = (k + k.transpose()) * 0.5;
-        let eigen = nalgebra::SymmetricEigen::new(k);
-        let scale = eigen.eigenvalues.amax();
-        // an eigenvalue is told from zero down to the eigensolver's backward error,
-        // a few eps |K|: a fixed 1e-13 |K| called eigenvalues of -1.9e-9 (|K| 2e4, 500x
-        // that error) zero on the Moebius chain's links, rejected a positive definite H
-        // and escalated the damping where the dense Cholesky did not (24 of 40 steps
-        // unconverged against none, 2026-12-02)
-        let tiny = 32.0 * f64::EPSILON * scale.max(1.0);
-        let positive = eigen.eigenvalues.iter().filter(|&&l| l > tiny).count();
-        let negative = eigen.eigenvalues.iter().filter(|&&l| l < -tiny).count();
-        if positive != ROOT || negative != ROOT || !scale.is_finite() {
-            self.failure = product::Failure::Closure;
-            return false;
-        }
-        self.capacitance = Some(eigen);
-        true
     }
 
     /// The chain's own factorization (no loop closure): see [`Self::factor`].
@@ -742,39 +606,6 @@ impl ChainModel {
         } else {
             self.solve_with_pairs(rhs, out)
         }
-    }
-
-    /// The chain's solve with its loop closure (no contact pairs). With a loop
-    /// closure, Woodbury: x = x0 - Y K^{-1} U^T x0, x0 = H0^{-1} rhs.
-    pub(super) fn solve_chain_only(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
-        if self.closure_k.is_some() {
-            return self.solve_open_closure(rhs, out);
-        }
-        if !self.solve_chain(rhs, out) {
-            return false;
-        }
-        let Some(eigen) = self.capacitance.as_ref() else {
-            return self.closure.is_none();
-        };
-        let nq = self.dimension();
-        let mut t = Vec14::zeros();
-        for (i, ti) in t.iter_mut().enumerate() {
-            let ui = &self.closure_u[i * nq..(i + 1) * nq];
-            *ti = ui.iter().zip(out.iter()).map(|(a, b)| a * b).sum();
-        }
-        // K^{-1} t = Q Λ^{-1} Q^T t
-        let mut s = eigen.eigenvectors.transpose() * t;
-        for (si, l) in s.iter_mut().zip(eigen.eigenvalues.iter()) {
-            *si /= l;
-        }
-        let s = eigen.eigenvectors * s;
-        for (j, sj) in s.iter().enumerate() {
-            let yj = &self.closure_y[j * nq..(j + 1) * nq];
-            for (o, y) in out.iter_mut().zip(yj) {
-                *o -= y * sj;
-            }
-        }
-        out.iter().all(|v| v.is_finite())
     }
 
     /// The chain's solve (H0, no loop closure) with the last factorization.
