@@ -4,8 +4,8 @@
 //! unknowns) is split as H = H_rho + U S U^T with H_rho the chain carrying only rho of
 //! the closure's two diagonal blocks (rho (a^T a + b^T b)):
 //!
-//! - rho = 0: H_open + mu (a - b)^T (a - b), a positive rank-9 update, K = I / mu + J
-//!   H_open^{-1} J^T >= I / mu (Cholesky);
+//! - rho = 0: H_open + mu (a - b)^T (a - b), a positive rank-9 update, K = I / mu +
+//!   (a - b) H_open^{-1} (a - b)^T >= I / mu (Cholesky);
 //! - 0 < rho < mu: U = [a^T, b^T], S = [[(mu - rho) I, -mu I], [-mu I, (mu - rho) I]]
 //!   (eigenvalues -rho and 2 mu - rho), K = S^{-1} + U^T H_rho^{-1} U; by Haynsworth's
 //!   inertia additivity H is positive definite (H_rho being so) exactly when K has 9
@@ -18,13 +18,19 @@
 //! method took such steps for Newton steps and crawled. A Moebius link's open chain is
 //! not positive definite (the closure holds it), hence the smallest rho that makes the
 //! chain so, tried in decades; the 14-column form stays as the last resort.
+//!
+//! Cost: both forms write U = V D with V = [P_{n-1}^T, E] (the 7 unit loads on element
+//! n-1's (V_{n-1}, c_{n-1}) and the 7 root unknowns), so a factorization is the sweep, 14
+//! chain solves for Z = H_rho^{-1} V and small dense products with the 14 x 14 V^T Z;
+//! a solve is one chain solve and 14 updates of length n.
 
-use nalgebra::{Cholesky, SMatrix, SVector};
+use nalgebra::{Cholesky, SMatrix};
 
 use super::{product, ChainModel, Mat14, Mat8x7, Vec14, Vec6, ROOT};
 
 type Mat9 = SMatrix<f64, 9, 9>;
 type Mat18 = SMatrix<f64, 18, 18>;
+type Mat14x18 = SMatrix<f64, 14, 18>;
 
 /// rho / mu tried in turn.
 const RHO: [f64; 4] = [0.0, 1e-3, 1e-2, 1e-1];
@@ -64,44 +70,70 @@ impl ChainModel {
         false
     }
 
-    /// The rows of U (9 for rho = 0, else 18) on the free unknowns, Y = H_rho^{-1} U and
-    /// K^{-1} after a successful sweep of H_rho; false where K is not as it must be.
+    /// After a successful sweep of H_rho: Z = H_rho^{-1} V and K^{-1}; false where K is
+    /// not as it must be.
+    ///
+    /// U = V D with V = [P_{n-1}^T, E] (14 columns: the unit loads on element n-1's
+    /// (V_{n-1}, c_{n-1}) and the root unknowns, zero on held unknowns) and D (14 x 9 or
+    /// 14 x 18) the closure's rows in those terms, so K needs only the 14 x 14
+    /// compliance V^T Z, whose element-n-1 rows are the forward sweep's end states:
+    /// 14 chain solves and no product over the unknowns.
     fn closure_capacitance(
         &mut self,
         rows: &crate::ribbon::objective::ClosureRows,
         mu: f64,
         rho: f64,
     ) -> bool {
-        let count = if rho == 0.0 { 9 } else { 18 };
-        self.closure_rows_on_free(rows, count);
         let nq = self.dimension();
-        let mut y = std::mem::take(&mut self.closure_jy);
-        y.clear();
-        y.resize(count * nq, 0.0);
+        let mut z = std::mem::take(&mut self.closure_z);
+        z.clear();
+        z.resize(14 * nq, 0.0);
         let mut rhs = std::mem::take(&mut self.scratch_rhs);
+        let mut compliance = Mat14::zeros();
         let mut ok = true;
-        for i in 0..count {
+        for j in 0..14 {
             rhs.clear();
-            rhs.extend_from_slice(&self.closure_j[i * nq..(i + 1) * nq]);
-            if !self.solve_chain(&rhs, &mut y[i * nq..(i + 1) * nq]) {
-                ok = false;
-                break;
+            rhs.resize(nq, 0.0);
+            if j < 7 {
+                let pv = Vec6::from_fn(|r, _| if r == j { 1.0 } else { 0.0 });
+                self.last_element_adjoint(&pv, if j == 6 { 1.0 } else { 0.0 }, &mut rhs);
+            } else if let Some(r) = self.root_index(j - 7) {
+                rhs[r] = 1.0;
+            }
+            for (v, &f) in rhs.iter_mut().zip(&self.free) {
+                if !f {
+                    *v = 0.0;
+                }
+            }
+            let column = &mut z[j * nq..(j + 1) * nq];
+            let (solved, end) = self.solve_chain_to_end(&rhs, column);
+            ok &= solved;
+            for i in 0..7 {
+                compliance[(i, j)] = end[i];
+                compliance[(7 + i, j)] = self.root_index(i).map_or(0.0, |r| column[r]);
             }
         }
         self.scratch_rhs = rhs;
-        let mut uy = Mat18::zeros();
-        for i in 0..count {
-            let ui = &self.closure_j[i * nq..(i + 1) * nq];
-            for j in 0..count {
-                let yj = &y[j * nq..(j + 1) * nq];
-                uy[(i, j)] = ui.iter().zip(yj).map(|(a, b)| a * b).sum::<f64>();
-            }
-        }
-        self.closure_jy = y;
+        self.closure_z = z;
         if !ok {
             return false;
         }
-        let uy = (uy + uy.transpose()) * 0.5;
+        let compliance = (compliance + compliance.transpose()) * 0.5;
+        let first_g = rows.first * self.root_map();
+        let count = if rho == 0.0 { 9 } else { 18 };
+        let mut d = Mat14x18::zeros();
+        for i in 0..9 {
+            for r in 0..7 {
+                d[(r, i)] = rows.last[(i, r)];
+                if count == 9 {
+                    d[(7 + r, i)] = -first_g[(i, r)];
+                } else {
+                    d[(7 + r, 9 + i)] = first_g[(i, r)];
+                }
+            }
+        }
+        let uy = d.transpose() * compliance * d;
+        self.closure_d = d;
         self.closure_k = if count == 9 {
             let k: Mat9 = Mat9::identity() / mu + uy.fixed_view::<9, 9>(0, 0);
             Cholesky::new(k).map(|c| {
@@ -110,61 +142,32 @@ impl ChainModel {
                 inverse
             })
         } else {
-            split_inverse(mu, rho, &uy)
+            split_inverse(mu, rho, &((uy + uy.transpose()) * 0.5))
         };
         self.closure_k.is_some()
     }
 
-    /// U's rows on the unknowns, zero on those the last sweep held: for `count` 9, row i
-    /// is a_i - b_i; for 18, the a_i then the b_i (a_i = P_{n-1}^T (row i of J_last),
-    /// b_i = E G^T (row i of J_first)).
-    fn closure_rows_on_free(&mut self, rows: &crate::ribbon::objective::ClosureRows, count: usize) {
-        let nq = self.dimension();
-        let first_g = rows.first * self.root_map();
-        let mut j = std::mem::take(&mut self.closure_j);
-        j.clear();
-        j.resize(count * nq, 0.0);
-        for i in 0..9 {
-            let w = rows.last.row(i);
-            let pv = Vec6::from_fn(|r, _| w[r]);
-            self.last_element_adjoint(&pv, w[6], &mut j[i * nq..(i + 1) * nq]);
-            let (b_row, sign) = if count == 9 { (i, -1.0) } else { (9 + i, 1.0) };
-            for c in 0..ROOT {
-                if let Some(r) = self.root_index(c) {
-                    j[b_row * nq + r] += sign * first_g[(i, c)];
-                }
-            }
-        }
-        for row in j.chunks_mut(nq) {
-            for (v, &f) in row.iter_mut().zip(&self.free) {
-                if !f {
-                    *v = 0.0;
-                }
-            }
-        }
-        self.closure_j = j;
-    }
-
-    /// x = x0 - Y K^{-1} U^T x0, x0 = H_rho^{-1} rhs.
+    /// x = x0 - Z D K^{-1} D^T V^T x0, x0 = H_rho^{-1} rhs (V^T x0: the forward
+    /// sweep's end state and x0 on the root unknowns).
     pub(super) fn solve_open_closure(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
-        if !self.solve_chain(rhs, out) {
+        let (solved, end) = self.solve_chain_to_end(rhs, out);
+        if !solved {
             return false;
         }
         let Some(k_inverse) = self.closure_k.as_ref() else {
             return false;
         };
-        let nq = self.dimension();
-        let count = self.closure_j.len() / nq.max(1);
-        let mut t = SVector::<f64, 18>::zeros();
-        for (i, ti) in t.iter_mut().enumerate().take(count) {
-            let ui = &self.closure_j[i * nq..(i + 1) * nq];
-            *ti = ui.iter().zip(out.iter()).map(|(a, b)| a * b).sum::<f64>();
+        let mut t = Vec14::zeros();
+        for i in 0..7 {
+            t[i] = end[i];
+            t[7 + i] = self.root_index(i).map_or(0.0, |r| out[r]);
         }
-        let s = k_inverse * t;
-        for (i, si) in s.iter().enumerate().take(count) {
-            let yi = &self.closure_jy[i * nq..(i + 1) * nq];
-            for (o, y) in out.iter_mut().zip(yi) {
-                *o -= y * si;
+        let w = self.closure_d * (k_inverse * (self.closure_d.transpose() * t));
+        let nq = self.dimension();
+        for (j, wj) in w.iter().enumerate() {
+            let zj = &self.closure_z[j * nq..(j + 1) * nq];
+            for (o, z) in out.iter_mut().zip(zj) {
+                *o -= z * wj;
             }
         }
         out.iter().all(|v| v.is_finite())

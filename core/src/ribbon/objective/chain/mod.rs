@@ -73,13 +73,13 @@ pub struct ChainModel {
     closure_u: Vec<f64>,
     closure_y: Vec<f64>,
     capacitance: Option<nalgebra::SymmetricEigen<f64, nalgebra::Const<14>>>,
-    /// The same closure as an update of a softer chain (`closure`): its rows, U's rows
-    /// on the unknowns (9 or 18 of the model's dimension), Y = H_rho^{-1} U and K^{-1}
-    /// (zero-padded to 18 x 18); `closure_k` is set when the last factorization took
-    /// this form.
+    /// The same closure as an update of a softer chain (`closure`): its rows,
+    /// Z = H_rho^{-1} V (14 columns of the model's dimension), D (U = V D, 9 or 18
+    /// columns, zero-padded) and K^{-1} (zero-padded to 18 x 18); `closure_k` is set
+    /// when the last factorization took this form.
     closure_rows: Option<super::ClosureRows>,
-    closure_j: Vec<f64>,
-    closure_jy: Vec<f64>,
+    closure_z: Vec<f64>,
+    closure_d: SMatrix<f64, 14, 18>,
     closure_k: Option<SMatrix<f64, 18, 18>>,
     scratch_rhs: Vec<f64>,
     // --- factors ---
@@ -610,6 +610,12 @@ impl ChainModel {
 
     /// The chain's solve (H0, no loop closure) with the last factorization.
     fn solve_chain(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
+        self.solve_chain_to_end(rhs, out).0
+    }
+
+    /// [`Self::solve_chain`] and the forward sweep's end state (V_{n-1}, c_{n-1}) =
+    /// P_{n-1} out.
+    fn solve_chain_to_end(&mut self, rhs: &[f64], out: &mut [f64]) -> (bool, Vec7) {
         let n = self.segments;
         self.feedforward.clear();
         self.feedforward.resize(n, nalgebra::Vector2::zeros());
@@ -642,7 +648,7 @@ impl ChainModel {
                 r[i] = if self.free[i] { rhs[i] - force[i] } else { 0.0 };
             }
             let Some(root) = self.root.as_ref() else {
-                return false;
+                return (false, x);
             };
             let u = root.solve(&r);
             out[..6].copy_from_slice(u.as_slice());
@@ -660,7 +666,7 @@ impl ChainModel {
             out[self.c_index(k)] = u[0];
             out[self.psi_index(k)] = u[1];
         }
-        out.iter().all(|v| v.is_finite())
+        (out.iter().all(|v| v.is_finite()), x)
     }
 }
 
