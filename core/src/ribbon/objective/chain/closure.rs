@@ -24,9 +24,9 @@
 //! chain solves for Z = H_rho^{-1} V and small dense products with the 14 x 14 V^T Z;
 //! a solve is one chain solve and 14 updates of length n.
 
-use nalgebra::{Cholesky, SMatrix};
+use nalgebra::{Cholesky, SMatrix, Vector2};
 
-use super::{product, ChainModel, Mat14, Mat8x7, Vec14, Vec6, ROOT};
+use super::{product, ChainModel, Mat14, Mat8x7, Vec14, Vec6, Vec7, ROOT};
 
 type Mat9 = SMatrix<f64, 9, 9>;
 type Mat18 = SMatrix<f64, 18, 18>;
@@ -89,25 +89,27 @@ impl ChainModel {
         z.clear();
         z.resize(14 * nq, 0.0);
         let mut rhs = std::mem::take(&mut self.scratch_rhs);
-        let mut compliance = Mat14::zeros();
-        let mut ok = true;
+        rhs.clear();
+        rhs.resize(14 * nq, 0.0);
         for j in 0..14 {
-            rhs.clear();
-            rhs.resize(nq, 0.0);
+            let column = &mut rhs[j * nq..(j + 1) * nq];
             if j < 7 {
                 let pv = Vec6::from_fn(|r, _| if r == j { 1.0 } else { 0.0 });
-                self.last_element_adjoint(&pv, if j == 6 { 1.0 } else { 0.0 }, &mut rhs);
+                self.last_element_adjoint(&pv, if j == 6 { 1.0 } else { 0.0 }, column);
             } else if let Some(r) = self.root_index(j - 7) {
-                rhs[r] = 1.0;
+                column[r] = 1.0;
             }
-            for (v, &f) in rhs.iter_mut().zip(&self.free) {
+            for (v, &f) in column.iter_mut().zip(&self.free) {
                 if !f {
                     *v = 0.0;
                 }
             }
-            let column = &mut z[j * nq..(j + 1) * nq];
-            let (solved, end) = self.solve_chain_to_end(&rhs, column);
-            ok &= solved;
+        }
+        let mut ends = [Vec7::zeros(); 14];
+        let ok = self.solve_chain_columns(&rhs, &mut z, &mut ends);
+        let mut compliance = Mat14::zeros();
+        for (j, end) in ends.iter().enumerate() {
+            let column = &z[j * nq..(j + 1) * nq];
             for i in 0..7 {
                 compliance[(i, j)] = end[i];
                 compliance[(7 + i, j)] = self.root_index(i).map_or(0.0, |r| column[r]);
@@ -145,6 +147,77 @@ impl ChainModel {
             split_inverse(mu, rho, &((uy + uy.transpose()) * 0.5))
         };
         self.closure_k.is_some()
+    }
+
+    /// The chain's solve (`solve_chain_to_end`) of the 14 columns of `rhs` at once, the
+    /// same arithmetic column by column (so the same bits), each stage's factors read
+    /// once for all 14: the closure's factorization solves these every Newton
+    /// iteration. `ends`: each column's end state P_{n-1} out.
+    fn solve_chain_columns(&mut self, rhs: &[f64], out: &mut [f64], ends: &mut [Vec7; 14]) -> bool {
+        let n = self.segments;
+        let nq = self.dimension();
+        let mut feedforward = std::mem::take(&mut self.feedforward);
+        feedforward.clear();
+        feedforward.resize(14 * n, Vector2::zeros());
+        let mut p = [Vec7::zeros(); 14];
+        for k in (1..n).rev() {
+            let (ic, ip) = (self.c_index(k), self.psi_index(k));
+            let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
+            let (free_c, free_p) = (self.free[ic], self.free[ip]);
+            let (inverse, gain) = (self.pivot_inverse[k], self.gain[k].transpose());
+            for (j, pj) in p.iter_mut().enumerate() {
+                let pv = Vec6::from_fn(|i, _| pj[i]);
+                let along_c = xc.dot(&pv) + pj[6];
+                let r = &rhs[j * nq..];
+                let mut qu = Vector2::new(along_c - r[ic], xp.dot(&pv) - r[ip]);
+                if !free_c {
+                    qu[0] = 0.0;
+                }
+                if !free_p {
+                    qu[1] = 0.0;
+                }
+                let mut qx = *pj;
+                qx[6] = along_c;
+                feedforward[j * n + k] = -(inverse * qu);
+                *pj = qx + gain * qu;
+            }
+        }
+        let mut ok = true;
+        for (j, (pj, x)) in p.iter().zip(ends.iter_mut()).enumerate() {
+            *x = Vec7::zeros();
+            if self.floating {
+                let r = &rhs[j * nq..];
+                let pv = Vec6::from_fn(|i, _| pj[i]);
+                let force = self.base_twists.transpose() * pv;
+                let v = Vec6::from_fn(|i, _| if self.free[i] { r[i] - force[i] } else { 0.0 });
+                let Some(root) = self.root.as_ref() else {
+                    self.feedforward = feedforward;
+                    return false;
+                };
+                let u = root.solve(&v);
+                out[j * nq..j * nq + 6].copy_from_slice(u.as_slice());
+                let twist = self.base_twists * u;
+                x.fixed_rows_mut::<6>(0).copy_from(&twist);
+            }
+        }
+        for k in 1..n {
+            let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
+            let (ic, ip) = (self.c_index(k), self.psi_index(k));
+            let gain = self.gain[k];
+            for (j, x) in ends.iter_mut().enumerate() {
+                let u = gain * *x + feedforward[j * n + k];
+                let c = x[6] + u[0];
+                for i in 0..6 {
+                    x[i] += xc[i] * c + xp[i] * u[1];
+                }
+                x[6] = c;
+                out[j * nq + ic] = u[0];
+                out[j * nq + ip] = u[1];
+            }
+        }
+        self.feedforward = feedforward;
+        ok &= out.iter().all(|v| v.is_finite());
+        ok
     }
 
     /// x = x0 - Z D K^{-1} D^T V^T x0, x0 = H_rho^{-1} rhs (V^T x0: the forward
