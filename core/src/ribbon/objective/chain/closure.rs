@@ -4,12 +4,13 @@
 //! unknowns) is split as H = H_rho + U S U^T with H_rho the chain carrying only rho of
 //! the closure's two diagonal blocks (rho (a^T a + b^T b)):
 //!
-//! - rho = 0: H_open + mu (a - b)^T (a - b), a positive rank-9 update, K = I / mu +
-//!   (a - b) H_open^{-1} (a - b)^T >= I / mu (Cholesky);
-//! - 0 < rho < mu: U = [a^T, b^T], S = [[(mu - rho) I, -mu I], [-mu I, (mu - rho) I]]
-//!   (eigenvalues -rho and 2 mu - rho), K = S^{-1} + U^T H_rho^{-1} U; by Haynsworth's
-//!   inertia additivity H is positive definite (H_rho being so) exactly when K has 9
-//!   positive and 9 negative eigenvalues, as S^{-1} has.
+//! - rho = 0: H_open + mu J^T J with J = a - b, a positive rank-9 update, K_1 = I / mu +
+//!   J H_open^{-1} J^T >= I / mu (Cholesky);
+//! - 0 < rho < mu: with P = a + b (a^T a + b^T b = (J^T J + P^T P) / 2),
+//!   H = H_1 - (rho / 2) P^T P, H_1 = H_rho + (mu - rho / 2) J^T J: H_1 by K_1 as above,
+//!   then H by K_2 = (2 / rho) I - P H_1^{-1} P^T, positive definite exactly when H is
+//!   (Haynsworth's inertia additivity, H_1 being positive definite): two 9 x 9 Cholesky
+//!   factors ([`closure_correction`]).
 //!
 //! Why: the 14-column form (`factor_closure`, rho = mu in effect) keeps mu a^T a and mu
 //! b^T b in the chain, stiff (mu = 1e3 and up) where the two ends move together and H is
@@ -17,7 +18,7 @@
 //! |H x - b| was 10 to 100 times |b| on the chains' links (2026-12-07): the damped Newton
 //! method took such steps for Newton steps and crawled. A Moebius link's open chain is
 //! not positive definite (the closure holds it), hence the smallest rho that makes the
-//! chain so, tried in decades; the 14-column form stays as the last resort.
+//! chain so, tried in decades up to 1e-2 mu; the 14-column form stays as the last resort.
 //!
 //! Cost: both forms write U = V D with V = [P_{n-1}^T, E] (the 7 unit loads on element
 //! n-1's (V_{n-1}, c_{n-1}) and the 7 root unknowns), so a factorization is the sweep, 14
@@ -29,11 +30,13 @@ use nalgebra::{Cholesky, SMatrix, Vector2};
 use super::{product, ChainModel, Mat14, Mat8x7, Vec14, Vec6, Vec7, ROOT};
 
 type Mat9 = SMatrix<f64, 9, 9>;
-type Mat18 = SMatrix<f64, 18, 18>;
-type Mat14x18 = SMatrix<f64, 14, 18>;
+type Mat14x9 = SMatrix<f64, 14, 9>;
 
-/// rho / mu tried in turn.
-const RHO: [f64; 4] = [0.0, 1e-3, 1e-2, 1e-1];
+/// rho / mu tried in turn. Not 1e-1: there K_2 = (2 / rho) I - P H_1^{-1} P^T loses
+/// digits to cancellation (H_rho is stiff along P by rho), and mobius_band's closure
+/// violation rose from 2e-8 to 9e-7 m with more Newton iterations (1 504 against the
+/// dense solver's 1 006 over 1 s; 1 024 without it), 2026-12-07.
+const RHO: [f64; 3] = [0.0, 1e-3, 1e-2];
 
 impl ChainModel {
     /// Factorize H + diag(shift) on `free` with the closure split as above, the first
@@ -121,31 +124,7 @@ impl ChainModel {
             return false;
         }
         let compliance = (compliance + compliance.transpose()) * 0.5;
-        let first_g = rows.first * self.root_map();
-        let count = if rho == 0.0 { 9 } else { 18 };
-        let mut d = Mat14x18::zeros();
-        for i in 0..9 {
-            for r in 0..7 {
-                d[(r, i)] = rows.last[(i, r)];
-                if count == 9 {
-                    d[(7 + r, i)] = -first_g[(i, r)];
-                } else {
-                    d[(7 + r, 9 + i)] = first_g[(i, r)];
-                }
-            }
-        }
-        let uy = d.transpose() * compliance * d;
-        self.closure_d = d;
-        self.closure_k = if count == 9 {
-            let k: Mat9 = Mat9::identity() / mu + uy.fixed_view::<9, 9>(0, 0);
-            Cholesky::new(k).map(|c| {
-                let mut inverse = Mat18::zeros();
-                inverse.fixed_view_mut::<9, 9>(0, 0).copy_from(&c.inverse());
-                inverse
-            })
-        } else {
-            split_inverse(mu, rho, &((uy + uy.transpose()) * 0.5))
-        };
+        self.closure_k = closure_correction(rows, &self.root_map(), &compliance, mu, rho);
         self.closure_k.is_some()
     }
 
@@ -235,7 +214,7 @@ impl ChainModel {
             t[i] = end[i];
             t[7 + i] = self.root_index(i).map_or(0.0, |r| out[r]);
         }
-        let w = self.closure_d * (k_inverse * (self.closure_d.transpose() * t));
+        let w = k_inverse * t;
         let nq = self.dimension();
         for (j, wj) in w.iter().enumerate() {
             let zj = &self.closure_z[j * nq..(j + 1) * nq];
@@ -247,32 +226,47 @@ impl ChainModel {
     }
 }
 
-/// K^{-1} for 0 < rho < mu: K = S^{-1} + U^T Y with S = [[alpha I, beta I], [beta I,
-/// alpha I]] (alpha = mu - rho, beta = -mu), so S^{-1} = [[alpha I, -beta I], [-beta I,
-/// alpha I]] / (alpha^2 - beta^2); None unless K has 9 positive and 9 negative
-/// eigenvalues (told from zero down to the eigensolver's backward error).
-fn split_inverse(mu: f64, rho: f64, uy: &Mat18) -> Option<Mat18> {
-    let (alpha, beta) = (mu - rho, -mu);
-    let det = alpha * alpha - beta * beta;
-    let mut k = *uy;
+/// The correction A of H^{-1} = H_rho^{-1} - Z A V^T (so that a solve is
+/// x = x0 - Z A V^T x0), from the 14 x 14 compliance C = V^T Z; None where H is not
+/// positive definite (H_rho being so).
+///
+/// With J = a - b and P = a + b (the closure's rows; a^T a + b^T b = (J^T J + P^T P) / 2)
+/// H = H_1 - (rho / 2) P^T P, H_1 = H_rho + (mu - rho / 2) J^T J: first H_1 by K_1 =
+/// I / (mu - rho / 2) + J H_rho^{-1} J^T (positive definite: a Cholesky factor), then,
+/// for rho > 0, H by K_2 = (2 / rho) I - P H_1^{-1} P^T, positive definite exactly when
+/// H is (Woodbury's determinant identity with H_1 positive definite). In the
+/// 14-column terms J = D_J^T V^T and P = D_P^T V^T.
+fn closure_correction(
+    rows: &crate::ribbon::objective::ClosureRows,
+    root_map: &Mat8x7,
+    compliance: &Mat14,
+    mu: f64,
+    rho: f64,
+) -> Option<Mat14> {
+    let first_g = rows.first * root_map;
+    let (mut d_j, mut d_p) = (Mat14x9::zeros(), Mat14x9::zeros());
     for i in 0..9 {
-        k[(i, i)] += alpha / det;
-        k[(9 + i, 9 + i)] += alpha / det;
-        k[(i, 9 + i)] -= beta / det;
-        k[(9 + i, i)] -= beta / det;
+        for r in 0..7 {
+            d_j[(r, i)] = rows.last[(i, r)];
+            d_p[(r, i)] = rows.last[(i, r)];
+            d_j[(7 + r, i)] = -first_g[(i, r)];
+            d_p[(7 + r, i)] = first_g[(i, r)];
+        }
     }
-    let eigen = nalgebra::SymmetricEigen::new(k);
-    let scale = eigen.eigenvalues.amax();
-    let tiny = 32.0 * f64::EPSILON * scale.max(1.0);
-    let positive = eigen.eigenvalues.iter().filter(|&&l| l > tiny).count();
-    let negative = eigen.eigenvalues.iter().filter(|&&l| l < -tiny).count();
-    if positive != 9 || negative != 9 || !scale.is_finite() {
-        return None;
+    let gamma = mu - 0.5 * rho;
+    let k1 = Mat9::identity() / gamma + d_j.transpose() * compliance * d_j;
+    let k1_inverse = Cholesky::new((k1 + k1.transpose()) * 0.5)?.inverse();
+    // H_1^{-1} = H_rho^{-1} - Z A_1 V^T
+    let a1 = d_j * k1_inverse * d_j.transpose();
+    if rho == 0.0 {
+        return Some(a1);
     }
-    let inverse_values = eigen.eigenvalues.map(|l| 1.0 / l);
-    Some(
-        eigen.eigenvectors * Mat18::from_diagonal(&inverse_values) * eigen.eigenvectors.transpose(),
-    )
+    // H_1^{-1} P^T = Z E_P, E_P = (I - A_1 C) D_P
+    let e_p = (Mat14::identity() - a1 * compliance) * d_p;
+    let k2 = Mat9::identity() * (2.0 / rho) - d_p.transpose() * compliance * e_p;
+    let k2_inverse = Cholesky::new((k2 + k2.transpose()) * 0.5)?.inverse();
+    // H^{-1} = H_1^{-1} + H_1^{-1} P^T K_2^{-1} P H_1^{-1}, P H_1^{-1} = E_P^T V^T
+    Some(a1 - e_p * k2_inverse * e_p.transpose())
 }
 
 /// The 14-column form and the pieces both forms share.

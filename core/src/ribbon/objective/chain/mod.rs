@@ -74,13 +74,12 @@ pub struct ChainModel {
     closure_y: Vec<f64>,
     capacitance: Option<nalgebra::SymmetricEigen<f64, nalgebra::Const<14>>>,
     /// The same closure as an update of a softer chain (`closure`): its rows,
-    /// Z = H_rho^{-1} V (14 columns of the model's dimension), D (U = V D, 9 or 18
-    /// columns, zero-padded) and K^{-1} (zero-padded to 18 x 18); `closure_k` is set
-    /// when the last factorization took this form.
+    /// Z = H_rho^{-1} V (14 columns of the model's dimension) and the correction A of
+    /// H^{-1} = H_rho^{-1} - Z A V^T; `closure_k` is set when the last factorization
+    /// took this form.
     closure_rows: Option<super::ClosureRows>,
     closure_z: Vec<f64>,
-    closure_d: SMatrix<f64, 14, 18>,
-    closure_k: Option<SMatrix<f64, 18, 18>>,
+    closure_k: Option<Mat14>,
     scratch_rhs: Vec<f64>,
     // --- factors ---
     gain: Vec<Mat2x7>,
