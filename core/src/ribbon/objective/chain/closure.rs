@@ -73,14 +73,14 @@ impl ChainModel {
         false
     }
 
-    /// After a successful sweep of H_rho: Z = H_rho^{-1} V and K^{-1}; false where K is
-    /// not as it must be.
+    /// After a successful sweep of H_rho: Z = H_rho^{-1} V and the correction A of
+    /// [`closure_correction`]; false where H is not positive definite.
     ///
-    /// U = V D with V = [P_{n-1}^T, E] (14 columns: the unit loads on element n-1's
-    /// (V_{n-1}, c_{n-1}) and the root unknowns, zero on held unknowns) and D (14 x 9 or
-    /// 14 x 18) the closure's rows in those terms, so K needs only the 14 x 14
-    /// compliance V^T Z, whose element-n-1 rows are the forward sweep's end states:
-    /// 14 chain solves and no product over the unknowns.
+    /// V = [P_{n-1}^T, E] (14 columns: the unit loads on element n-1's (V_{n-1},
+    /// c_{n-1}) and the root unknowns, zero on held unknowns); the closure's rows are
+    /// combinations of them, so the capacitances need only the 14 x 14 compliance
+    /// V^T Z, whose element-n-1 rows are the forward sweep's end states: 14 chain
+    /// solves and no product over the unknowns.
     fn closure_capacitance(
         &mut self,
         rows: &crate::ribbon::objective::ClosureRows,
@@ -199,14 +199,14 @@ impl ChainModel {
         ok
     }
 
-    /// x = x0 - Z D K^{-1} D^T V^T x0, x0 = H_rho^{-1} rhs (V^T x0: the forward
+    /// x = x0 - Z A V^T x0, x0 = H_rho^{-1} rhs (V^T x0: the forward
     /// sweep's end state and x0 on the root unknowns).
     pub(super) fn solve_open_closure(&mut self, rhs: &[f64], out: &mut [f64]) -> bool {
         let (solved, end) = self.solve_chain_to_end(rhs, out);
         if !solved {
             return false;
         }
-        let Some(k_inverse) = self.closure_k.as_ref() else {
+        let Some(correction) = self.closure_k.as_ref() else {
             return false;
         };
         let mut t = Vec14::zeros();
@@ -214,7 +214,7 @@ impl ChainModel {
             t[i] = end[i];
             t[7 + i] = self.root_index(i).map_or(0.0, |r| out[r]);
         }
-        let w = k_inverse * t;
+        let w = correction * t;
         let nq = self.dimension();
         for (j, wj) in w.iter().enumerate() {
             let zj = &self.closure_z[j * nq..(j + 1) * nq];
