@@ -25,7 +25,7 @@
 //! chain solves for Z = H_rho^{-1} V and small dense products with the 14 x 14 V^T Z;
 //! a solve is one chain solve and 14 updates of length n.
 
-use nalgebra::{Cholesky, SMatrix, Vector2};
+use nalgebra::{Cholesky, SMatrix};
 
 use super::{product, ChainModel, Mat14, Mat8x7, Vec14, Vec6, Vec7, ROOT};
 
@@ -126,77 +126,6 @@ impl ChainModel {
         let compliance = (compliance + compliance.transpose()) * 0.5;
         self.closure_k = closure_correction(rows, &self.root_map(), &compliance, mu, rho);
         self.closure_k.is_some()
-    }
-
-    /// The chain's solve (`solve_chain_to_end`) of the 14 columns of `rhs` at once, the
-    /// same arithmetic column by column (so the same bits), each stage's factors read
-    /// once for all 14: the closure's factorization solves these every Newton
-    /// iteration. `ends`: each column's end state P_{n-1} out.
-    fn solve_chain_columns(&mut self, rhs: &[f64], out: &mut [f64], ends: &mut [Vec7; 14]) -> bool {
-        let n = self.segments;
-        let nq = self.dimension();
-        let mut feedforward = std::mem::take(&mut self.feedforward);
-        feedforward.clear();
-        feedforward.resize(14 * n, Vector2::zeros());
-        let mut p = [Vec7::zeros(); 14];
-        for k in (1..n).rev() {
-            let (ic, ip) = (self.c_index(k), self.psi_index(k));
-            let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
-            let (free_c, free_p) = (self.free[ic], self.free[ip]);
-            let (inverse, gain) = (self.pivot_inverse[k], self.gain[k].transpose());
-            for (j, pj) in p.iter_mut().enumerate() {
-                let pv = Vec6::from_fn(|i, _| pj[i]);
-                let along_c = xc.dot(&pv) + pj[6];
-                let r = &rhs[j * nq..];
-                let mut qu = Vector2::new(along_c - r[ic], xp.dot(&pv) - r[ip]);
-                if !free_c {
-                    qu[0] = 0.0;
-                }
-                if !free_p {
-                    qu[1] = 0.0;
-                }
-                let mut qx = *pj;
-                qx[6] = along_c;
-                feedforward[j * n + k] = -(inverse * qu);
-                *pj = qx + gain * qu;
-            }
-        }
-        let mut ok = true;
-        for (j, (pj, x)) in p.iter().zip(ends.iter_mut()).enumerate() {
-            *x = Vec7::zeros();
-            if self.floating {
-                let r = &rhs[j * nq..];
-                let pv = Vec6::from_fn(|i, _| pj[i]);
-                let force = self.base_twists.transpose() * pv;
-                let v = Vec6::from_fn(|i, _| if self.free[i] { r[i] - force[i] } else { 0.0 });
-                let Some(root) = self.root.as_ref() else {
-                    self.feedforward = feedforward;
-                    return false;
-                };
-                let u = root.solve(&v);
-                out[j * nq..j * nq + 6].copy_from_slice(u.as_slice());
-                let twist = self.base_twists * u;
-                x.fixed_rows_mut::<6>(0).copy_from(&twist);
-            }
-        }
-        for k in 1..n {
-            let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
-            let (ic, ip) = (self.c_index(k), self.psi_index(k));
-            let gain = self.gain[k];
-            for (j, x) in ends.iter_mut().enumerate() {
-                let u = gain * *x + feedforward[j * n + k];
-                let c = x[6] + u[0];
-                for i in 0..6 {
-                    x[i] += xc[i] * c + xp[i] * u[1];
-                }
-                x[6] = c;
-                out[j * nq + ic] = u[0];
-                out[j * nq + ip] = u[1];
-            }
-        }
-        self.feedforward = feedforward;
-        ok &= out.iter().all(|v| v.is_finite());
-        ok
     }
 
     /// x = x0 - Z A V^T x0, x0 = H_rho^{-1} rhs (V^T x0: the forward

@@ -20,7 +20,7 @@
 //! crease, a 6x6 one at a floating base): a block LDL^T of the same matrix, so it
 //! succeeds exactly when the matrix is positive definite, like the dense Cholesky.
 
-use nalgebra::{Cholesky, Matrix2, SMatrix, SVector};
+use nalgebra::{Cholesky, Matrix2, SMatrix, SVector, Vector2};
 
 mod closure;
 mod pairs;
@@ -615,57 +615,86 @@ impl ChainModel {
     /// [`Self::solve_chain`] and the forward sweep's end state (V_{n-1}, c_{n-1}) =
     /// P_{n-1} out.
     fn solve_chain_to_end(&mut self, rhs: &[f64], out: &mut [f64]) -> (bool, Vec7) {
+        let mut end = [Vec7::zeros(); 1];
+        let ok = self.solve_chain_columns(rhs, out, &mut end);
+        (ok, end[0])
+    }
+
+    /// The chain's solve of the B columns of `rhs` (each of the model's dimension; held
+    /// entries ignored) into `out` (held entries 0) at once: each stage's factors are
+    /// read once for all B (the loop closure's factorization solves 14 every Newton
+    /// iteration), the arithmetic column by column that of a single solve. `ends`: each
+    /// column's end state (V_{n-1}, c_{n-1}) = P_{n-1} out.
+    pub(super) fn solve_chain_columns<const B: usize>(
+        &mut self,
+        rhs: &[f64],
+        out: &mut [f64],
+        ends: &mut [Vec7; B],
+    ) -> bool {
         let n = self.segments;
-        self.feedforward.clear();
-        self.feedforward.resize(n, nalgebra::Vector2::zeros());
-        // backward: the value's linear term p after crease k
-        let mut p = Vec7::zeros();
+        let nq = self.dimension();
+        let mut feedforward = std::mem::take(&mut self.feedforward);
+        feedforward.clear();
+        feedforward.resize(B * n, Vector2::zeros());
+        let mut p = [Vec7::zeros(); B];
         for k in (1..n).rev() {
             let (ic, ip) = (self.c_index(k), self.psi_index(k));
             let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
-            let pv = Vec6::from_fn(|i, _| p[i]);
-            let along_c = xc.dot(&pv) + p[6];
-            // q_x = M_x^T p, q_u = M_u^T p - rhs_u
-            let mut qu = nalgebra::Vector2::new(along_c - rhs[ic], xp.dot(&pv) - rhs[ip]);
-            if !self.free[ic] {
-                qu[0] = 0.0;
+            let (free_c, free_p) = (self.free[ic], self.free[ip]);
+            let (inverse, gain) = (self.pivot_inverse[k], self.gain[k].transpose());
+            for (j, pj) in p.iter_mut().enumerate() {
+                let pv = Vec6::from_fn(|i, _| pj[i]);
+                let along_c = xc.dot(&pv) + pj[6];
+                let r = &rhs[j * nq..];
+                let mut qu = Vector2::new(along_c - r[ic], xp.dot(&pv) - r[ip]);
+                if !free_c {
+                    qu[0] = 0.0;
+                }
+                if !free_p {
+                    qu[1] = 0.0;
+                }
+                let mut qx = *pj;
+                qx[6] = along_c;
+                feedforward[j * n + k] = -(inverse * qu);
+                *pj = qx + gain * qu;
             }
-            if !self.free[ip] {
-                qu[1] = 0.0;
-            }
-            let mut qx = p;
-            qx[6] = along_c;
-            self.feedforward[k] = -(self.pivot_inverse[k] * qu);
-            p = qx + self.gain[k].transpose() * qu;
         }
-        let mut x = Vec7::zeros();
-        if self.floating {
-            let mut r = Vec6::zeros();
-            let pv = Vec6::from_fn(|i, _| p[i]);
-            let force = self.base_twists.transpose() * pv;
-            for i in 0..6 {
-                r[i] = if self.free[i] { rhs[i] - force[i] } else { 0.0 };
+        let mut ok = true;
+        for (j, (pj, x)) in p.iter().zip(ends.iter_mut()).enumerate() {
+            *x = Vec7::zeros();
+            if self.floating {
+                let r = &rhs[j * nq..];
+                let pv = Vec6::from_fn(|i, _| pj[i]);
+                let force = self.base_twists.transpose() * pv;
+                let v = Vec6::from_fn(|i, _| if self.free[i] { r[i] - force[i] } else { 0.0 });
+                let Some(root) = self.root.as_ref() else {
+                    self.feedforward = feedforward;
+                    return false;
+                };
+                let u = root.solve(&v);
+                out[j * nq..j * nq + 6].copy_from_slice(u.as_slice());
+                let twist = self.base_twists * u;
+                x.fixed_rows_mut::<6>(0).copy_from(&twist);
             }
-            let Some(root) = self.root.as_ref() else {
-                return (false, x);
-            };
-            let u = root.solve(&r);
-            out[..6].copy_from_slice(u.as_slice());
-            let v = self.base_twists * u;
-            x.fixed_rows_mut::<6>(0).copy_from(&v);
         }
         for k in 1..n {
-            let u = self.gain[k] * x + self.feedforward[k];
             let (xc, xp) = (&self.xi_c[k], &self.xi_psi[k]);
-            let c = x[6] + u[0];
-            for i in 0..6 {
-                x[i] += xc[i] * c + xp[i] * u[1];
+            let (ic, ip) = (self.c_index(k), self.psi_index(k));
+            let gain = self.gain[k];
+            for (j, x) in ends.iter_mut().enumerate() {
+                let u = gain * *x + feedforward[j * n + k];
+                let c = x[6] + u[0];
+                for i in 0..6 {
+                    x[i] += xc[i] * c + xp[i] * u[1];
+                }
+                x[6] = c;
+                out[j * nq + ic] = u[0];
+                out[j * nq + ip] = u[1];
             }
-            x[6] = c;
-            out[self.c_index(k)] = u[0];
-            out[self.psi_index(k)] = u[1];
         }
-        (out.iter().all(|v| v.is_finite()), x)
+        self.feedforward = feedforward;
+        ok &= out.iter().all(|v| v.is_finite());
+        ok
     }
 }
 
