@@ -4,17 +4,21 @@
 //!
 //! Each body minimizes its own objective plus the barrier against the others held where
 //! they are. Bodies far enough apart that neither can reach the other within the step
-//! form a class and step in parallel, each against the others' meshes as the class
-//! found them; the classes run one after the other, each against the meshes the earlier
-//! ones left. Whether two bodies of a class did stay apart is checked after the fact on
-//! what they really swept (every mesh their line searches passed through, with the
-//! paths' curvature margins): a body that came within the barrier's reach of an earlier
-//! one of its class is put back and stepped again after the class, against everyone's
-//! new meshes — exactly the sequential step. The classes, the checks and the repeats
-//! depend only on the state, never on the threads: bit-identical at any thread count.
+//! form a class; the classes, one after the other, give the bodies a sequence. A body
+//! waits only for the earlier bodies of the sequence it may reach, and steps against
+//! their new meshes and every other body's mesh at the start of the step: a thread that
+//! finishes one body takes the next whose waits are over, with no barrier between
+//! classes. Whether two bodies that did not wait for each other stayed apart is checked
+//! after the fact on what they really swept (every mesh their line searches passed
+//! through, with the paths' curvature margins): a body that came within the barrier's
+//! reach of an earlier one it did not wait for is put back and stepped again after all
+//! the others, against everyone's new meshes, and so is every body that waited for
+//! one put back. The sequence, the waits, the checks and the repeats depend only on the
+//! state, never on the threads: bit-identical at any thread count.
 
-use rayon::prelude::*;
+use std::sync::OnceLock;
 
+use super::dependency_order::run_in_dependency_order;
 use super::object::{ObjectSim, ObjectStepReport, PhaseClock, StepContext};
 use super::world::{BarrierState, ContactStepReport};
 use super::HandleSpec;
@@ -25,6 +29,14 @@ use crate::geometry::{Point3, Pose, Vector3};
 const CHUNK: usize = 4;
 
 type Aabb = (Vector3, Vector3);
+
+/// One body's first step: its report, its backup (if it may step again) and its mesh
+/// after the step (if a later body waits for it).
+struct Stepped {
+    report: ObjectStepReport,
+    backup: Option<Box<dyn ObjectSim>>,
+    end: Vec<Point3>,
+}
 
 /// What every body's step of one world step shares.
 struct Shared<'a> {
@@ -77,14 +89,21 @@ impl BarrierState {
             .map(|o| outline(&o.mesh().vertices))
             .collect();
         let motion: Vec<f64> = objects.iter().map(|o| last_motion(o.as_ref())).collect();
+        let classes = self.classes(&order, &outlines, &motion);
+        let side_by_side = classes.iter().filter(|c| c.len() > 1).map(Vec::len).sum();
+        let sequence: Vec<usize> = classes.concat();
+        // a body waits for the earlier ones it may reach (earlier classes only: a class's
+        // members cannot reach each other)
+        let deps: Vec<Vec<usize>> = (0..count)
+            .map(|b| {
+                (0..b)
+                    .filter(|&a| self.may_meet(sequence[a], sequence[b], &outlines, &motion))
+                    .collect()
+            })
+            .collect();
         let mut reports = vec![ObjectStepReport::default(); count];
-        let (mut side_by_side, mut stepped_again) = (0, 0);
-        for class in self.classes(&order, &outlines, &motion) {
-            if class.len() > 1 {
-                side_by_side += class.len();
-            }
-            stepped_again += self.step_class(objects, &class, &shared, &mut reports);
-        }
+        let stepped_again =
+            self.step_in_dependency_order(objects, (&sequence, &deps), &shared, &mut reports);
         let summary = ContactStepReport {
             report: summary(&reports),
             side_by_side,
@@ -93,28 +112,32 @@ impl BarrierState {
         (reports, summary)
     }
 
+    /// Whether bodies `i` and `j` may reach each other in this step (the guess): both
+    /// contact bodies, their outlines within twice both last motions plus the barrier's
+    /// reach.
+    fn may_meet(&self, i: usize, j: usize, outlines: &[Vec<Aabb>], motion: &[f64]) -> bool {
+        let reach = self.settings.thickness + self.settings.activation_distance;
+        self.cells[i].is_some()
+            && self.cells[j].is_some()
+            && near(
+                &outlines[i],
+                &outlines[j],
+                2.0 * self.guess_scale * (motion[i] + motion[j]) + reach,
+            )
+    }
+
     /// Classes of bodies that cannot meet in this step, greedily in `order`: a body
-    /// joins the first class none of whose members it may reach (outlines within twice
-    /// both bodies' last motions plus the barrier's reach). Only a guess (the check
-    /// after the class is what holds), from the bodies' own state: a state restored
+    /// joins the first class none of whose members it may reach. Only a guess (the check
+    /// after the steps is what holds), from the bodies' own state: a state restored
     /// gives the same classes.
     fn classes(&self, order: &[usize], outlines: &[Vec<Aabb>], motion: &[f64]) -> Vec<Vec<usize>> {
-        let reach = self.settings.thickness + self.settings.activation_distance;
-        let may_meet = |i: usize, j: usize| {
-            self.cells[i].is_some()
-                && self.cells[j].is_some()
-                && near(
-                    &outlines[i],
-                    &outlines[j],
-                    2.0 * self.guess_scale * (motion[i] + motion[j]) + reach,
-                )
-        };
         let mut classes: Vec<Vec<usize>> = Vec::new();
         for &i in order {
-            match classes
-                .iter_mut()
-                .find(|class| class.iter().all(|&j| !may_meet(i, j)))
-            {
+            match classes.iter_mut().find(|class| {
+                class
+                    .iter()
+                    .all(|&j| !self.may_meet(i, j, outlines, motion))
+            }) {
                 Some(class) => class.push(i),
                 None => classes.push(vec![i]),
             }
@@ -122,63 +145,130 @@ impl BarrierState {
         classes
     }
 
-    /// One class: its members side by side against the meshes as the class found them,
-    /// then, one after the other, those that came within reach of an earlier member;
-    /// returns how many were stepped again.
-    fn step_class(
+    /// Every body in the classes' sequence, each as soon as the earlier bodies it may
+    /// reach (`deps`, positions in `sequence`) have stepped, against their new meshes
+    /// and every other body's mesh at the start of the step; then, one after the other,
+    /// those that came within reach of an earlier body they did not wait for, and those
+    /// that waited for a body stepped again. Returns how many were stepped again.
+    fn step_in_dependency_order(
         &self,
         objects: &mut [Box<dyn ObjectSim>],
-        class: &[usize],
+        (sequence, deps): (&[usize], &[Vec<usize>]),
         shared: &Shared,
         reports: &mut [ObjectStepReport],
     ) -> usize {
-        if class.len() == 1 {
-            reports[class[0]] = self.step_in_turn(objects, class[0], shared);
-            return 0;
-        }
+        let count = sequence.len();
         let before: Vec<Vec<Point3>> = objects.iter().map(|o| o.mesh().vertices.clone()).collect();
-        let mut members: Vec<(usize, &mut Box<dyn ObjectSim>)> = objects
-            .iter_mut()
-            .enumerate()
-            .filter(|(i, _)| class.contains(i))
-            .collect();
-        // each member's backup (for a step again) taken on its own thread: a ribbon's
-        // clone is half the time a class spends outside the steps (double chain)
-        let stepped: Vec<(usize, ObjectStepReport, Box<dyn ObjectSim>)> = members
-            .par_iter_mut()
-            .map(|(i, object)| {
-                let backup = object.clone_box();
-                let others = self.others(*i, |j| &before[j]);
-                let report = self.step_body(object.as_mut(), *i, &others, shared);
-                (*i, report, backup)
-            })
-            .collect();
-        let mut kept = Vec::with_capacity(stepped.len());
-        for (i, report, backup) in stepped {
-            reports[i] = report;
-            kept.push((i, backup));
+        let mut position = vec![0; count];
+        for (b, &i) in sequence.iter().enumerate() {
+            position[i] = b;
         }
-        let reach = self.settings.thickness + self.settings.activation_distance;
-        let swept: Vec<Vec<Aabb>> = class
+        // a body can be stepped again only if an earlier one did not wait for it...
+        let unwaited = |b: usize| {
+            self.cells[sequence[b]].is_some()
+                && (0..b).any(|a| self.cells[sequence[a]].is_some() && !deps[b].contains(&a))
+        };
+        let mut backed_up = vec![false; count];
+        for b in 0..count {
+            backed_up[b] =
+                self.check_classes && (unwaited(b) || deps[b].iter().any(|&a| backed_up[a]));
+        }
+        // ... or it waited for one that can
+        let waited_for: Vec<bool> = (0..count)
+            .map(|b| deps.iter().any(|d| d.contains(&b)))
+            .collect();
+        let mut slots: Vec<Option<&mut Box<dyn ObjectSim>>> =
+            objects.iter_mut().map(Some).collect();
+        let items: Vec<&mut Box<dyn ObjectSim>> = sequence
             .iter()
-            .map(|&i| swept_outline(objects[i].as_ref(), &before[i]))
+            .map(|&i| slots[i].take().expect("each body once"))
             .collect();
-        let mut again = Vec::new();
-        for b in 1..class.len() {
-            if self.check_classes
-                && self.cells[class[b]].is_some()
-                && (0..b)
-                    .any(|a| self.cells[class[a]].is_some() && near(&swept[a], &swept[b], reach))
-            {
-                again.push(class[b]);
-            }
+        let stepped =
+            run_in_dependency_order(items, deps, |b, object, done: &[OnceLock<Stepped>]| {
+                let i = sequence[b];
+                // each body's backup (for a step again) taken on its own thread: a ribbon's
+                // clone is half the time spent outside the steps (double chain)
+                let backup = backed_up[b].then(|| object.clone_box());
+                let mesh = |j: usize| -> &[Point3] {
+                    let p = position[j];
+                    match deps[b].contains(&p) {
+                        true => &done[p].get().expect("a dependency stepped first").end,
+                        false => &before[j],
+                    }
+                };
+                let others = self.others(i, mesh);
+                let report = self.step_body(object.as_mut(), i, &others, shared);
+                let end = match waited_for[b] {
+                    true => object.mesh().vertices.clone(),
+                    false => Vec::new(),
+                };
+                Stepped {
+                    report,
+                    backup,
+                    end,
+                }
+            });
+        drop(slots);
+        let mut backups: Vec<Option<Box<dyn ObjectSim>>> = Vec::with_capacity(count);
+        for (b, s) in stepped.into_iter().enumerate() {
+            reports[sequence[b]] = s.report;
+            backups.push(s.backup);
         }
-        for &i in &again {
-            let k = kept.iter().position(|(j, _)| *j == i).expect("a member");
-            objects[i] = kept.swap_remove(k).1;
+        let again = self.stepped_apart_check(objects, (sequence, deps), &before);
+        // every body that steps again back at its start first: a later one's first
+        // step may have moved into where an earlier one started (it waited for it)
+        let redo: Vec<(usize, usize)> = sequence
+            .iter()
+            .copied()
+            .enumerate()
+            .filter(|(b, _)| again[*b])
+            .collect();
+        for &(b, i) in &redo {
+            objects[i] = backups[b]
+                .take()
+                .expect("a body that may step again is backed up");
+        }
+        for &(_, i) in &redo {
             reports[i] = self.step_in_turn(objects, i, shared);
         }
-        again.len()
+        again.iter().filter(|&&a| a).count()
+    }
+
+    /// Per position in `sequence`: whether that body steps again, because what it swept
+    /// came within the barrier's reach of what an earlier body it did not wait for swept
+    /// (paths' boxes with their curvature margins), or it waited for one that steps
+    /// again.
+    fn stepped_apart_check(
+        &self,
+        objects: &[Box<dyn ObjectSim>],
+        (sequence, deps): (&[usize], &[Vec<usize>]),
+        before: &[Vec<Point3>],
+    ) -> Vec<bool> {
+        let count = sequence.len();
+        let mut again = vec![false; count];
+        if !self.check_classes {
+            return again;
+        }
+        let reach = self.settings.thickness + self.settings.activation_distance;
+        let swept: Vec<Option<Vec<Aabb>>> = sequence
+            .iter()
+            .map(|&i| {
+                self.cells[i]
+                    .as_ref()
+                    .map(|_| swept_outline(objects[i].as_ref(), &before[i]))
+            })
+            .collect();
+        for b in 0..count {
+            let Some(mine) = &swept[b] else { continue };
+            let met = (0..b).any(|a| {
+                !deps[b].contains(&a)
+                    && swept[a]
+                        .as_ref()
+                        .is_some_and(|theirs| near(theirs, mine, reach))
+            });
+            again[b] = met || deps[b].iter().any(|&a| again[a]);
+        }
+        again
     }
 
     /// Body `index` stepped against the other bodies as they are now.

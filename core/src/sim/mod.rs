@@ -7,6 +7,7 @@
 //! import it, not the world).
 
 mod barrier_steps;
+mod dependency_order;
 mod grasp;
 pub mod handle;
 pub mod object;
