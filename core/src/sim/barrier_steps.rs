@@ -54,7 +54,7 @@ impl BarrierState {
     /// contact body with the colliders and the other bodies' current meshes; the
     /// bodies' contact outcomes summed into a [`ContactStepReport`].
     pub(super) fn step(
-        &self,
+        &mut self,
         objects: &mut [Box<dyn ObjectSim>],
         step_index: u64,
         (targets0, targets1): (&[Pose], &[Pose]),
@@ -101,9 +101,27 @@ impl BarrierState {
                     .collect()
             })
             .collect();
+        // a free thread takes the ready body that the longest chain of waiting work
+        // still hangs on, each body's work guessed from its last step's iterations
+        let mut priority = vec![0.0; count];
+        for b in (0..count).rev() {
+            let cost = self
+                .last_iterations
+                .get(sequence[b])
+                .map_or(1, |&n| n.max(1));
+            let after = (b + 1..count)
+                .filter(|&k| deps[k].contains(&b))
+                .fold(0.0, |m: f64, k| m.max(priority[k]));
+            priority[b] = cost as f64 + after;
+        }
         let mut reports = vec![ObjectStepReport::default(); count];
-        let stepped_again =
-            self.step_in_dependency_order(objects, (&sequence, &deps), &shared, &mut reports);
+        let stepped_again = self.step_in_dependency_order(
+            objects,
+            (&sequence, &deps, &priority),
+            &shared,
+            &mut reports,
+        );
+        self.last_iterations = reports.iter().map(|r| r.iterations as usize).collect();
         let summary = ContactStepReport {
             report: summary(&reports),
             side_by_side,
@@ -153,7 +171,7 @@ impl BarrierState {
     fn step_in_dependency_order(
         &self,
         objects: &mut [Box<dyn ObjectSim>],
-        (sequence, deps): (&[usize], &[Vec<usize>]),
+        (sequence, deps, priority): (&[usize], &[Vec<usize>], &[f64]),
         shared: &Shared,
         reports: &mut [ObjectStepReport],
     ) -> usize {
@@ -183,8 +201,10 @@ impl BarrierState {
             .iter()
             .map(|&i| slots[i].take().expect("each body once"))
             .collect();
-        let stepped =
-            run_in_dependency_order(items, deps, |b, object, done: &[OnceLock<Stepped>]| {
+        let stepped = run_in_dependency_order(
+            items,
+            (deps, priority),
+            |b, object, done: &[OnceLock<Stepped>]| {
                 let i = sequence[b];
                 // each body's backup (for a step again) taken on its own thread: a ribbon's
                 // clone is half the time spent outside the steps (double chain)
@@ -207,7 +227,8 @@ impl BarrierState {
                     backup,
                     end,
                 }
-            });
+            },
+        );
         drop(slots);
         let mut backups: Vec<Option<Box<dyn ObjectSim>>> = Vec::with_capacity(count);
         for (b, s) in stepped.into_iter().enumerate() {

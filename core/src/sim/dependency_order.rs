@@ -21,10 +21,12 @@ struct Board<T> {
 
 /// Runs `task(i, items[i], outputs)` for every i, each after every task of `deps[i]`
 /// (indices below i: the items come in a topological order) has finished;
-/// `outputs[j]` holds task j's output from then on. Returns the outputs in index order.
+/// `outputs[j]` holds task j's output from then on. Of the tasks ready to start, a free
+/// thread takes the one of highest `priority` (then the lowest index): only the order
+/// of the work, never its results. Returns the outputs in index order.
 pub(super) fn run_in_dependency_order<T, O, F>(
     items: Vec<T>,
-    deps: &[Vec<usize>],
+    (deps, priority): (&[Vec<usize>], &[f64]),
     task: F,
 ) -> Vec<O>
 where
@@ -59,7 +61,7 @@ where
         });
         let ready = Condvar::new();
         let worker = || {
-            while let Some((i, item)) = next_task(&board, &ready) {
+            while let Some((i, item)) = next_task(&board, &ready, priority) {
                 let guard = AbandonOnPanic(&board, &ready);
                 let out = task(i, item, &outputs);
                 let _ = outputs[i].set(out);
@@ -84,15 +86,20 @@ where
         .collect()
 }
 
-/// The first task (in index order) whose dependencies are done, waiting while none is
+/// The task of highest priority whose dependencies are done, waiting while none is
 /// but some still run; None once every task has started (or one panicked).
-fn next_task<T>(board: &Mutex<Board<T>>, ready: &Condvar) -> Option<(usize, T)> {
+fn next_task<T>(board: &Mutex<Board<T>>, ready: &Condvar, priority: &[f64]) -> Option<(usize, T)> {
     let mut b = board.lock().unwrap_or_else(|e| e.into_inner());
     loop {
         if b.abandoned || b.started == b.items.len() {
             return None;
         }
-        let found = (0..b.items.len()).find(|&i| b.missing[i] == 0 && b.items[i].is_some());
+        let found = (0..b.items.len())
+            .filter(|&i| b.missing[i] == 0 && b.items[i].is_some())
+            .fold(None, |best: Option<usize>, i| match best {
+                Some(j) if priority[j] >= priority[i] => Some(j),
+                _ => Some(i),
+            });
         if let Some(i) = found {
             b.started += 1;
             let item = b.items[i].take().expect("not started");
@@ -127,7 +134,8 @@ mod tests {
                 .build()
                 .expect("a pool");
             pool.install(|| {
-                run_in_dependency_order((0..6u64).collect(), &deps, |i, item, outs| {
+                let priority = [0.0, 1.0, 0.0, 0.0, 9.0, 0.0];
+                run_in_dependency_order((0..6u64).collect(), (&deps, &priority), |i, item, outs| {
                     // every dependency's output exists; spin a little to mix the order
                     let mut x = item * 1000;
                     for &j in &deps[i] {
@@ -155,17 +163,21 @@ mod tests {
         let (tx, rx) = std::sync::mpsc::channel::<()>();
         let rx = Mutex::new(rx);
         let seen = pool.install(|| {
-            run_in_dependency_order(vec![0u8, 1], &deps, |i, _, outs: &[OnceLock<bool>]| {
-                if i == 0 {
-                    // task 0 waits until task 1 has looked (they run side by side)
-                    rx.lock().unwrap().recv().expect("task 1 looked");
-                    true
-                } else {
-                    let seen = outs[0].get().is_some();
-                    tx.send(()).expect("task 0 waits");
-                    seen
-                }
-            })
+            run_in_dependency_order(
+                vec![0u8, 1],
+                (&deps, &[0.0; 2]),
+                |i, _, outs: &[OnceLock<bool>]| {
+                    if i == 0 {
+                        // task 0 waits until task 1 has looked (they run side by side)
+                        rx.lock().unwrap().recv().expect("task 1 looked");
+                        true
+                    } else {
+                        let seen = outs[0].get().is_some();
+                        tx.send(()).expect("task 0 waits");
+                        seen
+                    }
+                },
+            )
         });
         assert!(
             !seen[1],
@@ -183,10 +195,14 @@ mod tests {
             .expect("a pool");
         let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             pool.install(|| {
-                run_in_dependency_order(vec![0u8, 1, 2], &deps, |i, _, _: &[OnceLock<u8>]| {
-                    assert!(i != 0, "task 0 fails");
-                    1
-                })
+                run_in_dependency_order(
+                    vec![0u8, 1, 2],
+                    (&deps, &[0.0; 3]),
+                    |i, _, _: &[OnceLock<u8>]| {
+                        assert!(i != 0, "task 0 fails");
+                        1
+                    },
+                )
             })
         }));
         assert!(result.is_err());

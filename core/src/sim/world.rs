@@ -92,6 +92,9 @@ pub(super) struct BarrierState {
     /// designed); whether the check after a class runs (tests only change them).
     pub(super) guess_scale: f64,
     pub(super) check_classes: bool,
+    /// Per object: its Newton iterations in the last step (which body a free thread
+    /// takes first; never what a body computes).
+    pub(super) last_iterations: Vec<usize>,
 }
 
 impl World {
@@ -142,6 +145,7 @@ impl World {
             cells,
             guess_scale: 1.0,
             check_classes: true,
+            last_iterations: Vec::new(),
         });
         self
     }
@@ -453,7 +457,7 @@ impl World {
         resolved.extend_from_slice(&self.kinematic_next);
         let dt = self.dt;
         let handles = &self.handles;
-        if let Some(barrier) = &self.barrier {
+        if let Some(barrier) = &mut self.barrier {
             let (reports, contact) = barrier.step(
                 &mut self.objects,
                 self.steps,
