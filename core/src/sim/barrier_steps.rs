@@ -287,7 +287,7 @@ impl BarrierState {
                         .as_ref()
                         .is_some_and(|theirs| near(theirs, mine, reach))
             });
-            again[b] = met || deps[b].iter().any(|&a| again[a]);
+            again[b] = met || (self.repeat_dependents && deps[b].iter().any(|&a| again[a]));
         }
         again
     }

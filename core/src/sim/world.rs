@@ -92,6 +92,9 @@ pub(super) struct BarrierState {
     /// designed); whether the check after a class runs (tests only change them).
     pub(super) guess_scale: f64,
     pub(super) check_classes: bool,
+    /// Whether a body that waited for one stepped again steps again too (tests only
+    /// turn it off).
+    pub(super) repeat_dependents: bool,
     /// Per object: its Newton iterations in the last step (which body a free thread
     /// takes first; never what a body computes).
     pub(super) last_iterations: Vec<usize>,
@@ -145,9 +148,20 @@ impl World {
             cells,
             guess_scale: 1.0,
             check_classes: true,
+            repeat_dependents: true,
             last_iterations: Vec::new(),
         });
         self
+    }
+
+    /// Test only: whether a body that waited for one put back and stepped again is
+    /// stepped again too (docs/contact_barrier.md, "Several ribbons"; off: the negative
+    /// control of the repeat's rule).
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub fn set_repeat_dependents_hook(&mut self, on: bool) {
+        if let Some(b) = self.barrier.as_mut() {
+            b.repeat_dependents = on;
+        }
     }
 
     /// Test only: the side-by-side steps' guess of which bodies may meet with their
