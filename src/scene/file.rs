@@ -472,11 +472,18 @@ impl SceneFile {
         let kind = match ck.choice(
             "solver.kind",
             &s.kind,
-            &["gauss_newton", "lbfgsb", "chain", "trust_region"],
+            &[
+                "gauss_newton",
+                "lbfgsb",
+                "chain",
+                "trust_region",
+                "interior_point",
+            ],
         )? {
             "lbfgsb" => SolverKind::Lbfgsb,
             "chain" => SolverKind::Chain,
             "trust_region" => SolverKind::TrustRegion,
+            "interior_point" => SolverKind::InteriorPoint,
             _ => SolverKind::GaussNewton,
         };
         let tolerance = ck.positive("solver.tolerance", s.tolerance)?;
@@ -487,7 +494,10 @@ impl SceneFile {
             ));
         }
         let max_iterations = s.max_iterations.unwrap_or(match kind {
-            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => 200,
+            SolverKind::GaussNewton
+            | SolverKind::Chain
+            | SolverKind::TrustRegion
+            | SolverKind::InteriorPoint => 200,
             SolverKind::Lbfgsb => 5000,
         });
         if max_iterations == 0 {

@@ -24,7 +24,7 @@ use super::params::{SolverKind, SolverSettings};
 use super::reconstruct::Strip;
 use crate::geometry::Pose;
 use crate::optim::{
-    BoxProblem, Dense, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton, Slab, TrustRegion,
+    BoxProblem, Dense, InteriorPoint, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton, Slab, TrustRegion,
 };
 
 /// Relative objective decrease that ends an inner solve, (f_k - f_k+1)/max(|f|, 1):
@@ -76,6 +76,7 @@ pub struct StepSolver {
     newton: ProjectedNewton<Dense>,
     chain: ProjectedNewton<ChainMatrix>,
     trust: TrustRegion<ChainMatrix>,
+    interior: InteriorPoint<ChainMatrix>,
     /// L-BFGS-B workspace and the dimension it was built for.
     lbfgsb: Option<(usize, Lbfgsb)>,
     z: Vec<f64>,
@@ -108,6 +109,7 @@ impl Clone for StepSolver {
             newton: self.newton.fresh_with_history(),
             chain: self.chain.fresh_with_history(),
             trust: self.trust.fresh_with_history(),
+            interior: self.interior.fresh_with_history(),
             #[cfg(any(test, feature = "test-hooks"))]
             newton_matrix_error: self.newton_matrix_error,
             #[cfg(any(test, feature = "test-hooks"))]
@@ -518,7 +520,10 @@ impl StepSolver {
         // carries over from the last step, relaxed at its end (below).
         let adaptive = matches!(
             settings.kind,
-            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion
+            SolverKind::GaussNewton
+                | SolverKind::Chain
+                | SolverKind::TrustRegion
+                | SolverKind::InteriorPoint
         );
         if !adaptive {
             objective_terms.penalty = settings.penalty;
@@ -526,6 +531,7 @@ impl StepSolver {
         // The trust-region solver holds the end crease exactly (a slab), so it has no
         // augmented-Lagrangian term, and no multiplier, there.
         objective_terms.end_crease_exact = settings.kind == SolverKind::TrustRegion
+            || settings.kind == SolverKind::InteriorPoint
             || (settings.kind == SolverKind::Chain && settings.chain_variant.end_crease_exact);
         if objective_terms.end_crease_exact {
             objective_terms.end_crease_multipliers = [0.0, 0.0];
@@ -651,7 +657,10 @@ impl StepSolver {
         };
         problem.path.valid = false;
         let result = match settings.kind {
-            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => {
+            SolverKind::GaussNewton
+            | SolverKind::Chain
+            | SolverKind::TrustRegion
+            | SolverKind::InteriorPoint => {
                 // relative gradient tolerance against the first round's start (the
                 // solver measures it at its first evaluation)
                 let opts = NewtonOptions {
@@ -673,7 +682,16 @@ impl StepSolver {
                     range: objective.layout.c(1)..objective.layout.c(n - 1) + 1,
                     bound: objective.terms.crease_bound,
                 });
-                let r = if settings.kind == SolverKind::TrustRegion {
+                let r = if settings.kind == SolverKind::InteriorPoint {
+                    self.interior.minimize(
+                        &mut ZChain(&mut problem),
+                        &mut self.z,
+                        &self.lower,
+                        &self.upper,
+                        slab,
+                        &opts,
+                    )
+                } else if settings.kind == SolverKind::TrustRegion {
                     self.trust.minimize(
                         &mut ZChain(&mut problem),
                         &mut self.z,

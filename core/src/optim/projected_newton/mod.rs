@@ -98,6 +98,8 @@ pub struct Dense {
     scratch: Option<(usize, MemBuffer)>,
     /// Its last factorization as a trust-region model ([`super::ModelMatrix`]).
     pub(crate) model: super::trust_region::DenseModel,
+    /// Its last factorization for the interior-point method.
+    pub(crate) barrier: super::interior_point::DenseBarrier,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
