@@ -109,6 +109,7 @@ pub struct InteriorPoint<M: BarrierMatrix> {
     force_delta: bool,
     last_alpha: f64,
     first_mu_iterations: u32,
+    sides: Vec<i8>,
     /// Whether the duals come from a solve of this dimension (warm start).
     warm: bool,
     factorizations: u32,
@@ -171,6 +172,7 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
         self.counts = BarrierCounts::default();
         self.factorizations = 0;
         self.first_mu_iterations = 0;
+        self.sides.clear();
         let n = x.len();
         for v in [&mut self.g, &mut self.g_trial, &mut self.dzl, &mut self.dzu] {
             v.resize(n, 0.0);
@@ -226,6 +228,33 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
                 self.first_mu_iterations = state.iterations;
             }
             self.update_mu(x, lower, upper, mu_min, &mut state);
+            let mut flips = 0;
+            let mut on_bound = 0;
+            if env("IPM_TRACE", 0.0) >= 2.0 {
+                self.sides.resize(n, 0);
+                for i in 0..n {
+                    if lower[i].is_finite() && upper[i].is_finite() {
+                        let w = upper[i] - lower[i];
+                        let side = if x[i] - lower[i] < 0.01 * w {
+                            -1
+                        } else if upper[i] - x[i] < 0.01 * w {
+                            1
+                        } else {
+                            0
+                        };
+                        if side != 0 {
+                            on_bound += 1;
+                        }
+                        if side != self.sides[i] && side != 0 && self.sides[i] != 0 {
+                            flips += 1;
+                        }
+                        if side != 0 {
+                            self.sides[i] = side;
+                        }
+                    }
+                }
+                eprint!("flips {flips} near_bounds {on_bound} ");
+            }
             if env("IPM_TRACE", 0.0) >= 2.0 {
                 eprintln!(
                     "ipm it {} f {:.9e} phi {:.9e} pg {:.3e} (tol {:.1e}) mu {:.2e} delta {:.1e} cuts {} alpha {:.2e}",
