@@ -24,7 +24,8 @@ use super::params::{SolverKind, SolverSettings};
 use super::reconstruct::Strip;
 use crate::geometry::Pose;
 use crate::optim::{
-    BoxProblem, Dense, InteriorPoint, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton, Slab, TrustRegion,
+    BoxProblem, Dense, InteriorPoint, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton, Slab,
+    TrustRegion,
 };
 
 /// Relative objective decrease that ends an inner solve, (f_k - f_k+1)/max(|f|, 1):

@@ -35,8 +35,11 @@ use super::slab::Slab;
 pub trait BarrierMatrix: NewtonMatrix {
     /// Factorize H + diag(shift) + rho a a^T (a the indicator of `face.0`, rho =
     /// `face.1`) over all unknowns. False where not positive definite.
-    fn factor_shifted(&mut self, shift: &[f64], face: Option<(std::ops::Range<usize>, f64)>)
-        -> bool;
+    fn factor_shifted(
+        &mut self,
+        shift: &[f64],
+        face: Option<(std::ops::Range<usize>, f64)>,
+    ) -> bool;
     /// Solve with the last factorization (full length). False if not finite.
     fn solve_shifted(&mut self, rhs: &[f64], out: &mut [f64]) -> bool;
 }
@@ -59,13 +62,17 @@ const DELTA_GROW: f64 = 8.0;
 const DELTA_SHRINK: f64 = 1.0 / 3.0;
 const DELTA_MIN: f64 = 1e-20;
 const DELTA_MAX: f64 = 1e40;
-
-fn env(name: &str, default: f64) -> f64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
-}
+/// The smallest μ, a fraction of the projected-gradient tolerance (IPOPT's
+/// ε_tol / (κ_ε + 1) is 1/11 of it; lower, since the stop is the projected gradient,
+/// whose components at an active bound are the slacks μ / z).
+const MU_MIN: f64 = 1e-3;
+/// The start is pushed inside by this fraction of each bound's width (IPOPT's
+/// bound_frac κ_2 = 1e-2; 1e-3 and 1e-4 took 1.4x the iterations on the extreme
+/// torsion at n = 400, docs/ribbon_chain_solver.md 2026-12-07).
+const PUSH: f64 = 1e-2;
+/// A warm start's μ: this times the average complementarity of the kept duals at the
+/// pushed start (1: 1.2x the iterations at n = 400; 1e4: the same as 100).
+const MU_WARM: f64 = 100.0;
 
 /// Counts of one solve (for the measurements of docs/ribbon_chain_solver.md).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -78,6 +85,8 @@ pub struct BarrierCounts {
     pub cuts: u32,
     /// Final μ.
     pub mu: f64,
+    /// Iterations before the first decrease of μ (on the first barrier problem).
+    pub first_stage_iterations: u32,
 }
 
 /// Workspace of the interior-point method; buffers reused between calls.
@@ -95,8 +104,8 @@ pub struct InteriorPoint<M: BarrierMatrix> {
     v: [f64; 2],
     dv: [f64; 2],
     shift: Vec<f64>,
+    /// Σ without δ_w (restored after each trial factorization).
     base_shift: Vec<f64>,
-    diag: Vec<f64>,
     rhs: Vec<f64>,
     dx: Vec<f64>,
     trial: Vec<f64>,
@@ -107,9 +116,7 @@ pub struct InteriorPoint<M: BarrierMatrix> {
     delta_last: f64,
     /// A line search failed: the next factorization starts at δ_w = `delta_last`.
     force_delta: bool,
-    last_alpha: f64,
-    first_mu_iterations: u32,
-    sides: Vec<i8>,
+
     /// Whether the duals come from a solve of this dimension (warm start).
     warm: bool,
     factorizations: u32,
@@ -124,7 +131,9 @@ impl<M: BarrierMatrix> Clone for InteriorPoint<M> {
 
 impl<M: BarrierMatrix> std::fmt::Debug for InteriorPoint<M> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("InteriorPoint").field("mu", &self.mu).finish()
+        f.debug_struct("InteriorPoint")
+            .field("mu", &self.mu)
+            .finish()
     }
 }
 
@@ -171,13 +180,17 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
         self.slab = slab;
         self.counts = BarrierCounts::default();
         self.factorizations = 0;
-        self.first_mu_iterations = 0;
-        self.sides.clear();
+        self.counts.first_stage_iterations = 0;
         let n = x.len();
         for v in [&mut self.g, &mut self.g_trial, &mut self.dzl, &mut self.dzu] {
             v.resize(n, 0.0);
         }
-        for v in [&mut self.shift, &mut self.rhs, &mut self.dx, &mut self.trial] {
+        for v in [
+            &mut self.shift,
+            &mut self.rhs,
+            &mut self.dx,
+            &mut self.trial,
+        ] {
             v.resize(n, 0.0);
         }
         self.push_inside(x, lower, upper);
@@ -195,14 +208,11 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
             None => options.pgtol,
         };
         let initial_pg = state.pg;
-        let mu_min = env("IPM_MU_MIN", 1e-3) * pgtol;
+        let mu_min = MU_MIN * pgtol;
         self.start_duals(x, lower, upper, mu_min);
         state.phi = self.barrier(x, lower, upper, state.f);
         let mut converged = state.pg <= pgtol;
         let finite = state.f.is_finite();
-        if env("IPM_TRACE", 0.0) != 0.0 {
-            eprintln!("ipm start f {:.9e} pg {:.3e} mu {:.2e} warm {}", state.f, state.pg, self.mu, self.warm);
-        }
         while finite && !converged && state.iterations < options.max_iterations {
             state.iterations += 1;
             let phi_old = state.phi;
@@ -214,8 +224,8 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
             // The resampling operator's kinks stall the gradient (as for the projected
             // Newton method's FTOL test): a step that lowers φ_μ by less than ftol
             // relative ends this barrier problem, and the solve once μ is at its floor.
-            let stalled = phi_old - state.phi
-                <= options.ftol * phi_old.abs().max(state.phi.abs()).max(1.0);
+            let stalled =
+                phi_old - state.phi <= options.ftol * phi_old.abs().max(state.phi.abs()).max(1.0);
             if stalled && !converged {
                 if self.mu <= mu_min {
                     converged = true;
@@ -225,51 +235,12 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
                 }
             }
             if self.counts.mu_stages == 0 {
-                self.first_mu_iterations = state.iterations;
+                self.counts.first_stage_iterations = state.iterations;
             }
             self.update_mu(x, lower, upper, mu_min, &mut state);
-            let mut flips = 0;
-            let mut on_bound = 0;
-            if env("IPM_TRACE", 0.0) >= 2.0 {
-                self.sides.resize(n, 0);
-                for i in 0..n {
-                    if lower[i].is_finite() && upper[i].is_finite() {
-                        let w = upper[i] - lower[i];
-                        let side = if x[i] - lower[i] < 0.01 * w {
-                            -1
-                        } else if upper[i] - x[i] < 0.01 * w {
-                            1
-                        } else {
-                            0
-                        };
-                        if side != 0 {
-                            on_bound += 1;
-                        }
-                        if side != self.sides[i] && side != 0 && self.sides[i] != 0 {
-                            flips += 1;
-                        }
-                        if side != 0 {
-                            self.sides[i] = side;
-                        }
-                    }
-                }
-                eprint!("flips {flips} near_bounds {on_bound} ");
-            }
-            if env("IPM_TRACE", 0.0) >= 2.0 {
-                eprintln!(
-                    "ipm it {} f {:.9e} phi {:.9e} pg {:.3e} (tol {:.1e}) mu {:.2e} delta {:.1e} cuts {} alpha {:.2e}",
-                    state.iterations, state.f, state.phi, state.pg, pgtol, self.mu, self.delta_last, self.counts.cuts, self.last_alpha
-                );
-            }
         }
         self.counts.mu = self.mu;
         self.warm = true;
-        if env("IPM_TRACE", 0.0) != 0.0 {
-            eprintln!(
-                "ipm solve iterations {} converged {} mu_stages {} corrected {} cuts {} factorizations {} evaluations {} first_mu_iterations {}",
-                state.iterations, converged, self.counts.mu_stages, self.counts.corrected, self.counts.cuts, self.factorizations, state.evaluations, self.first_mu_iterations
-            );
-        }
         NewtonResult {
             f: state.f,
             iterations: state.iterations,
@@ -285,7 +256,7 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
     /// width away (or `push` max(1, |bound|) for a half-bounded unknown), the slab's
     /// sum likewise inside b.
     fn push_inside(&mut self, x: &mut [f64], lower: &[f64], upper: &[f64]) {
-        let push = env("IPM_PUSH", 1e-2);
+        let push = PUSH;
         let margin = |l: f64, u: f64| {
             if l.is_finite() && u.is_finite() {
                 push * (u - l)
@@ -329,12 +300,13 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
         })
     }
 
-    /// The duals at the start: the last solve's (same dimension), μ from their average
-    /// complementarity, each kept within the safeguard; else centered on μ = mu_min x
-    /// 1e3... (IPM_MU0 relative to the gradient scale).
+    /// The duals at the start: the last solve's (same dimension), μ = MU_WARM times
+    /// their average complementarity at the pushed start, each dual kept within the
+    /// safeguard; without them, centred (z = μ / s) on μ = the average of s |g| over
+    /// the bounded unknowns (the barrier's force μ / s then matches the gradient's).
     fn start_duals(&mut self, x: &[f64], lower: &[f64], upper: &[f64], mu_min: f64) {
         let n = x.len();
-        let warm = self.warm && self.zl.len() == n && env("IPM_COLD", 0.0) == 0.0;
+        let warm = self.warm && self.zl.len() == n;
         self.zl.resize(n, 0.0);
         self.zu.resize(n, 0.0);
         if !warm {
@@ -348,7 +320,7 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
                     count += 1;
                 }
             }
-            self.mu = (env("IPM_MU0", 1.0) * sum / count.max(1) as f64).max(mu_min);
+            self.mu = (sum / count.max(1) as f64).max(mu_min);
             for i in 0..n {
                 self.zl[i] = if lower[i].is_finite() {
                     self.mu / (x[i] - lower[i])
@@ -382,7 +354,7 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
             sum += self.v[0] * rp + self.v[1] * rm;
             count += 2;
         }
-        self.mu = (env("IPM_MU_WARM", 100.0) * sum / count.max(1) as f64).max(mu_min);
+        self.mu = (MU_WARM * sum / count.max(1) as f64).max(mu_min);
         self.safeguard_duals(x, lower, upper);
     }
 
@@ -467,11 +439,13 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
         let safe = problem.max_step_fraction(x, &self.dx, lower, upper);
         let mut alpha = alpha_p.min(safe);
         // directional derivative of φ_μ along dx: -rhs . dx
-        let slope: f64 = -self.rhs.iter().zip(&self.dx).map(|(r, d)| r * d).sum::<f64>();
+        let slope: f64 = -self
+            .rhs
+            .iter()
+            .zip(&self.dx)
+            .map(|(r, d)| r * d)
+            .sum::<f64>();
         if !(slope < 0.0) || !(alpha > 0.0) {
-            if env("IPM_TRACE", 0.0) != 0.0 {
-                eprintln!("ipm stop: slope {slope:e} alpha {alpha:e} (fb {alpha_p:e} safe {safe:e})");
-            }
             return false;
         }
         let n = x.len();
@@ -496,7 +470,6 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
                 }
                 state.f = f_new;
                 state.phi = phi_new;
-                self.last_alpha = alpha;
                 state.hessian_ready = false;
                 self.step_duals(alpha_d, x, lower, upper);
                 return true;

@@ -76,23 +76,12 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
             0.0
         };
         let mut corrected = false;
-        let relative = env("IPM_REL", 0.0) != 0.0;
-        if relative {
-            let mut d = std::mem::take(&mut self.diag);
-            d.resize(self.shift.len(), 0.0);
-            self.h.diagonal(&mut d);
-            let floor = 1e-14 * d.iter().fold(0.0f64, |a, b| a.max(b.abs())).max(1e-300);
-            for v in d.iter_mut() {
-                *v = v.abs().max(floor);
-            }
-            self.diag = d;
-        }
         loop {
             self.base_shift.clear();
             self.base_shift.extend_from_slice(&self.shift);
             if delta > 0.0 {
-                for (i, s) in self.shift.iter_mut().enumerate() {
-                    *s += if relative { delta * self.diag[i] } else { delta };
+                for s in self.shift.iter_mut() {
+                    *s += delta;
                 }
             }
             self.factorizations += 1;
@@ -156,7 +145,9 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
         if let (Some(slab), Some((rp, rm))) = (&self.slab, self.slab_slacks(x)) {
             let across: f64 = self.dx[slab.range.clone()].iter().sum();
             ap = ap.min(limit(rp, -across)).min(limit(rm, across));
-            ad = ad.min(limit(self.v[0], self.dv[0])).min(limit(self.v[1], self.dv[1]));
+            ad = ad
+                .min(limit(self.v[0], self.dv[0]))
+                .min(limit(self.v[1], self.dv[1]));
         }
         (ap, ad)
     }
@@ -177,7 +168,11 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
     /// The barrier problem's optimality error at x: stationarity of the Lagrangian
     /// (g - z_L + z_U + a (v_+ - v_-)) and complementarity (z s - μ), infinity norms.
     fn barrier_error(&self, x: &[f64], lower: &[f64], upper: &[f64], mu: f64) -> f64 {
-        let along = self.slab.as_ref().map(|_| self.v[0] - self.v[1]).unwrap_or(0.0);
+        let along = self
+            .slab
+            .as_ref()
+            .map(|_| self.v[0] - self.v[1])
+            .unwrap_or(0.0);
         let range = self.slab.as_ref().map(|s| s.range.clone()).unwrap_or(0..0);
         let mut err: f64 = 0.0;
         for i in 0..x.len() {
@@ -194,7 +189,9 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
             }
         }
         if let Some((rp, rm)) = self.slab_slacks(x) {
-            err = err.max((self.v[0] * rp - mu).abs()).max((self.v[1] * rm - mu).abs());
+            err = err
+                .max((self.v[0] * rp - mu).abs())
+                .max((self.v[1] * rm - mu).abs());
         }
         err
     }
@@ -216,13 +213,13 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
         state: &mut State,
     ) {
         let mut changed = false;
-        while self.mu > mu_min && self.barrier_error(x, lower, upper, self.mu) <= KAPPA_EPS * self.mu
+        while self.mu > mu_min
+            && self.barrier_error(x, lower, upper, self.mu) <= KAPPA_EPS * self.mu
         {
             self.next_mu(mu_min);
             changed = true;
         }
         if changed {
-            self.delta_last *= 1.0;
             state.phi = self.barrier(x, lower, upper, state.f);
         }
     }

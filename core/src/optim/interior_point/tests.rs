@@ -75,7 +75,10 @@ fn a_convex_quadratic_in_a_box_reaches_its_kkt_point() {
     let h = coupled([0.5, 1.0, 3.0, 10.0]);
     let b = DVector::from_row_slice(&[-2.0, 1.0, 0.5, -0.3]);
     let free_min = -h.clone().lu().solve(&b).unwrap();
-    assert!(free_min[0] > 0.1, "x_0 must want to leave the box: {free_min}");
+    assert!(
+        free_min[0] > 0.1,
+        "x_0 must want to leave the box: {free_min}"
+    );
     let expected = held_minimizer(&h, &b, 0.1);
     let multiplier = -(&h * &expected + &b)[0];
     assert!(multiplier > 0.1, "the bound binds: {multiplier}");
@@ -126,7 +129,11 @@ fn an_indefinite_quadratic_ends_on_the_bound_its_negative_curvature_points_to() 
         let mut x = start;
         let r = ipm.minimize(&mut indefinite(), &mut x, &lower, &upper, None, &options());
         assert!(r.converged, "{r:?}");
-        assert!(ipm.counts.corrected > 0, "no inertia correction: {:?}", ipm.counts);
+        assert!(
+            ipm.counts.corrected > 0,
+            "no inertia correction: {:?}",
+            ipm.counts
+        );
         let bound = x[0].signum();
         assert!((x[0] - bound).abs() <= 1e-12, "x_0 not at a bound: {x:?}");
         let expected = held_minimizer(&q.h, &q.b, bound);
@@ -203,8 +210,22 @@ fn a_warm_start_from_the_last_solution_takes_fewer_iterations() {
     let mut ipm = InteriorPoint::<Dense>::new();
     let mut x = [0.0; 4];
     let bounds = ([-10.0; 4], [10.0; 4]);
-    let cold = ipm.minimize(&mut problem, &mut x, &bounds.0, &bounds.1, Some(slab.clone()), &options());
-    let warm = ipm.minimize(&mut problem, &mut x, &bounds.0, &bounds.1, Some(slab), &options());
+    let cold = ipm.minimize(
+        &mut problem,
+        &mut x,
+        &bounds.0,
+        &bounds.1,
+        Some(slab.clone()),
+        &options(),
+    );
+    let warm = ipm.minimize(
+        &mut problem,
+        &mut x,
+        &bounds.0,
+        &bounds.1,
+        Some(slab),
+        &options(),
+    );
     assert!(cold.converged && warm.converged, "{cold:?} {warm:?}");
     assert!(warm.iterations < cold.iterations, "{warm:?} vs {cold:?}");
 }
