@@ -473,6 +473,23 @@ fn multiplier_update(
     }
 }
 
+/// Our Newton solvers' options for round `outer`: the gradient tolerance relative to
+/// the first round's start (`pg0`; the solver measures it at its first evaluation
+/// when unset), and chord steps on the last round's final factorization in later
+/// rounds (they differ from it only by the multiplier update).
+fn newton_options(settings: &SolverSettings, pg0: Option<f64>, outer: u32) -> NewtonOptions {
+    NewtonOptions {
+        max_iterations: settings.max_iterations,
+        pgtol: settings.tolerance * pg0.unwrap_or(0.0),
+        ftol: FTOL,
+        pgtol_relative_to_start: match pg0 {
+            Some(_) => None,
+            None => Some(settings.tolerance),
+        },
+        reuse_factorization: outer > 0,
+    }
+}
+
 /// The next step's starting mu after a step that did not raise it: relaxed toward the
 /// scene's (a large mu makes the inner problems stiffer), but not below |lambda| / (l/n)
 /// for the position rows, J/m^2. The shifted penalty mu/2 (C - lambda/mu)^2 pulls toward
@@ -662,20 +679,7 @@ impl StepSolver {
             | SolverKind::Chain
             | SolverKind::TrustRegion
             | SolverKind::InteriorPoint => {
-                // relative gradient tolerance against the first round's start (the
-                // solver measures it at its first evaluation)
-                let opts = NewtonOptions {
-                    max_iterations: settings.max_iterations,
-                    pgtol: settings.tolerance * pg0.unwrap_or(0.0),
-                    ftol: FTOL,
-                    pgtol_relative_to_start: match pg0 {
-                        Some(_) => None,
-                        None => Some(settings.tolerance),
-                    },
-                    // a later round differs from the last one only by the multiplier
-                    // update: start with chord steps on its final factorization
-                    reuse_factorization: outer > 0,
-                };
+                let opts = newton_options(settings, *pg0, outer);
                 problem.second_order = true;
                 let n = objective.layout.segments;
                 // |c_{n-1}| = |Σ_k z_k| <= Δc_max, held exactly
