@@ -181,6 +181,8 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
         options: &NewtonOptions,
     ) -> NewtonResult {
         self.slab = slab;
+        // (per solve: a clone made between solves continues bit for bit)
+        self.force_delta = false;
         self.counts = BarrierCounts::default();
         self.factorizations = 0;
         self.counts.first_stage_iterations = 0;
