@@ -1,6 +1,6 @@
 //! The dense Newton matrix as the interior-point method's (small problems, tests).
 
-use nalgebra::{Cholesky, DMatrix, DVector, Dyn};
+use nalgebra::{DMatrix, DVector};
 
 use super::BarrierMatrix;
 use crate::optim::Dense;
@@ -34,6 +34,3 @@ impl BarrierMatrix for Dense {
         out.iter().all(|v| v.is_finite())
     }
 }
-
-/// What [`Dense`] keeps of its last [`BarrierMatrix::factor_shifted`].
-pub(crate) type DenseBarrier = Option<Cholesky<f64, Dyn>>;

@@ -23,7 +23,6 @@
 //! of the last solve (same dimension) kept and μ set from their complementarity.
 
 mod dense;
-pub(crate) use dense::DenseBarrier;
 #[cfg(test)]
 mod tests;
 
