@@ -95,7 +95,8 @@ pub struct SceneFile {
 pub struct SolverFile {
     /// `chain` (ours, default: projected Newton with the Newton system solved along the
     /// chain in O(n)), `trust_region` (ours: a trust-region projected Newton method on
-    /// the same O(n) chain model, the end crease held exactly), `gauss_newton` (the
+    /// the same O(n) chain model, the end crease held exactly), `interior_point` (ours:
+    /// a primal-dual interior-point method on the same chain model), `gauss_newton` (the
     /// damped method on a dense matrix, O(n^3) per iteration: a baseline) or `lbfgsb`
     /// (the paper's).
     #[serde(default = "d_solver_kind")]

@@ -1,6 +1,7 @@
 //! Solvers shared by the simulators: a projected (Gauss-)Newton method for
 //! box-constrained problems with a damped Newton matrix, a trust-region projected
-//! Newton method (TRON / LANCELOT family) with one optional slab besides the box, and
+//! Newton method (TRON / LANCELOT family) with one optional slab besides the box, a
+//! primal-dual interior-point method (IPOPT family) for the same constraints, and
 //! L-BFGS-B (Byrd et al. 1995), the baseline the ribbon paper uses.
 
 pub mod interior_point;
