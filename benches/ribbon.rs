@@ -111,6 +111,7 @@ fn kind_name(kind: SolverKind) -> &'static str {
         SolverKind::GaussNewton => "gauss_newton",
         SolverKind::Lbfgsb => "lbfgsb",
         SolverKind::TrustRegion => "trust_region",
+        SolverKind::InteriorPoint => "interior_point",
     }
 }
 

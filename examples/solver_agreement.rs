@@ -22,6 +22,7 @@ fn kind(name: &str) -> Result<(SolverKind, ChainVariant), String> {
         "chain" => SolverKind::Chain,
         "gauss_newton" => SolverKind::GaussNewton,
         "trust_region" => SolverKind::TrustRegion,
+        "interior_point" => SolverKind::InteriorPoint,
         "lbfgsb" => SolverKind::Lbfgsb,
         other => return Err(format!("unknown solver kind {other}")),
     };

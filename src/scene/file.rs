@@ -95,7 +95,8 @@ pub struct SceneFile {
 pub struct SolverFile {
     /// `chain` (ours, default: projected Newton with the Newton system solved along the
     /// chain in O(n)), `trust_region` (ours: a trust-region projected Newton method on
-    /// the same O(n) chain model, the end crease held exactly), `gauss_newton` (the
+    /// the same O(n) chain model, the end crease held exactly), `interior_point` (ours:
+    /// a primal-dual interior-point method on the same chain model), `gauss_newton` (the
     /// damped method on a dense matrix, O(n^3) per iteration: a baseline) or `lbfgsb`
     /// (the paper's).
     #[serde(default = "d_solver_kind")]
@@ -472,11 +473,18 @@ impl SceneFile {
         let kind = match ck.choice(
             "solver.kind",
             &s.kind,
-            &["gauss_newton", "lbfgsb", "chain", "trust_region"],
+            &[
+                "gauss_newton",
+                "lbfgsb",
+                "chain",
+                "trust_region",
+                "interior_point",
+            ],
         )? {
             "lbfgsb" => SolverKind::Lbfgsb,
             "chain" => SolverKind::Chain,
             "trust_region" => SolverKind::TrustRegion,
+            "interior_point" => SolverKind::InteriorPoint,
             _ => SolverKind::GaussNewton,
         };
         let tolerance = ck.positive("solver.tolerance", s.tolerance)?;
@@ -487,7 +495,10 @@ impl SceneFile {
             ));
         }
         let max_iterations = s.max_iterations.unwrap_or(match kind {
-            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => 200,
+            SolverKind::GaussNewton
+            | SolverKind::Chain
+            | SolverKind::TrustRegion
+            | SolverKind::InteriorPoint => 200,
             SolverKind::Lbfgsb => 5000,
         });
         if max_iterations == 0 {

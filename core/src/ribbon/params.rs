@@ -37,6 +37,10 @@ pub enum SolverKind {
     /// of negative curvature where they meet it (`optim::trust_region`,
     /// docs/ribbon_chain_solver.md).
     TrustRegion,
+    /// Ours (issue 47): a primal-dual interior-point method on the same O(n) chain
+    /// model, the crease bounds and the end crease as barrier terms with their duals
+    /// (`optim::interior_point`, docs/ribbon_chain_solver.md).
+    InteriorPoint,
 }
 
 /// How a clamp weights the creases next to it.

@@ -820,6 +820,7 @@ impl ObjectSim for RibbonSim {
             super::SolverKind::Lbfgsb => "lbfgsb",
             super::SolverKind::Chain => "chain",
             super::SolverKind::TrustRegion => "trust_region",
+            super::SolverKind::InteriorPoint => "interior_point",
         }
     }
     /// One implicit-Euler step, timed as one [`Phase::Simulation`].

@@ -24,7 +24,8 @@ use super::params::{SolverKind, SolverSettings};
 use super::reconstruct::Strip;
 use crate::geometry::Pose;
 use crate::optim::{
-    BoxProblem, Dense, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton, Slab, TrustRegion,
+    BoxProblem, Dense, InteriorPoint, Lbfgsb, LbfgsbOptions, NewtonOptions, ProjectedNewton, Slab,
+    TrustRegion,
 };
 
 /// Relative objective decrease that ends an inner solve, (f_k - f_k+1)/max(|f|, 1):
@@ -76,6 +77,7 @@ pub struct StepSolver {
     newton: ProjectedNewton<Dense>,
     chain: ProjectedNewton<ChainMatrix>,
     trust: TrustRegion<ChainMatrix>,
+    interior: InteriorPoint<ChainMatrix>,
     /// L-BFGS-B workspace and the dimension it was built for.
     lbfgsb: Option<(usize, Lbfgsb)>,
     z: Vec<f64>,
@@ -108,6 +110,7 @@ impl Clone for StepSolver {
             newton: self.newton.fresh_with_history(),
             chain: self.chain.fresh_with_history(),
             trust: self.trust.fresh_with_history(),
+            interior: self.interior.fresh_with_history(),
             #[cfg(any(test, feature = "test-hooks"))]
             newton_matrix_error: self.newton_matrix_error,
             #[cfg(any(test, feature = "test-hooks"))]
@@ -470,6 +473,23 @@ fn multiplier_update(
     }
 }
 
+/// Our Newton solvers' options for round `outer`: the gradient tolerance relative to
+/// the first round's start (`pg0`; the solver measures it at its first evaluation
+/// when unset), and chord steps on the last round's final factorization in later
+/// rounds (they differ from it only by the multiplier update).
+fn newton_options(settings: &SolverSettings, pg0: Option<f64>, outer: u32) -> NewtonOptions {
+    NewtonOptions {
+        max_iterations: settings.max_iterations,
+        pgtol: settings.tolerance * pg0.unwrap_or(0.0),
+        ftol: FTOL,
+        pgtol_relative_to_start: match pg0 {
+            Some(_) => None,
+            None => Some(settings.tolerance),
+        },
+        reuse_factorization: outer > 0,
+    }
+}
+
 /// The next step's starting mu after a step that did not raise it: relaxed toward the
 /// scene's (a large mu makes the inner problems stiffer), but not below |lambda| / (l/n)
 /// for the position rows, J/m^2. The shifted penalty mu/2 (C - lambda/mu)^2 pulls toward
@@ -518,7 +538,10 @@ impl StepSolver {
         // carries over from the last step, relaxed at its end (below).
         let adaptive = matches!(
             settings.kind,
-            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion
+            SolverKind::GaussNewton
+                | SolverKind::Chain
+                | SolverKind::TrustRegion
+                | SolverKind::InteriorPoint
         );
         if !adaptive {
             objective_terms.penalty = settings.penalty;
@@ -526,6 +549,7 @@ impl StepSolver {
         // The trust-region solver holds the end crease exactly (a slab), so it has no
         // augmented-Lagrangian term, and no multiplier, there.
         objective_terms.end_crease_exact = settings.kind == SolverKind::TrustRegion
+            || settings.kind == SolverKind::InteriorPoint
             || (settings.kind == SolverKind::Chain && settings.chain_variant.end_crease_exact);
         if objective_terms.end_crease_exact {
             objective_terms.end_crease_multipliers = [0.0, 0.0];
@@ -651,21 +675,11 @@ impl StepSolver {
         };
         problem.path.valid = false;
         let result = match settings.kind {
-            SolverKind::GaussNewton | SolverKind::Chain | SolverKind::TrustRegion => {
-                // relative gradient tolerance against the first round's start (the
-                // solver measures it at its first evaluation)
-                let opts = NewtonOptions {
-                    max_iterations: settings.max_iterations,
-                    pgtol: settings.tolerance * pg0.unwrap_or(0.0),
-                    ftol: FTOL,
-                    pgtol_relative_to_start: match pg0 {
-                        Some(_) => None,
-                        None => Some(settings.tolerance),
-                    },
-                    // a later round differs from the last one only by the multiplier
-                    // update: start with chord steps on its final factorization
-                    reuse_factorization: outer > 0,
-                };
+            SolverKind::GaussNewton
+            | SolverKind::Chain
+            | SolverKind::TrustRegion
+            | SolverKind::InteriorPoint => {
+                let opts = newton_options(settings, *pg0, outer);
                 problem.second_order = true;
                 let n = objective.layout.segments;
                 // |c_{n-1}| = |Σ_k z_k| <= Δc_max, held exactly
@@ -673,7 +687,16 @@ impl StepSolver {
                     range: objective.layout.c(1)..objective.layout.c(n - 1) + 1,
                     bound: objective.terms.crease_bound,
                 });
-                let r = if settings.kind == SolverKind::TrustRegion {
+                let r = if settings.kind == SolverKind::InteriorPoint {
+                    self.interior.minimize(
+                        &mut ZChain(&mut problem),
+                        &mut self.z,
+                        &self.lower,
+                        &self.upper,
+                        slab,
+                        &opts,
+                    )
+                } else if settings.kind == SolverKind::TrustRegion {
                     self.trust.minimize(
                         &mut ZChain(&mut problem),
                         &mut self.z,

@@ -98,6 +98,9 @@ pub struct Dense {
     scratch: Option<(usize, MemBuffer)>,
     /// Its last factorization as a trust-region model ([`super::ModelMatrix`]).
     pub(crate) model: super::trust_region::DenseModel,
+    /// Its last factorization for the interior-point method
+    /// (`optim::interior_point::BarrierMatrix`).
+    pub(crate) barrier: Option<nalgebra::Cholesky<f64, nalgebra::Dyn>>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -22,6 +22,7 @@
 
 use nalgebra::{Cholesky, Matrix2, SMatrix, SVector, Vector2};
 
+mod barrier;
 mod closure;
 mod pairs;
 mod pivot;
