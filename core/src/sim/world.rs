@@ -89,7 +89,7 @@ pub(super) struct BarrierState {
     /// The first colliders, the scene's; kinematic colliders follow them.
     scene_colliders: usize,
     /// The guess of which bodies may meet scales their last motions by this (1: as
-    /// designed); whether the check after a class runs (tests only change them).
+    /// designed); whether the check after the steps runs (tests only change them).
     pub(super) guess_scale: f64,
     pub(super) check_classes: bool,
     /// Whether a body that waited for one stepped again steps again too (tests only
