@@ -662,38 +662,16 @@ fn bodies_stepped_side_by_side_are_stepped_again_when_they_meet() {
 /// mm below its centre plane (within the barrier's reach: it waits for the lifted one),
 /// lifted at the same speed by its own handle: each step it moves into where the lifted
 /// one started.
-const MEETING_OVER_ANOTHER: &str = r#"
-name: side_by_side_meeting_over_another
-duration: 0.1
-dt: 0.01
-gravity: [0.0, 0.0, -9.81]
-solver: {kind: chain}
-contact: {method: barrier, thickness: 0.002}
-ribbons:
-  - name: upper
-    length: 0.3
-    width: 0.05
-    segments: 15
-    base: {mode: floating, position: [-0.15, 0.0, 0.03], rotation: [0.0, 0.0, 0.0]}
-  - name: lower
-    length: 0.3
-    width: 0.05
-    segments: 15
-    base: {mode: floating, position: [0.0, -0.15, 0.0], rotation: [0.0, 0.0, 1.5707963267948966]}
-  - name: under
+/// The meeting scene over a third ribbon, 2.5 mm under the lifted one and lifted with
+/// it, for 0.1 s.
+fn meeting_over_another() -> String {
+    const UNDER: &str = r#"  - name: under
     length: 0.3
     width: 0.05
     segments: 15
     base: {mode: floating, position: [0.0, -0.15, -0.0025], rotation: [0.0, 0.0, 1.5707963267948966]}
-handles:
-  - name: lift
-    object: lower
-    point: [0.15, 0.0]
-    trajectory:
-      initial: {position: [0.0, 0.0, 0.0], rotation: [0.0, 0.0, 1.5707963267948966]}
-      motions:
-        - {start: 0.0, end: 0.15, translation: [0.0, 0.0, 0.075]}
-  - name: lift_under
+"#;
+    const LIFT_UNDER: &str = r#"  - name: lift_under
     object: under
     point: [0.15, 0.0]
     trajectory:
@@ -701,6 +679,16 @@ handles:
       motions:
         - {start: 0.0, end: 0.15, translation: [0.0, 0.0, 0.075]}
 "#;
+    let scene = MEETING
+        .replace(
+            "name: side_by_side_meeting\nduration: 0.15",
+            "name: side_by_side_meeting_over_another\nduration: 0.1",
+        )
+        .replace("handles:\n", &format!("{UNDER}handles:\n"))
+        + LIFT_UNDER;
+    assert!(scene.contains("duration: 0.1\n") && scene.contains("- name: under"));
+    scene
+}
 
 /// A body that waited for one stepped again is stepped again too, both put back first:
 /// in the meeting scene over a third ribbon, with the guess made blind, the lifted
@@ -713,7 +701,7 @@ fn a_body_that_waited_for_one_stepped_again_steps_again_too() {
     let run = |repeat_dependents: bool| {
         let dir = common::scratch(&format!("meeting_over_another_{repeat_dependents}"));
         let path = dir.join("meeting.yaml");
-        std::fs::write(&path, MEETING_OVER_ANOTHER).expect("a scratch file");
+        std::fs::write(&path, meeting_over_another()).expect("a scratch file");
         let mut scene = developable_sim::scene::load(&path, &[]).expect("the scene");
         scene.world.set_side_by_side_hooks(0.0, true);
         scene.world.set_repeat_dependents_hook(repeat_dependents);

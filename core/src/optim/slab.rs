@@ -35,6 +35,29 @@ pub fn project_feasible(slab: Option<&Slab>, y: &mut [f64], lower: &[f64], upper
     }
 }
 
+/// |P(x - g) - x|_inf, P the projection onto the box and, if any, the slab (both Newton
+/// methods' stopping measure), and the slab projection's multiplier τ (0 without one).
+/// `point` is a kept buffer.
+pub fn projected_gradient(
+    slab: Option<&Slab>,
+    (x, g): (&[f64], &[f64]),
+    (lower, upper): (&[f64], &[f64]),
+    point: &mut Vec<f64>,
+) -> (f64, f64) {
+    let Some(slab) = slab else {
+        return (super::projected_gradient_inf(x, g, lower, upper), 0.0);
+    };
+    point.clear();
+    point.extend(x.iter().zip(g).map(|(a, b)| a - b));
+    let tau = slab.project(point, lower, upper, 0.0);
+    let norm = point
+        .iter()
+        .zip(x)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    (norm, tau)
+}
+
 impl Slab {
     /// Σ_{i in S} x_i, summed from the first entry on: the same floating-point value as
     /// the ribbon's c_{n-1} = (((z_1 + z_2) + z_3) + ...) of `ribbon::step::z_to_q`.

@@ -687,47 +687,30 @@ impl StepSolver {
                     range: objective.layout.c(1)..objective.layout.c(n - 1) + 1,
                     bound: objective.terms.crease_bound,
                 });
-                let r = if settings.kind == SolverKind::InteriorPoint {
-                    self.interior.minimize(
-                        &mut ZChain(&mut problem),
-                        &mut self.z,
-                        &self.lower,
-                        &self.upper,
-                        slab,
-                        &opts,
-                    )
-                } else if settings.kind == SolverKind::TrustRegion {
-                    self.trust.minimize(
-                        &mut ZChain(&mut problem),
-                        &mut self.z,
-                        &self.lower,
-                        &self.upper,
-                        slab,
-                        &opts,
-                    )
-                } else if settings.kind == SolverKind::Chain {
-                    let variant = settings.chain_variant;
-                    self.chain
-                        .set_slab(slab.filter(|_| variant.end_crease_exact));
-                    self.chain.set_cut_keeps_damping(variant.cut_keeps_shift);
-                    if variant.saddle_free {
-                        problem.saddle_floor = SADDLE_FREE_FLOOR;
+                let (z, lower, upper) = (&mut self.z, &self.lower[..], &self.upper[..]);
+                let r = match settings.kind {
+                    SolverKind::InteriorPoint => {
+                        let chain = &mut ZChain(&mut problem);
+                        self.interior.minimize(chain, z, lower, upper, slab, &opts)
                     }
-                    self.chain.minimize(
-                        &mut ZChain(&mut problem),
-                        &mut self.z,
-                        &self.lower,
-                        &self.upper,
-                        &opts,
-                    )
-                } else {
-                    self.newton.minimize(
-                        &mut ZNewton(&mut problem),
-                        &mut self.z,
-                        &self.lower,
-                        &self.upper,
-                        &opts,
-                    )
+                    SolverKind::TrustRegion => {
+                        let chain = &mut ZChain(&mut problem);
+                        self.trust.minimize(chain, z, lower, upper, slab, &opts)
+                    }
+                    SolverKind::Chain => {
+                        let variant = settings.chain_variant;
+                        self.chain
+                            .set_slab(slab.filter(|_| variant.end_crease_exact));
+                        self.chain.set_cut_keeps_damping(variant.cut_keeps_shift);
+                        if variant.saddle_free {
+                            problem.saddle_floor = SADDLE_FREE_FLOOR;
+                        }
+                        let chain = &mut ZChain(&mut problem);
+                        self.chain.minimize(chain, z, lower, upper, &opts)
+                    }
+                    _ => self
+                        .newton
+                        .minimize(&mut ZNewton(&mut problem), z, lower, upper, &opts),
                 };
                 pg0.get_or_insert(r.initial_projected_gradient_inf.max(1e-300));
                 (r.iterations, r.converged, r.f)

@@ -271,21 +271,23 @@ impl BarrierState {
             return again;
         }
         let reach = self.settings.thickness + self.settings.activation_distance;
-        let swept: Vec<Option<Vec<Aabb>>> = sequence
+        // each body's swept boxes with their hull: most pairs of bodies are far apart
+        let swept: Vec<Option<(Aabb, Vec<Aabb>)>> = sequence
             .iter()
             .map(|&i| {
-                self.cells[i]
-                    .as_ref()
-                    .map(|_| swept_outline(objects[i].as_ref(), &before[i]))
+                self.cells[i].as_ref().map(|_| {
+                    let boxes = swept_outline(objects[i].as_ref(), &before[i]);
+                    (hull(&boxes), boxes)
+                })
             })
             .collect();
         for b in 0..count {
             let Some(mine) = &swept[b] else { continue };
             let met = (0..b).any(|a| {
                 !deps[b].contains(&a)
-                    && swept[a]
-                        .as_ref()
-                        .is_some_and(|theirs| near(theirs, mine, reach))
+                    && swept[a].as_ref().is_some_and(|(hull, theirs)| {
+                        near(&[*hull], &[mine.0], reach) && near(theirs, &mine.1, reach)
+                    })
             });
             again[b] = met || (self.repeat_dependents && deps[b].iter().any(|&a| again[a]));
         }
@@ -423,6 +425,15 @@ fn swept_outline(object: &dyn ObjectSim, start: &[Point3]) -> Vec<Aabb> {
     boxes.extend(outline(&object.mesh().vertices));
     boxes.extend_from_slice(recorded);
     boxes
+}
+
+/// The box holding `boxes` (f64::min and max skip a NaN corner, which no box comes
+/// near in [`near`] either).
+fn hull(boxes: &[Aabb]) -> Aabb {
+    let inf = Vector3::repeat(f64::INFINITY);
+    boxes.iter().fold((inf, -inf), |(lo, hi), (a, b)| {
+        (lo.zip_map(a, f64::min), hi.zip_map(b, f64::max))
+    })
 }
 
 /// Whether any box of `a` comes within `margin` of any box of `b` on every axis.

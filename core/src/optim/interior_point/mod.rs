@@ -409,16 +409,12 @@ impl<M: BarrierMatrix> InteriorPoint<M> {
 
     /// ||P(x - g) - x||_inf with P onto box and slab.
     fn projected_gradient(&mut self, x: &[f64], lower: &[f64], upper: &[f64]) -> f64 {
-        let mut p = std::mem::take(&mut self.point);
-        p.clear();
-        p.extend(x.iter().zip(&self.g).map(|(a, b)| a - b));
-        super::slab::project_feasible(self.slab.as_ref(), &mut p, lower, upper);
-        let norm = p
-            .iter()
-            .zip(x)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        self.point = p;
+        let (norm, _) = super::slab::projected_gradient(
+            self.slab.as_ref(),
+            (x, &self.g),
+            (lower, upper),
+            &mut self.point,
+        );
         norm
     }
 

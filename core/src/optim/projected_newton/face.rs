@@ -2,7 +2,7 @@
 //! method (issue 47's `solver.end_crease_exact` for the chain solver): the projection
 //! onto box and slab, the projected gradient with it, and the Newton step held on a face.
 
-use super::{projected_gradient_inf, NewtonMatrix, ProjectedNewton, Slab};
+use super::{NewtonMatrix, ProjectedNewton, Slab};
 use crate::optim::slab::project_feasible;
 
 impl<M: NewtonMatrix> ProjectedNewton<M> {
@@ -22,20 +22,13 @@ impl<M: NewtonMatrix> ProjectedNewton<M> {
 
     /// ||P(x - g) - x||_inf, P onto box and slab; sets `slab_tau`.
     pub(super) fn projected_gradient(&mut self, x: &[f64], lower: &[f64], upper: &[f64]) -> f64 {
-        let Some(slab) = &self.slab else {
-            self.slab_tau = 0.0;
-            return projected_gradient_inf(x, &self.g, lower, upper);
-        };
-        let mut p = std::mem::take(&mut self.point);
-        p.clear();
-        p.extend(x.iter().zip(&self.g).map(|(a, b)| a - b));
-        self.slab_tau = slab.project(&mut p, lower, upper, 0.0);
-        let norm = p
-            .iter()
-            .zip(x)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max);
-        self.point = p;
+        let (norm, tau) = crate::optim::slab::projected_gradient(
+            self.slab.as_ref(),
+            (x, &self.g),
+            (lower, upper),
+            &mut self.point,
+        );
+        self.slab_tau = tau;
         norm
     }
 

@@ -9,7 +9,6 @@ use faer::linalg::cholesky::llt;
 use faer::{MatMut, Par};
 use nalgebra::DMatrix;
 
-use super::projected_gradient_inf;
 use super::slab::Slab;
 
 mod face;

@@ -11,18 +11,7 @@ impl crate::optim::BarrierMatrix for ChainMatrix {
         face: Option<(std::ops::Range<usize>, f64)>,
     ) -> bool {
         let model = &mut self.model;
-        let n = model.segments;
-        model.terminal_penalty = match face {
-            Some((range, rho)) => {
-                assert_eq!(
-                    range,
-                    model.c_index(1)..model.c_index(n - 1) + 1,
-                    "the chain's only slab is the crease differences' sum"
-                );
-                rho
-            }
-            None => 0.0,
-        };
+        model.hold_slab_face(face);
         self.mask.clear();
         self.mask.resize(model.dimension(), true);
         model.factor(&self.mask, shift)

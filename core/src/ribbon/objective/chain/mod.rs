@@ -213,6 +213,25 @@ impl Objective<'_> {
 }
 
 impl ChainModel {
+    /// The slab's face held in the next factorization: `face` is the crease
+    /// differences' index range with the penalty rho on their sum (None: no face).
+    /// The slab's face is the last crease's change, c_{n-1} = Σ_k z_k, so rho (Σ d_z)^2
+    /// is rho dc_{n-1}^2 on the sweep's terminal value.
+    pub(crate) fn hold_slab_face(&mut self, face: Option<(std::ops::Range<usize>, f64)>) {
+        let n = self.segments;
+        self.terminal_penalty = match face {
+            Some((range, rho)) => {
+                assert_eq!(
+                    range,
+                    self.c_index(1)..self.c_index(n - 1) + 1,
+                    "the chain's only slab is the crease differences' sum"
+                );
+                rho
+            }
+            None => 0.0,
+        };
+    }
+
     /// Test-only: the loop closure in the 14-column form only (the split of `closure`
     /// not tried), until the next [`Objective::chain_model`].
     #[cfg(any(test, feature = "test-hooks"))]
@@ -772,8 +791,7 @@ impl crate::optim::ModelMatrix for ChainMatrix {
         self.model.multiply(v, out);
     }
 
-    /// The slab's face is the last crease's change: c_{n-1} = Σ_k z_k, so the penalty
-    /// rho (Σ d_z)^2 is rho dc_{n-1}^2 on the sweep's terminal value.
+    /// The slab's face as the sweep's terminal penalty ([`ChainModel::hold_slab_face`]).
     fn factor_free(
         &mut self,
         free: &[bool],
@@ -781,18 +799,7 @@ impl crate::optim::ModelMatrix for ChainMatrix {
         face: Option<(std::ops::Range<usize>, f64)>,
     ) -> bool {
         let model = &mut self.model;
-        let n = model.segments;
-        model.terminal_penalty = match face {
-            Some((range, rho)) => {
-                assert_eq!(
-                    range,
-                    model.c_index(1)..model.c_index(n - 1) + 1,
-                    "the chain's only slab is the crease differences' sum"
-                );
-                rho
-            }
-            None => 0.0,
-        };
+        model.hold_slab_face(face);
         self.shift.clear();
         self.shift.resize(model.dimension(), shift);
         model.factor(free, &self.shift)
