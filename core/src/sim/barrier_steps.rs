@@ -13,7 +13,9 @@
 //! through, with the paths' curvature margins): a body that came within the barrier's
 //! reach of an earlier one it did not wait for is put back and stepped again after all
 //! the others, against everyone's new meshes, and so is every body that waited for
-//! one put back. The sequence, the waits, the checks and the repeats depend only on the
+//! one put back. Then, back over the sequence, a body held back by where a later one
+//! that waited for it started, now moved off, steps again against everyone's new
+//! meshes. The sequence, the waits, the checks and the repeats depend only on the
 //! state, never on the threads: bit-identical at any thread count.
 
 use std::sync::OnceLock;
@@ -30,11 +32,14 @@ const CHUNK: usize = 4;
 
 type Aabb = (Vector3, Vector3);
 
+/// A body's copy from before its step, if it may step again.
+type Backup = Option<Box<dyn ObjectSim>>;
+
 /// One body's first step: its report, its backup (if it may step again) and its mesh
 /// after the step (if a later body waits for it).
 struct Stepped {
     report: ObjectStepReport,
-    backup: Option<Box<dyn ObjectSim>>,
+    backup: Backup,
     end: Vec<Point3>,
 }
 
@@ -186,15 +191,17 @@ impl BarrierState {
             self.cells[sequence[b]].is_some()
                 && (0..b).any(|a| self.cells[sequence[a]].is_some() && !deps[b].contains(&a))
         };
-        let mut backed_up = vec![false; count];
-        for b in 0..count {
-            backed_up[b] =
-                self.check_classes && (unwaited(b) || deps[b].iter().any(|&a| backed_up[a]));
-        }
-        // ... or it waited for one that can
+        // ... or it waited for one that can; one that a later body waited for may be
+        // held back by where that body started
         let waited_for: Vec<bool> = (0..count)
             .map(|b| deps.iter().any(|d| d.contains(&b)))
             .collect();
+        let mut backed_up = vec![false; count];
+        for b in 0..count {
+            backed_up[b] = (self.check_classes
+                && (unwaited(b) || deps[b].iter().any(|&a| backed_up[a])))
+                || (self.repeat_held_back && waited_for[b]);
+        }
         let mut slots: Vec<Option<&mut Box<dyn ObjectSim>>> =
             objects.iter_mut().map(Some).collect();
         let items: Vec<&mut Box<dyn ObjectSim>> = sequence
@@ -230,7 +237,7 @@ impl BarrierState {
             },
         );
         drop(slots);
-        let mut backups: Vec<Option<Box<dyn ObjectSim>>> = Vec::with_capacity(count);
+        let mut backups: Vec<Backup> = Vec::with_capacity(count);
         for (b, s) in stepped.into_iter().enumerate() {
             reports[sequence[b]] = s.report;
             backups.push(s.backup);
@@ -252,7 +259,64 @@ impl BarrierState {
         for &(_, i) in &redo {
             reports[i] = self.step_in_turn(objects, i, shared);
         }
-        again.iter().filter(|&&a| a).count()
+        let held_back = self.step_held_back_again(
+            objects,
+            (sequence, deps, &again),
+            (&before, &mut backups),
+            shared,
+            reports,
+        );
+        again.iter().filter(|&&a| a).count() + held_back
+    }
+
+    /// Back over the sequence, every body held back by where a later body started: it
+    /// stepped against that body's start (the later one waited for it), part of it
+    /// ended within the barrier's reach of it, and that part is now out of reach of
+    /// where the later body went (a stack lifted from its top, taken bottom first). It
+    /// steps again from its start against everyone's meshes now; later bodies first, so
+    /// a stack moving off in a chain follows in one pass. A step again that is rejected
+    /// (its start within reach of where another went) keeps the first step, which the
+    /// later bodies stepped against. Returns how many stepped again.
+    fn step_held_back_again(
+        &self,
+        objects: &mut [Box<dyn ObjectSim>],
+        (sequence, deps, again): (&[usize], &[Vec<usize>], &[bool]),
+        (before, backups): (&[Vec<Point3>], &mut [Backup]),
+        shared: &Shared,
+        reports: &mut [ObjectStepReport],
+    ) -> usize {
+        if !self.repeat_held_back {
+            return 0;
+        }
+        let reach = self.settings.thickness + self.settings.activation_distance;
+        let mut stepped = 0;
+        for a in (0..sequence.len()).rev() {
+            let i = sequence[a];
+            if again[a] || self.cells[i].is_none() {
+                continue;
+            }
+            let mine = outline(&objects[i].mesh().vertices);
+            let held = (a + 1..sequence.len())
+                .filter(|&b| deps[b].contains(&a))
+                .any(|b| {
+                    let j = sequence[b];
+                    let (then, now) = (outline(&before[j]), outline(&objects[j].mesh().vertices));
+                    mine.iter()
+                        .any(|x| near(&[*x], &then, reach) && !near(&[*x], &now, reach))
+                });
+            let Some(start) = backups[a].take().filter(|_| held) else {
+                continue;
+            };
+            let first = std::mem::replace(&mut objects[i], start);
+            let report = self.step_in_turn(objects, i, shared);
+            if report.kept_previous_state {
+                objects[i] = first;
+            } else {
+                reports[i] = report;
+                stepped += 1;
+            }
+        }
+        stepped
     }
 
     /// Per position in `sequence`: whether that body steps again, because what it swept

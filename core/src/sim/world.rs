@@ -95,6 +95,9 @@ pub(super) struct BarrierState {
     /// Whether a body that waited for one stepped again steps again too (tests only
     /// turn it off).
     pub(super) repeat_dependents: bool,
+    /// Whether a body held back by where a later one started steps again once that one
+    /// has moved off (tests only turn it off).
+    pub(super) repeat_held_back: bool,
     /// Per object: its Newton iterations in the last step (which body a free thread
     /// takes first; never what a body computes).
     pub(super) last_iterations: Vec<usize>,
@@ -149,6 +152,7 @@ impl World {
             guess_scale: 1.0,
             check_classes: true,
             repeat_dependents: true,
+            repeat_held_back: true,
             last_iterations: Vec::new(),
         });
         self
@@ -161,6 +165,16 @@ impl World {
     pub fn set_repeat_dependents_hook(&mut self, on: bool) {
         if let Some(b) = self.barrier.as_mut() {
             b.repeat_dependents = on;
+        }
+    }
+
+    /// Test only: whether a body held back by where a later body started steps again
+    /// after that body moved off (docs/contact_barrier.md, "Several ribbons"; off: the
+    /// negative control of that rule).
+    #[cfg(any(test, feature = "test-hooks"))]
+    pub fn set_repeat_held_back_hook(&mut self, on: bool) {
+        if let Some(b) = self.barrier.as_mut() {
+            b.repeat_held_back = on;
         }
     }
 
