@@ -116,6 +116,12 @@ pub struct ContactStats {
     pub flipped_triangles: usize,
     pub degenerate_triangles: usize,
     pub distorted_triangles_max: usize,
+    /// Contact inside the steps with several bodies (docs/contact_barrier.md, "Several
+    /// ribbons"), summed over the run: body steps taken side by side with another, and
+    /// body steps taken again (after meeting one it did not wait for, after one it waited
+    /// for stepped again, or held back by where a later one started).
+    pub side_by_side: usize,
+    pub stepped_again: usize,
 }
 
 /// The `--stats` JSON.
@@ -428,6 +434,8 @@ impl StatsCollector {
             cs.distorted_triangles_max = cs
                 .distorted_triangles_max
                 .max(r.flipped_triangles + r.degenerate_triangles);
+            cs.side_by_side += c.side_by_side;
+            cs.stepped_again += c.stepped_again;
         }
         let e: f64 = report.objects.iter().map(|o| o.energies.total()).sum();
         s.energy.last = e;
