@@ -179,6 +179,14 @@ fn collider_and_contact_errors_name_the_key() {
         &["`contact.friction_velocity`", "> 0"],
     );
     check(
+        &format!("{ONE}contact: {{ribbon_friction: -0.1}}\n"),
+        &["`contact.ribbon_friction`", ">= 0"],
+    );
+    check(
+        &format!("{ONE}contact: {{method: projection, ribbon_friction: 0.3}}\n"),
+        &["`contact.ribbon_friction`", "barrier"],
+    );
+    check(
         &format!("{ONE}solver: {{kind: lbfgsb}}\ncontact: {{}}\n"),
         &["`solver.kind`", "Newton solver", "projection"],
     );

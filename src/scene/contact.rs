@@ -115,6 +115,11 @@ pub struct ContactFile {
     /// Default 1e-4.
     #[serde(default = "d_friction_velocity")]
     pub friction_velocity: f64,
+    /// barrier: Coulomb friction coefficient μ between two ribbons (>= 0; IPC's lagged
+    /// friction, as against colliders). Default 0: ribbons slide freely over each other
+    /// (Pan et al.'s chains are frictionless).
+    #[serde(default)]
+    pub ribbon_friction: f64,
     /// Ribbon thickness h, m (> 0): a mid-surface stays h/2 from colliders and h from
     /// other ribbons. Default 0.001.
     #[serde(default = "d_thickness")]
@@ -148,6 +153,7 @@ impl Default for ContactFile {
             activation_distance: None,
             barrier_pressure: d_barrier_pressure(),
             friction_velocity: d_friction_velocity(),
+            ribbon_friction: 0.0,
             thickness: d_thickness(),
             stiffness: d_stiffness(),
             closeness: d_closeness(),
@@ -179,6 +185,12 @@ pub(super) fn build_contact(
     if ck.choice("contact.method", &c.method, &["barrier", "projection"])? == "barrier" {
         return build_barrier(collider_files, c, ck, file, world);
     }
+    if c.ribbon_friction != 0.0 {
+        return Err(ck.fail(
+            "contact.ribbon_friction",
+            "friction between ribbons acts with contact.method: barrier only (the projection has none)",
+        ));
+    }
     match build_stage(collider_files, c, ck, file, &world)? {
         Some(stage) => Ok(world.with_contact(stage)),
         None => Ok(world),
@@ -203,6 +215,7 @@ fn build_barrier(
         },
         barrier_pressure: ck.positive("contact.barrier_pressure", c.barrier_pressure)?,
         friction_velocity: ck.positive("contact.friction_velocity", c.friction_velocity)?,
+        body_friction: ck.non_negative("contact.ribbon_friction", c.ribbon_friction)?,
         self_contact: c.self_contact,
     };
     settings

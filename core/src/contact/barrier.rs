@@ -19,6 +19,9 @@ pub struct BarrierSettings {
     pub barrier_pressure: f64,
     /// ε_v, m/s: below this slip speed friction is a viscous stick (IPC's mollifier).
     pub friction_velocity: f64,
+    /// Coulomb coefficient μ between two contact bodies (ribbons), >= 0; 0: they slide
+    /// freely over each other.
+    pub body_friction: f64,
     /// Contacts between non-neighbouring parts of one ribbon.
     pub self_contact: bool,
 }
@@ -30,6 +33,7 @@ impl Default for BarrierSettings {
             activation_distance: 1e-4,
             barrier_pressure: 1e3,
             friction_velocity: 1e-4,
+            body_friction: 0.0,
             self_contact: true,
         }
     }
@@ -63,6 +67,12 @@ impl BarrierSettings {
             if !(v.is_finite() && v > 0.0) {
                 return Err(format!("{name} must be positive and finite, got {v}"));
             }
+        }
+        if !(self.body_friction.is_finite() && self.body_friction >= 0.0) {
+            return Err(format!(
+                "ribbon_friction must be finite and >= 0, got {}",
+                self.body_friction
+            ));
         }
         let most = (0.5 * std::f64::consts::PI - 1.0) * self.thickness;
         if self.activation_distance >= most {

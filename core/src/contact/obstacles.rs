@@ -98,6 +98,9 @@ impl CellMesh {
 pub struct OtherMesh<'a> {
     /// World positions, m.
     pub vertices: &'a [Point3],
+    /// The same vertices at the start of the world's step, m (equal to `vertices` when
+    /// the body has not stepped yet): what it moved is what its friction drags along.
+    pub start: &'a [Point3],
     pub cells: &'a Arc<CellMesh>,
 }
 
@@ -153,6 +156,8 @@ impl<const N: usize> ObstacleFeature<N> {
 #[derive(Clone, Debug, Default)]
 pub struct ObstacleBody {
     pub vertices: Vec<Vector3>,
+    /// Each vertex's displacement since the start of the world's step, m.
+    pub shift: Vec<Vector3>,
     pub cells: Arc<CellMesh>,
     pub boxes: Vec<(Vector3, Vector3)>,
     /// Cells sorted by their box's minimum along `axis`.
@@ -301,6 +306,9 @@ impl ObstacleBody {
         self.vertices.clear();
         self.vertices
             .extend(other.vertices.iter().map(|p| p.coords));
+        self.shift.clear();
+        self.shift
+            .extend(other.vertices.iter().zip(other.start).map(|(p, q)| p - q));
         self.cells = Arc::clone(other.cells);
         self.boxes.clear();
         let v = &self.vertices;

@@ -241,7 +241,7 @@ impl RibbonContact {
                 mu_lambda: obs.friction[k] * t.weight * (-db),
                 tangent: tangent_basis(&normal),
                 shift: moved.coords - point,
-                collider: k,
+                source: PairSource::Collider(k),
             });
         };
         for solid in &obs.solids {
@@ -262,6 +262,7 @@ impl RibbonContact {
                 );
             }
         }
+        super::body_friction::lag(&self.terms, &self.mesh, &mut friction);
         self.terms.friction = friction;
     }
 
@@ -294,11 +295,20 @@ impl RibbonContact {
                 .terms
                 .friction
                 .iter()
-                .filter(|f| f.collider == k)
+                .filter(|f| f.source == PairSource::Collider(k))
                 .map(|f| f.mu_lambda)
                 .sum();
             work += (c.collider_force.get(k).copied().unwrap_or(0.0) + friction) * travel * tau;
         }
+        // another body's motion drags through friction: at most μλ over what it moved
+        work += self
+            .terms
+            .friction
+            .iter()
+            .filter(|f| matches!(f.source, PairSource::Body(_)))
+            .map(|f| f.mu_lambda * f.shift.norm())
+            .sum::<f64>()
+            * tau;
         self.last = BarrierOutcome {
             active: c.active,
             min_gap: c.min_gap,
@@ -340,7 +350,7 @@ fn mesh_at(
 }
 
 /// An orthonormal basis of the plane orthogonal to the unit vector `n`.
-fn tangent_basis(n: &Vector3) -> [Vector3; 2] {
+pub(super) fn tangent_basis(n: &Vector3) -> [Vector3; 2] {
     let helper = if n.x.abs() < 0.9 {
         Vector3::x()
     } else {

@@ -11,6 +11,7 @@
 //! - [`contact`]: a step with contact inside it (the barrier, docs/contact_barrier.md).
 
 pub mod bending;
+mod body_friction;
 pub mod contact;
 mod handle_terms;
 mod handles;

@@ -45,6 +45,8 @@ struct Stepped {
 
 /// What every body's step of one world step shares.
 struct Shared<'a> {
+    /// Every object's mesh at the start of the step.
+    before: &'a [Vec<Point3>],
     poses0: &'a [Pose],
     poses1: &'a [Pose],
     targets1: &'a [Pose],
@@ -73,7 +75,9 @@ impl BarrierState {
                 .collect()
         };
         let (poses0, poses1) = (pose_at(targets0), pose_at(targets1));
+        let before: Vec<Vec<Point3>> = objects.iter().map(|o| o.mesh().vertices.clone()).collect();
         let shared = Shared {
+            before: &before,
             poses0: &poses0,
             poses1: &poses1,
             // (the carriers' poses: the handles' targets, then the kinematic bodies)
@@ -181,7 +185,7 @@ impl BarrierState {
         reports: &mut [ObjectStepReport],
     ) -> usize {
         let count = sequence.len();
-        let before: Vec<Vec<Point3>> = objects.iter().map(|o| o.mesh().vertices.clone()).collect();
+        let before = shared.before;
         let mut position = vec![0; count];
         for (b, &i) in sequence.iter().enumerate() {
             position[i] = b;
@@ -223,7 +227,7 @@ impl BarrierState {
                         false => &before[j],
                     }
                 };
-                let others = self.others(i, mesh);
+                let others = self.others(i, (mesh, before));
                 let report = self.step_body(object.as_mut(), i, &others, shared);
                 let end = match waited_for[b] {
                     true => object.mesh().vertices.clone(),
@@ -242,7 +246,7 @@ impl BarrierState {
             reports[sequence[b]] = s.report;
             backups.push(s.backup);
         }
-        let again = self.stepped_apart_check(objects, (sequence, deps), &before);
+        let again = self.stepped_apart_check(objects, (sequence, deps), before);
         // every body that steps again back at its start first: a later one's first
         // step may have moved into where an earlier one started (it waited for it)
         let redo: Vec<(usize, usize)> = sequence
@@ -262,7 +266,7 @@ impl BarrierState {
         let held_back = self.step_held_back_again(
             objects,
             (sequence, deps, &again),
-            (&before, &mut backups),
+            (before, &mut backups),
             shared,
             reports,
         );
@@ -374,7 +378,7 @@ impl BarrierState {
                 &after[j - index - 1].mesh().vertices
             }
         };
-        let others = self.others(index, mesh);
+        let others = self.others(index, (mesh, shared.before));
         self.step_body(object.as_mut(), index, &others, shared)
     }
 
@@ -382,13 +386,14 @@ impl BarrierState {
     fn others<'m>(
         &'m self,
         index: usize,
-        vertices: impl Fn(usize) -> &'m [Point3],
+        (vertices, start): (impl Fn(usize) -> &'m [Point3], &'m [Vec<Point3>]),
     ) -> Vec<OtherMesh<'m>> {
         (0..self.cells.len())
             .filter(|&j| j != index)
             .filter_map(|j| {
                 self.cells[j].as_ref().map(|cells| OtherMesh {
                     vertices: vertices(j),
+                    start: &start[j],
                     cells,
                 })
             })

@@ -212,6 +212,7 @@ impl World {
                 .filter_map(|(j, o)| {
                     barrier.cells[j].as_ref().map(|cells| OtherMesh {
                         vertices: &o.mesh().vertices,
+                        start: &o.mesh().vertices,
                         cells,
                     })
                 })

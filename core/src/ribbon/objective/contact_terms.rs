@@ -20,8 +20,8 @@ use crate::contact::obstacles::{
 };
 use crate::geometry::{Point3, Vector3};
 
-/// Lagged friction of one ribbon vertex against one collider (IPC): fixed at the start
-/// of the step.
+/// Lagged friction of one ribbon vertex against one collider or another body (IPC):
+/// fixed at the start of the step.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FrictionLag {
     /// Mesh vertex (2 j + top).
@@ -30,10 +30,11 @@ pub struct FrictionLag {
     pub mu_lambda: f64,
     /// An orthonormal basis of the contact's tangent plane at the start of the step.
     pub tangent: [Vector3; 2],
-    /// The collider's own displacement at the contact over the step, m.
+    /// The collider's (or the other body's) own displacement at the contact over the
+    /// step, m.
     pub shift: Vector3,
-    /// The collider (for the work a moving one does).
-    pub collider: usize,
+    /// What the vertex slides on (for the work a moving one does).
+    pub source: PairSource,
 }
 
 /// The contact data of one ribbon's step: the static world it sees, its own mesh

@@ -98,6 +98,7 @@ fn settings() -> BarrierSettings {
         activation_distance: 0.008,
         barrier_pressure: 50.0,
         friction_velocity: 0.5,
+        body_friction: 0.0,
         self_contact: true,
     }
 }
@@ -117,7 +118,7 @@ fn add_friction(ct: &mut ContactTerms, mesh: &[Vector3], normal: &Vector3, seed:
                 rng.random_range(-0.01..0.01),
                 0.0,
             ),
-            collider: 0,
+            source: crate::contact::barrier::PairSource::Collider(0),
         });
     }
 }
