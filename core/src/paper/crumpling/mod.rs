@@ -21,11 +21,13 @@ use super::pattern::{point_segment, segments_cross};
 use crate::geometry::Point2;
 
 mod context;
+mod outcome;
 mod propagation;
 mod singular;
 
 use context::Band;
 pub use context::CrumpleContext;
+pub use outcome::Unchanged;
 
 pub use propagation::{propagate, Border, Strip};
 use singular::{insert_in_curved, split_fold};
@@ -53,8 +55,9 @@ pub enum CrumpleEvent {
 }
 
 /// Step 2 for the flat region of `strain.face`: propagate, resolve the borders
-/// (creating singular vertices), insert the new curved region. On any failure the
-/// structure is left unchanged and no event is returned.
+/// (creating singular vertices), insert the new curved region. Returns the events
+/// (never empty); when nothing is added the structure is left unchanged and the
+/// branch that added nothing is returned.
 pub fn crumple_flat_region(
     ctx: &CrumpleContext,
     layer: &mut GeometricLayer,
@@ -62,37 +65,31 @@ pub fn crumple_flat_region(
     labels: &[usize],
     strain: &TriangleStrain,
     rng: &mut impl Rng,
-) -> Vec<CrumpleEvent> {
+) -> Result<Vec<CrumpleEvent>, Unchanged> {
     let saved = layer.clone();
     // appendix B, fig. 24(b, c): a border on a ruling of a cone whose apex is an
     // interior singular vertex is that apex (the d-cone absorbs the conflict); only when
     // no region can be built that way, a new singular point is created inside the cone
     // (sec. 5.2, fig. 6d). A region S_G has already (two apices joined by a crease) is
-    // not a failure: nothing is added
+    // not a failure, but nothing is added (no new singular point either)
     let mut attracted = false;
-    if let Some(events) =
-        crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng)
-    {
-        if events.is_empty() {
-            // the region is already in S_G (fig. 24c: the crease between the two
-            // apices exists): nothing to add, and no new singular point either
-            *layer = saved;
-        }
-        return events;
-    }
+    let reason = match crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng) {
+        Ok(events) if !events.is_empty() => return Ok(events),
+        Ok(_) => Unchanged::CreaseExists,
+        Err(reason) => reason,
+    };
     *layer = saved.clone();
-    if attracted {
-        let mut again = false;
-        if let Some(events) =
-            crumple_inner(ctx, layer, gmesh, labels, strain, false, &mut again, rng)
-        {
-            if !events.is_empty() {
-                return events;
-            }
-        }
-        *layer = saved;
+    if !attracted || reason == Unchanged::CreaseExists {
+        return Err(reason);
     }
-    Vec::new()
+    let mut again = false;
+    match crumple_inner(ctx, layer, gmesh, labels, strain, false, &mut again, rng) {
+        Ok(events) if !events.is_empty() => Ok(events),
+        other => {
+            *layer = saved;
+            Err(other.err().unwrap_or(Unchanged::CreaseExists))
+        }
+    }
 }
 
 /// One attempt of step 2 on a flat region (appendix B), once T_comp's strip and band
@@ -129,10 +126,10 @@ fn crumple_inner(
     attract: bool,
     attracted: &mut bool,
     rng: &mut impl Rng,
-) -> Option<Vec<CrumpleEvent>> {
+) -> Result<Vec<CrumpleEvent>, Unchanged> {
     let mut strip = propagate(gmesh, labels, strain.face, &strain.ruling_direction)?;
-    borders_by_region_id(layer, &mut strip.borders)?;
-    let band = compression_band(ctx, gmesh, strain)?;
+    borders_by_region_id(layer, &mut strip.borders).ok_or(Unchanged::NoRegion)?;
+    let band = compression_band(ctx, gmesh, strain).ok_or(Unchanged::NarrowTriangle)?;
     let attempt = Attempt {
         ctx,
         band,
@@ -147,8 +144,8 @@ fn crumple_inner(
         attempt.resolve_borders(layer, gmesh, &strip.borders, attracted, &mut events, rng)?;
     attempt.insert_curved_region(layer, &current, terminals, &mut events)?;
     // the result must mesh
-    GeometricMesh::build(layer, ctx.pattern, ctx.position).ok()?;
-    Some(events)
+    GeometricMesh::build(layer, ctx.pattern, ctx.position).map_err(|_| Unchanged::MeshFailed)?;
+    Ok(events)
 }
 
 /// Replace the region indices of curved-ruling borders by the regions' stable ids;
@@ -233,7 +230,7 @@ impl Attempt<'_, '_> {
         attracted: &mut bool,
         events: &mut Vec<CrumpleEvent>,
         rng: &mut impl Rng,
-    ) -> Option<([Option<u64>; 2], GeometricMesh)> {
+    ) -> Result<([Option<u64>; 2], GeometricMesh), Unchanged> {
         let mut terminals: [Option<u64>; 2] = [None, None];
         let mut current = gmesh.clone();
         for side in 0..2 {
@@ -243,13 +240,11 @@ impl Attempt<'_, '_> {
             events.extend(terminal.new_singular);
             terminals[side] = terminal.singular;
             if before != structure_counts(layer) {
-                let Ok(c) = GeometricMesh::build(layer, self.ctx.pattern, self.ctx.position) else {
-                    return None;
-                };
-                current = c;
+                current = GeometricMesh::build(layer, self.ctx.pattern, self.ctx.position)
+                    .map_err(|_| Unchanged::MeshFailed)?;
             }
         }
-        Some((terminals, current))
+        Ok((terminals, current))
     }
 
     /// Resolve the border on `side` (0: +v_perp, 1: -v_perp): the free boundary, an
@@ -262,7 +257,7 @@ impl Attempt<'_, '_> {
         side: usize,
         border: Border,
         rng: &mut impl Rng,
-    ) -> Option<Terminal> {
+    ) -> Result<Terminal, Unchanged> {
         let ctx = self.ctx;
         let band = &self.band;
         let dir = if side == 0 { band.v_perp } else { -band.v_perp };
@@ -271,7 +266,7 @@ impl Attempt<'_, '_> {
             new_singular,
             attracted,
         };
-        Some(match border {
+        Ok(match border {
             Border::Boundary => terminal(None, None, false),
             Border::Singular { id } => terminal(Some(id), None, false),
             Border::FlatFold { a, b } => {
@@ -279,7 +274,7 @@ impl Attempt<'_, '_> {
                 let event = if new {
                     Some(CrumpleEvent::NewSingular {
                         id,
-                        material: layer.singular_material(id)?,
+                        material: layer.singular_material(id).ok_or(Unchanged::NoRegion)?,
                         on_fold: true,
                     })
                 } else {
@@ -309,7 +304,7 @@ impl Attempt<'_, '_> {
                 let event = if new {
                     Some(CrumpleEvent::NewSingular {
                         id,
-                        material: layer.singular_material(id)?,
+                        material: layer.singular_material(id).ok_or(Unchanged::NoRegion)?,
                         on_fold: false,
                     })
                 } else {
@@ -323,32 +318,35 @@ impl Attempt<'_, '_> {
     /// Appendix B: the new curved region between the terminals, pushed to `layer`
     /// with its event: a crease between two singular vertices (fig. 24c), parallel
     /// rulings between free borders (fig. 24a) or conical rulings from a singular
-    /// vertex to the free border (fig. 24b). `None` when it does not fit.
+    /// vertex to the free border (fig. 24b). The reason when it does not fit.
     fn insert_curved_region(
         &self,
         layer: &mut GeometricLayer,
         current: &GeometricMesh,
         terminals: [Option<u64>; 2],
         events: &mut Vec<CrumpleEvent>,
-    ) -> Option<()> {
+    ) -> Result<(), Unchanged> {
         let ctx = self.ctx;
         let band = &self.band;
         match terminals {
             [Some(s1), Some(s2)] => {
                 // fig. 24(c): a degenerate region, the crease (s1, s2)
                 if s1 == s2 {
-                    return None;
+                    return Err(Unchanged::SameSingular);
                 }
                 // appendix B: the strip's region degenerates into the edge (s1, s2);
                 // where S_G had that crease already (no border made a new point), the
                 // compression is the one it takes up, and the paper generates no new
                 // region ("let the physical simulation further deform this region")
                 if events.is_empty() && has_crease(layer, s1, s2) {
-                    return Some(());
+                    return Ok(());
                 }
-                let (p, q) = (layer.singular_material(s1)?, layer.singular_material(s2)?);
+                let (p, q) = layer
+                    .singular_material(s1)
+                    .zip(layer.singular_material(s2))
+                    .ok_or(Unchanged::NoRegion)?;
                 if !segment_is_free(ctx, layer, current, &p, &q, &[]) {
-                    return None;
+                    return Err(Unchanged::CreaseBlocked);
                 }
                 layer.creases.push(Crease {
                     a: Endpoint::Singular(s1),
@@ -365,7 +363,7 @@ impl Attempt<'_, '_> {
                     Some((Endpoint::Boundary(s_hi), Endpoint::Boundary(s_lo)))
                 });
                 if rulings.len() < 2 {
-                    return None;
+                    return Err(Unchanged::TooFewRulings);
                 }
                 let n = rulings.len();
                 let id = layer.add_region(rulings);
@@ -387,7 +385,7 @@ impl Attempt<'_, '_> {
                     })
                 });
                 if rulings.len() < 2 {
-                    return None;
+                    return Err(Unchanged::TooFewRulings);
                 }
                 let n = rulings.len();
                 let id = layer.add_region(rulings);
@@ -398,7 +396,7 @@ impl Attempt<'_, '_> {
                 });
             }
         }
-        Some(())
+        Ok(())
     }
 }
 
@@ -712,7 +710,8 @@ mod tests {
             position: &position,
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let events = crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng);
+        let events = crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng)
+            .expect("S_G changes");
         let new: Vec<&CrumpleEvent> = events
             .iter()
             .filter(|e| matches!(e, CrumpleEvent::NewSingular { .. }))
@@ -754,7 +753,9 @@ mod tests {
             position: &position,
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng);
+        let outcome = crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng);
         assert!(layer.singular.is_empty());
+        // the strip meets the curved band, whose rulings are flatter than theta_0
+        assert_eq!(outcome, Err(Unchanged::FlatCurvedRegion));
     }
 }
