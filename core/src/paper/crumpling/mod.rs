@@ -27,7 +27,7 @@ mod singular;
 
 use context::Band;
 pub use context::CrumpleContext;
-pub use outcome::Unchanged;
+pub use outcome::{Unchanged, Via};
 
 pub use propagation::{propagate, Border, Strip};
 use singular::{insert_in_curved, split_fold};
@@ -74,22 +74,17 @@ pub fn crumple_flat_region(
     // not a failure, but nothing is added (no new singular point either)
     let mut attracted = false;
     let reason = match crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng) {
-        Ok(events) if !events.is_empty() => return Ok(events),
-        Ok(_) => Unchanged::CreaseExists,
+        Ok(events) => return Ok(events),
         Err(reason) => reason,
     };
     *layer = saved.clone();
-    if !attracted || reason == Unchanged::CreaseExists {
+    if !attracted || matches!(reason, Unchanged::CreaseExists(_)) {
         return Err(reason);
     }
     let mut again = false;
-    match crumple_inner(ctx, layer, gmesh, labels, strain, false, &mut again, rng) {
-        Ok(events) if !events.is_empty() => Ok(events),
-        other => {
-            *layer = saved;
-            Err(other.err().unwrap_or(Unchanged::CreaseExists))
-        }
-    }
+    crumple_inner(ctx, layer, gmesh, labels, strain, false, &mut again, rng).inspect_err(|_| {
+        *layer = saved;
+    })
 }
 
 /// One attempt of step 2 on a flat region (appendix B), once T_comp's strip and band
@@ -112,6 +107,8 @@ struct Terminal {
     singular: Option<u64>,
     /// The event, when the terminal is a singular vertex created for it (sec. 5.2).
     new_singular: Option<CrumpleEvent>,
+    /// How an existing singular vertex became the terminal.
+    via: Option<Via>,
     /// The border was a cone's ruling and the terminal is that cone's apex.
     attracted: bool,
 }
@@ -221,7 +218,8 @@ fn structure_counts(layer: &GeometricLayer) -> (usize, usize, usize, u64) {
 impl Attempt<'_, '_> {
     /// Resolve the borders on the +v_perp and -v_perp sides into terminals, pushing
     /// the events of new singular vertices; S_G is rebuilt after a side that changed
-    /// the structure. Returns the terminals and the S_G they were resolved in.
+    /// the structure. Returns the terminals (the singular vertex, if any, and how an
+    /// existing one was found) and the S_G they were resolved in.
     fn resolve_borders(
         &self,
         layer: &mut GeometricLayer,
@@ -230,15 +228,15 @@ impl Attempt<'_, '_> {
         attracted: &mut bool,
         events: &mut Vec<CrumpleEvent>,
         rng: &mut impl Rng,
-    ) -> Result<([Option<u64>; 2], GeometricMesh), Unchanged> {
-        let mut terminals: [Option<u64>; 2] = [None, None];
+    ) -> Result<([(Option<u64>, Option<Via>); 2], GeometricMesh), Unchanged> {
+        let mut terminals = [(None, None); 2];
         let mut current = gmesh.clone();
         for side in 0..2 {
             let before = structure_counts(layer);
             let terminal = self.resolve_border(layer, &current, side, borders[side], rng)?;
             *attracted |= terminal.attracted;
             events.extend(terminal.new_singular);
-            terminals[side] = terminal.singular;
+            terminals[side] = (terminal.singular, terminal.via);
             if before != structure_counts(layer) {
                 current = GeometricMesh::build(layer, self.ctx.pattern, self.ctx.position)
                     .map_err(|_| Unchanged::MeshFailed)?;
@@ -261,17 +259,18 @@ impl Attempt<'_, '_> {
         let ctx = self.ctx;
         let band = &self.band;
         let dir = if side == 0 { band.v_perp } else { -band.v_perp };
-        let terminal = |singular, new_singular, attracted| Terminal {
+        let terminal = |singular, new_singular, via, attracted| Terminal {
             singular,
             new_singular,
+            via,
             attracted,
         };
         Ok(match border {
-            Border::Boundary => terminal(None, None, false),
-            Border::Singular { id } => terminal(Some(id), None, false),
+            Border::Boundary => terminal(None, None, None, false),
+            Border::Singular { id } => terminal(Some(id), None, Some(Via::Opposite), false),
             Border::FlatFold { a, b } => {
-                let (id, new) = split_fold(ctx, layer, current, band, a, b, rng)?;
-                let event = if new {
+                let (id, via) = split_fold(ctx, layer, current, band, a, b, rng)?;
+                let event = if via.is_none() {
                     Some(CrumpleEvent::NewSingular {
                         id,
                         material: layer.singular_material(id).ok_or(Unchanged::NoRegion)?,
@@ -280,15 +279,10 @@ impl Attempt<'_, '_> {
                 } else {
                     None
                 };
-                terminal(Some(id), event, false)
+                terminal(Some(id), event, via, false)
             }
             Border::CurvedRuling { region, ruling } => {
-                let cone_apex = layer
-                    .regions
-                    .iter()
-                    .find(|r| r.id == region)
-                    .and_then(|r| r.singular_apex());
-                let (id, new) = insert_in_curved(
+                let (id, via) = insert_in_curved(
                     ctx,
                     layer,
                     current,
@@ -300,8 +294,8 @@ impl Attempt<'_, '_> {
                     self.attract,
                     rng,
                 )?;
-                let attracted = self.attract && !new && Some(id) == cone_apex;
-                let event = if new {
+                let attracted = via == Some(Via::ConeApex);
+                let event = if via.is_none() {
                     Some(CrumpleEvent::NewSingular {
                         id,
                         material: layer.singular_material(id).ok_or(Unchanged::NoRegion)?,
@@ -310,7 +304,7 @@ impl Attempt<'_, '_> {
                 } else {
                     None
                 };
-                terminal(Some(id), event, attracted)
+                terminal(Some(id), event, via, attracted)
             }
         })
     }
@@ -323,23 +317,24 @@ impl Attempt<'_, '_> {
         &self,
         layer: &mut GeometricLayer,
         current: &GeometricMesh,
-        terminals: [Option<u64>; 2],
+        terminals: [(Option<u64>, Option<Via>); 2],
         events: &mut Vec<CrumpleEvent>,
     ) -> Result<(), Unchanged> {
         let ctx = self.ctx;
         let band = &self.band;
-        match terminals {
+        let via = terminals.map(|t| t.1);
+        match terminals.map(|t| t.0) {
             [Some(s1), Some(s2)] => {
                 // fig. 24(c): a degenerate region, the crease (s1, s2)
                 if s1 == s2 {
-                    return Err(Unchanged::SameSingular);
+                    return Err(Unchanged::SameSingular(via));
                 }
                 // appendix B: the strip's region degenerates into the edge (s1, s2);
                 // where S_G had that crease already (no border made a new point), the
                 // compression is the one it takes up, and the paper generates no new
                 // region ("let the physical simulation further deform this region")
                 if events.is_empty() && has_crease(layer, s1, s2) {
-                    return Ok(());
+                    return Err(Unchanged::CreaseExists(via));
                 }
                 let (p, q) = layer
                     .singular_material(s1)
@@ -374,7 +369,7 @@ impl Attempt<'_, '_> {
             }
             [Some(s), None] | [None, Some(s)] => {
                 // fig. 24(b): conical rulings from s to the free border
-                let s_on_plus = terminals[0].is_some();
+                let s_on_plus = terminals[0].0.is_some();
                 let rulings = band_rulings(ctx, layer, current, band, |t| {
                     let (o, d) = band.line(t);
                     let [(s_lo, _), (s_hi, _)] = ctx.pattern.clip_line(&o, &d)?;

@@ -5,7 +5,7 @@
 //! attempts that change nothing").
 
 /// The branch of step 2 that left S_G unchanged.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Unchanged {
     /// Appendix A: T_comp is no triangle of S_G or has no edge facing each side.
     #[default]
@@ -38,11 +38,12 @@ pub enum Unchanged {
     NoSingularSample,
     /// Fig. 11: no ruling of the curved region lies between F and the new point.
     NoRulingsToReplace,
-    /// Fig. 24(c): both borders resolve to the same singular vertex.
-    SameSingular,
+    /// Fig. 24(c): both borders resolve to the same singular vertex (how each border
+    /// became it; None: made by this attempt).
+    SameSingular([Option<Via>; 2]),
     /// Fig. 24(c): both borders resolve to singular vertices already joined by a
     /// crease, and neither border made a new point (our rule: the region is there).
-    CreaseExists,
+    CreaseExists([Option<Via>; 2]),
     /// Fig. 24(c): the crease between the two singular vertices would cross S_G.
     CreaseBlocked,
     /// Fig. 24(a, b): fewer than two of the band's rulings fit in S_G.
@@ -51,25 +52,19 @@ pub enum Unchanged {
     MeshFailed,
 }
 
-impl Unchanged {
-    /// Every reason, in declaration order (for tables).
-    pub const ALL: [Unchanged; 17] = [
-        Unchanged::NoTriangle,
-        Unchanged::StripIntoCurved,
-        Unchanged::StripLost,
-        Unchanged::NoRegion,
-        Unchanged::NarrowTriangle,
-        Unchanged::FoldTooShort,
-        Unchanged::FoldNearSingular,
-        Unchanged::FoldPointCrowded,
-        Unchanged::CompatibleRulings,
-        Unchanged::FlatCurvedRegion,
-        Unchanged::NoSingularSample,
-        Unchanged::NoRulingsToReplace,
-        Unchanged::SameSingular,
-        Unchanged::CreaseExists,
-        Unchanged::CreaseBlocked,
-        Unchanged::TooFewRulings,
-        Unchanged::MeshFailed,
-    ];
+/// How a border of the strip became a singular vertex that existed before the attempt.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Via {
+    /// Fig. 23 (bottom): the singular vertex of T_comp opposite its largest-angle edge
+    /// (the paper's).
+    Opposite,
+    /// Fig. 6(c): the fold's split point fell within 1/rho_bound of the fold's singular
+    /// end (ours: the paper splits the fold at a new point).
+    FoldEnd,
+    /// Fig. 6(d): the border is a ruling of a cone and its apex is taken as the border
+    /// (ours: the paper adds a new point inside the cone).
+    ConeApex,
+    /// Fig. 6(d): the new point drawn from chi(s) fell within 1/rho_bound of an
+    /// existing one, which is taken instead (ours).
+    Nearby,
 }

@@ -6,7 +6,7 @@ use nalgebra::Vector2;
 use rand::Rng;
 
 use super::context::{normal, Band, CrumpleContext};
-use super::outcome::Unchanged;
+use super::outcome::{Unchanged, Via};
 use crate::geometry::Point2;
 use crate::paper::geometric::{
     Crease, CreaseKind, Endpoint, GeometricLayer, GeometricMesh, Ruling,
@@ -31,7 +31,8 @@ fn nearby_singular(layer: &GeometricLayer, params: &PaperParams, s: &Point2) -> 
 
 /// Fig. 6(c), sec. 5.2: a singular vertex on the fold (a, b) between two flat regions,
 /// at a uniformly random position where the band meets it. The fold becomes a
-/// degenerate curved region of one ruling: two plastic creases.
+/// degenerate curved region of one ruling: two plastic creases. Returns the point and,
+/// when it is a singular end of the fold, how it was found (None: new).
 pub(super) fn split_fold(
     ctx: &CrumpleContext,
     layer: &mut GeometricLayer,
@@ -40,7 +41,7 @@ pub(super) fn split_fold(
     a: Endpoint,
     b: Endpoint,
     rng: &mut impl Rng,
-) -> Result<(u64, bool), Unchanged> {
+) -> Result<(u64, Option<Via>), Unchanged> {
     let p = layer.endpoint_material(ctx.pattern, &a);
     let q = layer.endpoint_material(ctx.pattern, &b);
     let len = (q - p).norm();
@@ -62,7 +63,7 @@ pub(super) fn split_fold(
         // off the fold cannot be one
         return [a, b]
             .contains(&Endpoint::Singular(old))
-            .then_some((old, false))
+            .then_some((old, Some(Via::FoldEnd)))
             .ok_or(Unchanged::FoldNearSingular);
     }
     if ctx.pattern.signed_inside_distance(&s) < gap
@@ -89,7 +90,7 @@ pub(super) fn split_fold(
         b,
         kind,
     });
-    Ok((id, true))
+    Ok((id, None))
 }
 
 /// Fig. 6(d), sec. 5.2 and fig. 11: the imaginary rulings meet ruling `ruling` of
@@ -98,8 +99,8 @@ pub(super) fn split_fold(
 /// chi(s) = exp(-d^2 / sigma^2); remove the rulings between e_lim and e_sup (the next
 /// ruling sharper than theta_0) and replace them by cones of apex s, leaving the flat
 /// transition triangle (s, e_sup). When `attract` and C is already a cone of interior
-/// apex a, a is the border instead (appendix B, fig. 24b, c). Returns s and whether it
-/// is new.
+/// apex a, a is the border instead (appendix B, fig. 24b, c). Returns s and, when it
+/// existed already, how it was found (None: new).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn insert_in_curved(
     ctx: &CrumpleContext,
@@ -112,7 +113,7 @@ pub(super) fn insert_in_curved(
     dprop: &Vector2<f64>,
     attract: bool,
     rng: &mut impl Rng,
-) -> Result<(u64, bool), Unchanged> {
+) -> Result<(u64, Option<Via>), Unchanged> {
     let ri = layer
         .regions
         .iter()
@@ -120,7 +121,7 @@ pub(super) fn insert_in_curved(
         .ok_or(Unchanged::NoRegion)?;
     let apex = layer.regions[ri].singular_apex();
     if let Some(a) = apex.filter(|_| attract) {
-        return Ok((a, false));
+        return Ok((a, Some(Via::ConeApex)));
     }
     insert_new_singular(ctx, layer, gmesh, band, ri, ruling, f_ref, dprop, rng)
 }
@@ -138,7 +139,7 @@ fn insert_new_singular(
     f_ref: &Point2,
     dprop: &Vector2<f64>,
     rng: &mut impl Rng,
-) -> Result<(u64, bool), Unchanged> {
+) -> Result<(u64, Option<Via>), Unchanged> {
     let params = ctx.params;
     let c = ConflictRegion {
         gmesh,
@@ -167,14 +168,14 @@ fn insert_new_singular(
         .sample_singular(ctx, band, e_sing, rng)
         .ok_or(Unchanged::NoSingularSample)?;
     if let Some(old) = nearby_singular(layer, params, &s) {
-        return Ok((old, false));
+        return Ok((old, Some(Via::Nearby)));
     }
     let (removed, e_sup) = c.rulings_to_replace(params, &order, e_sing, &s, f_ref);
     if removed.is_empty() {
         return Err(Unchanged::NoRulingsToReplace);
     }
     let id = replace_by_cones(layer, ri, s, step, &removed, e_sup);
-    Ok((id, true))
+    Ok((id, None))
 }
 
 /// The rulings of a curved region C in S_G, as a conflict of fig. 6(d) walks them.
