@@ -113,6 +113,10 @@ struct Terminal {
     attracted: bool,
 }
 
+/// A resolved border: the singular vertex the rulings pass through (None: the free
+/// boundary) and, when it existed before the attempt, how it was found.
+type End = (Option<u64>, Option<Via>);
+
 #[allow(clippy::too_many_arguments)]
 fn crumple_inner(
     ctx: &CrumpleContext,
@@ -228,7 +232,7 @@ impl Attempt<'_, '_> {
         attracted: &mut bool,
         events: &mut Vec<CrumpleEvent>,
         rng: &mut impl Rng,
-    ) -> Result<([(Option<u64>, Option<Via>); 2], GeometricMesh), Unchanged> {
+    ) -> Result<([End; 2], GeometricMesh), Unchanged> {
         let mut terminals = [(None, None); 2];
         let mut current = gmesh.clone();
         for side in 0..2 {
@@ -317,7 +321,7 @@ impl Attempt<'_, '_> {
         &self,
         layer: &mut GeometricLayer,
         current: &GeometricMesh,
-        terminals: [(Option<u64>, Option<Via>); 2],
+        terminals: [End; 2],
         events: &mut Vec<CrumpleEvent>,
     ) -> Result<(), Unchanged> {
         let ctx = self.ctx;
