@@ -204,8 +204,8 @@ fn fig1_extra_singular_points_start_from_compression_handed_over_by_step_3() {
 /// compressed flat triangle 350 times and changes S_G 16 times. Of the 334 others, 254
 /// end with both borders on singular vertices that existed already and are joined by a
 /// crease (`Unchanged::CreaseExists`: our reuse rules, where the paper's fig. 6c, d
-/// would add a new point), and 12 have a free border (the case where the paper curves
-/// the triangle without a point). Measured 2026-12-08 on 0ab3a4b; docs/
+/// would add a new point), and 12 have a free border (fig. 7, 8: the only strips
+/// whose rulings may reach the free boundary). Measured 2026-12-08 on 0ab3a4b; docs/
 /// paper_simulator.md, "The attempts that change nothing". Pins the measurement.
 #[test]
 fn fig1_attempts_that_change_nothing_end_on_existing_singular_vertices() {
