@@ -31,7 +31,7 @@ fn main() {
             f.edges.compression_mean_pct, f.edges.compressed_edges_pct, f.triangles, f.curved_regions, o.singular_points, f.crumple_events.len(), f.junctions, f.cones, f.isometry.iterations, f.isometry.length_error_before, f.isometry.length_error_after);
         for a in &f.crumple_attempts {
             println!(
-                "    attempt comp {:.4} (start {:.4}, membrane {:.4}) at ({:.3},{:.3}) dir ({:.2},{:.2}) changed {} held {} corners {:?} borders {:?} dihedral {:?}",
+                "    attempt comp {:.4} (start {:.4}, membrane {:.4}) at ({:.3},{:.3}) dir ({:.2},{:.2}) changed {} ({:?}) held {} corners {:?} borders {:?} dihedral {:?}",
                 a.compression,
                 a.compression_at_start,
                 a.membrane,
@@ -40,6 +40,7 @@ fn main() {
                 a.ruling_direction.x,
                 a.ruling_direction.y,
                 a.changed,
+                a.unchanged,
                 a.touches_held,
                 a.corners.map(|c| [(c.x * 1e4).round() / 1e4, (c.y * 1e4).round() / 1e4]),
                 a.borders,

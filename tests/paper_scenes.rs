@@ -200,6 +200,47 @@ fn fig1_extra_singular_points_start_from_compression_handed_over_by_step_3() {
     assert!(transition.border_dihedral[0][0] > theta0, "{transition:?}");
 }
 
+/// Issue 49, the attempts that change nothing: in fig. 1 (seed 0) step 2 finds a
+/// compressed flat triangle 350 times and changes S_G 16 times. Of the 334 others, 254
+/// end with both borders on singular vertices that existed already and are joined by a
+/// crease (`Unchanged::CreaseExists`: our reuse rules, where the paper's fig. 6c, d
+/// would add a new point), and 12 have a free border (fig. 7, 8: the only strips
+/// whose rulings may reach the free boundary). Measured 2026-12-08 on 0ab3a4b; docs/
+/// paper_simulator.md, "The attempts that change nothing". Pins the measurement.
+#[test]
+fn fig1_attempts_that_change_nothing_end_on_existing_singular_vertices() {
+    use developable_sim::paper::crumpling::{Border, Unchanged};
+    let mut s = load("paper_cylinder_then_bend", &["seed=0"]);
+    let steps = (s.duration / s.world.dt()).round() as usize;
+    let mut attempts = Vec::new();
+    for _ in 0..steps {
+        s.world.step(&[]);
+        attempts.extend(paper(&s).frame_stats().crumple_attempts.iter().copied());
+    }
+    // every attempt that changes nothing says why, and only those
+    for a in &attempts {
+        assert_eq!(a.changed, a.unchanged.is_none(), "{a:?}");
+    }
+    let unchanged: Vec<_> = attempts.iter().filter(|a| !a.changed).collect();
+    assert!(unchanged.len() > 300, "{} attempts", unchanged.len());
+    let crease = unchanged
+        .iter()
+        .filter(|a| matches!(a.unchanged, Some(Unchanged::CreaseExists(_))))
+        .count();
+    // 254 of 334 measured: more than two thirds
+    assert!(
+        3 * crease > 2 * unchanged.len(),
+        "{crease} of {}",
+        unchanged.len()
+    );
+    let free = unchanged
+        .iter()
+        .filter(|a| a.borders.is_some_and(|b| b.contains(&Border::Boundary)))
+        .count();
+    // 12 of 334 measured: under a twentieth
+    assert!(20 * free < unchanged.len(), "{free} of {}", unchanged.len());
+}
+
 /// Mean singular vertices of fig. 1's scenario over seeds 0-3 at each epsilon_c of
 /// fig. 21 (1 %, 0.5 %, 0.2 %), with `extra` overrides.
 fn singular_by_epsilon_c(extra: &[&str]) -> Vec<(&'static str, f64)> {

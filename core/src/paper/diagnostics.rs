@@ -10,7 +10,7 @@
 use nalgebra::{Matrix2, Matrix3x2};
 
 use super::compression::TriangleStrain;
-use super::crumpling::{face_center, propagate, Border};
+use super::crumpling::{face_center, propagate, Border, Unchanged};
 use super::geometric::{Endpoint, GeometricMesh};
 use super::pattern::in_convex_polygon;
 use super::physical::{Interpolator, PhysicalMesh};
@@ -26,6 +26,8 @@ pub struct CrumpleAttempt {
     pub ruling_direction: nalgebra::Vector2<f64>,
     /// Whether S_G changed.
     pub changed: bool,
+    /// When it did not, the branch of step 2 that added nothing.
+    pub unchanged: Option<Unchanged>,
     /// T_comp's pattern corners (m).
     pub corners: [Point2; 3],
     /// T_comp's compression with the positions S_P had at the start of the frame
@@ -59,18 +61,21 @@ pub(super) struct AttemptContext<'a> {
 }
 
 impl AttemptContext<'_> {
-    /// The attempt on T_comp = `strain.face`; `changed`: S_G changed.
-    pub fn attempt(&self, strain: &TriangleStrain, changed: bool) -> CrumpleAttempt {
+    /// The attempt on T_comp = `strain.face`; `unchanged`: why S_G did not change
+    /// (None: it changed).
+    pub fn attempt(&self, strain: &TriangleStrain, unchanged: Option<Unchanged>) -> CrumpleAttempt {
         let g = self.gmesh;
         let tri = &g.faces[strain.face].vertices;
         let corners = [0, 1, 2].map(|k| g.vertices[tri[k] as usize].material);
-        let borders =
-            propagate(g, self.labels, strain.face, &strain.ruling_direction).map(|s| s.borders);
+        let borders = propagate(g, self.labels, strain.face, &strain.ruling_direction)
+            .ok()
+            .map(|s| s.borders);
         CrumpleAttempt {
             compression: strain.compression,
             centroid: face_center(g, strain.face),
             ruling_direction: strain.ruling_direction,
-            changed,
+            changed: unchanged.is_none(),
+            unchanged,
             corners,
             compression_at_start: self.compression_at_start(&corners),
             membrane: self.membrane(&corners, strain),

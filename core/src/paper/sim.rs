@@ -445,7 +445,7 @@ impl PaperSim {
             else {
                 break;
             };
-            let events = crumple_flat_region(&ctx, layer, &gmesh, &labels, &strain, rng);
+            let outcome = crumple_flat_region(&ctx, layer, &gmesh, &labels, &strain, rng);
             let seen = AttemptContext {
                 gmesh: &gmesh,
                 labels: &labels,
@@ -456,10 +456,10 @@ impl PaperSim {
             };
             frame
                 .crumple_attempts
-                .push(seen.attempt(&strain, !events.is_empty()));
-            if events.is_empty() {
+                .push(seen.attempt(&strain, outcome.as_ref().err().copied()));
+            let Ok(events) = outcome else {
                 continue;
-            }
+            };
             frame.crumple_events.extend(events);
             match GeometricMesh::build(layer, pattern, &position) {
                 Ok(g) => gmesh = g,

@@ -21,11 +21,13 @@ use super::pattern::{point_segment, segments_cross};
 use crate::geometry::Point2;
 
 mod context;
+mod outcome;
 mod propagation;
 mod singular;
 
 use context::Band;
 pub use context::CrumpleContext;
+pub use outcome::{Unchanged, Via};
 
 pub use propagation::{propagate, Border, Strip};
 use singular::{insert_in_curved, split_fold};
@@ -53,8 +55,9 @@ pub enum CrumpleEvent {
 }
 
 /// Step 2 for the flat region of `strain.face`: propagate, resolve the borders
-/// (creating singular vertices), insert the new curved region. On any failure the
-/// structure is left unchanged and no event is returned.
+/// (creating singular vertices), insert the new curved region. Returns the events
+/// (never empty); when nothing is added the structure is left unchanged and the
+/// branch that added nothing is returned.
 pub fn crumple_flat_region(
     ctx: &CrumpleContext,
     layer: &mut GeometricLayer,
@@ -62,37 +65,26 @@ pub fn crumple_flat_region(
     labels: &[usize],
     strain: &TriangleStrain,
     rng: &mut impl Rng,
-) -> Vec<CrumpleEvent> {
+) -> Result<Vec<CrumpleEvent>, Unchanged> {
     let saved = layer.clone();
     // appendix B, fig. 24(b, c): a border on a ruling of a cone whose apex is an
     // interior singular vertex is that apex (the d-cone absorbs the conflict); only when
     // no region can be built that way, a new singular point is created inside the cone
     // (sec. 5.2, fig. 6d). A region S_G has already (two apices joined by a crease) is
-    // not a failure: nothing is added
+    // not a failure, but nothing is added (no new singular point either)
     let mut attracted = false;
-    if let Some(events) =
-        crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng)
-    {
-        if events.is_empty() {
-            // the region is already in S_G (fig. 24c: the crease between the two
-            // apices exists): nothing to add, and no new singular point either
-            *layer = saved;
-        }
-        return events;
-    }
+    let reason = match crumple_inner(ctx, layer, gmesh, labels, strain, true, &mut attracted, rng) {
+        Ok(events) => return Ok(events),
+        Err(reason) => reason,
+    };
     *layer = saved.clone();
-    if attracted {
-        let mut again = false;
-        if let Some(events) =
-            crumple_inner(ctx, layer, gmesh, labels, strain, false, &mut again, rng)
-        {
-            if !events.is_empty() {
-                return events;
-            }
-        }
-        *layer = saved;
+    if !attracted || matches!(reason, Unchanged::CreaseExists(_)) {
+        return Err(reason);
     }
-    Vec::new()
+    let mut again = false;
+    crumple_inner(ctx, layer, gmesh, labels, strain, false, &mut again, rng).inspect_err(|_| {
+        *layer = saved;
+    })
 }
 
 /// One attempt of step 2 on a flat region (appendix B), once T_comp's strip and band
@@ -115,9 +107,15 @@ struct Terminal {
     singular: Option<u64>,
     /// The event, when the terminal is a singular vertex created for it (sec. 5.2).
     new_singular: Option<CrumpleEvent>,
+    /// How an existing singular vertex became the terminal.
+    via: Option<Via>,
     /// The border was a cone's ruling and the terminal is that cone's apex.
     attracted: bool,
 }
+
+/// A resolved border: the singular vertex the rulings pass through (None: the free
+/// boundary) and, when it existed before the attempt, how it was found.
+type End = (Option<u64>, Option<Via>);
 
 #[allow(clippy::too_many_arguments)]
 fn crumple_inner(
@@ -129,10 +127,10 @@ fn crumple_inner(
     attract: bool,
     attracted: &mut bool,
     rng: &mut impl Rng,
-) -> Option<Vec<CrumpleEvent>> {
+) -> Result<Vec<CrumpleEvent>, Unchanged> {
     let mut strip = propagate(gmesh, labels, strain.face, &strain.ruling_direction)?;
-    borders_by_region_id(layer, &mut strip.borders)?;
-    let band = compression_band(ctx, gmesh, strain)?;
+    borders_by_region_id(layer, &mut strip.borders).ok_or(Unchanged::NoRegion)?;
+    let band = compression_band(ctx, gmesh, strain).ok_or(Unchanged::NarrowTriangle)?;
     let attempt = Attempt {
         ctx,
         band,
@@ -147,8 +145,8 @@ fn crumple_inner(
         attempt.resolve_borders(layer, gmesh, &strip.borders, attracted, &mut events, rng)?;
     attempt.insert_curved_region(layer, &current, terminals, &mut events)?;
     // the result must mesh
-    GeometricMesh::build(layer, ctx.pattern, ctx.position).ok()?;
-    Some(events)
+    GeometricMesh::build(layer, ctx.pattern, ctx.position).map_err(|_| Unchanged::MeshFailed)?;
+    Ok(events)
 }
 
 /// Replace the region indices of curved-ruling borders by the regions' stable ids;
@@ -224,7 +222,8 @@ fn structure_counts(layer: &GeometricLayer) -> (usize, usize, usize, u64) {
 impl Attempt<'_, '_> {
     /// Resolve the borders on the +v_perp and -v_perp sides into terminals, pushing
     /// the events of new singular vertices; S_G is rebuilt after a side that changed
-    /// the structure. Returns the terminals and the S_G they were resolved in.
+    /// the structure. Returns the terminals (the singular vertex, if any, and how an
+    /// existing one was found) and the S_G they were resolved in.
     fn resolve_borders(
         &self,
         layer: &mut GeometricLayer,
@@ -233,23 +232,21 @@ impl Attempt<'_, '_> {
         attracted: &mut bool,
         events: &mut Vec<CrumpleEvent>,
         rng: &mut impl Rng,
-    ) -> Option<([Option<u64>; 2], GeometricMesh)> {
-        let mut terminals: [Option<u64>; 2] = [None, None];
+    ) -> Result<([End; 2], GeometricMesh), Unchanged> {
+        let mut terminals = [(None, None); 2];
         let mut current = gmesh.clone();
         for side in 0..2 {
             let before = structure_counts(layer);
             let terminal = self.resolve_border(layer, &current, side, borders[side], rng)?;
             *attracted |= terminal.attracted;
             events.extend(terminal.new_singular);
-            terminals[side] = terminal.singular;
+            terminals[side] = (terminal.singular, terminal.via);
             if before != structure_counts(layer) {
-                let Ok(c) = GeometricMesh::build(layer, self.ctx.pattern, self.ctx.position) else {
-                    return None;
-                };
-                current = c;
+                current = GeometricMesh::build(layer, self.ctx.pattern, self.ctx.position)
+                    .map_err(|_| Unchanged::MeshFailed)?;
             }
         }
-        Some((terminals, current))
+        Ok((terminals, current))
     }
 
     /// Resolve the border on `side` (0: +v_perp, 1: -v_perp): the free boundary, an
@@ -262,38 +259,34 @@ impl Attempt<'_, '_> {
         side: usize,
         border: Border,
         rng: &mut impl Rng,
-    ) -> Option<Terminal> {
+    ) -> Result<Terminal, Unchanged> {
         let ctx = self.ctx;
         let band = &self.band;
         let dir = if side == 0 { band.v_perp } else { -band.v_perp };
-        let terminal = |singular, new_singular, attracted| Terminal {
+        let terminal = |singular, new_singular, via, attracted| Terminal {
             singular,
             new_singular,
+            via,
             attracted,
         };
-        Some(match border {
-            Border::Boundary => terminal(None, None, false),
-            Border::Singular { id } => terminal(Some(id), None, false),
+        Ok(match border {
+            Border::Boundary => terminal(None, None, None, false),
+            Border::Singular { id } => terminal(Some(id), None, Some(Via::Opposite), false),
             Border::FlatFold { a, b } => {
-                let (id, new) = split_fold(ctx, layer, current, band, a, b, rng)?;
-                let event = if new {
+                let (id, via) = split_fold(ctx, layer, current, band, a, b, rng)?;
+                let event = if via.is_none() {
                     Some(CrumpleEvent::NewSingular {
                         id,
-                        material: layer.singular_material(id)?,
+                        material: layer.singular_material(id).ok_or(Unchanged::NoRegion)?,
                         on_fold: true,
                     })
                 } else {
                     None
                 };
-                terminal(Some(id), event, false)
+                terminal(Some(id), event, via, false)
             }
             Border::CurvedRuling { region, ruling } => {
-                let cone_apex = layer
-                    .regions
-                    .iter()
-                    .find(|r| r.id == region)
-                    .and_then(|r| r.singular_apex());
-                let (id, new) = insert_in_curved(
+                let (id, via) = insert_in_curved(
                     ctx,
                     layer,
                     current,
@@ -305,17 +298,17 @@ impl Attempt<'_, '_> {
                     self.attract,
                     rng,
                 )?;
-                let attracted = self.attract && !new && Some(id) == cone_apex;
-                let event = if new {
+                let attracted = via == Some(Via::ConeApex);
+                let event = if via.is_none() {
                     Some(CrumpleEvent::NewSingular {
                         id,
-                        material: layer.singular_material(id)?,
+                        material: layer.singular_material(id).ok_or(Unchanged::NoRegion)?,
                         on_fold: false,
                     })
                 } else {
                     None
                 };
-                terminal(Some(id), event, attracted)
+                terminal(Some(id), event, via, attracted)
             }
         })
     }
@@ -323,32 +316,36 @@ impl Attempt<'_, '_> {
     /// Appendix B: the new curved region between the terminals, pushed to `layer`
     /// with its event: a crease between two singular vertices (fig. 24c), parallel
     /// rulings between free borders (fig. 24a) or conical rulings from a singular
-    /// vertex to the free border (fig. 24b). `None` when it does not fit.
+    /// vertex to the free border (fig. 24b). The reason when it does not fit.
     fn insert_curved_region(
         &self,
         layer: &mut GeometricLayer,
         current: &GeometricMesh,
-        terminals: [Option<u64>; 2],
+        terminals: [End; 2],
         events: &mut Vec<CrumpleEvent>,
-    ) -> Option<()> {
+    ) -> Result<(), Unchanged> {
         let ctx = self.ctx;
         let band = &self.band;
-        match terminals {
+        let via = terminals.map(|t| t.1);
+        match terminals.map(|t| t.0) {
             [Some(s1), Some(s2)] => {
                 // fig. 24(c): a degenerate region, the crease (s1, s2)
                 if s1 == s2 {
-                    return None;
+                    return Err(Unchanged::SameSingular(via));
                 }
                 // appendix B: the strip's region degenerates into the edge (s1, s2);
                 // where S_G had that crease already (no border made a new point), the
                 // compression is the one it takes up, and the paper generates no new
                 // region ("let the physical simulation further deform this region")
                 if events.is_empty() && has_crease(layer, s1, s2) {
-                    return Some(());
+                    return Err(Unchanged::CreaseExists(via));
                 }
-                let (p, q) = (layer.singular_material(s1)?, layer.singular_material(s2)?);
+                let (p, q) = layer
+                    .singular_material(s1)
+                    .zip(layer.singular_material(s2))
+                    .ok_or(Unchanged::NoRegion)?;
                 if !segment_is_free(ctx, layer, current, &p, &q, &[]) {
-                    return None;
+                    return Err(Unchanged::CreaseBlocked);
                 }
                 layer.creases.push(Crease {
                     a: Endpoint::Singular(s1),
@@ -365,7 +362,7 @@ impl Attempt<'_, '_> {
                     Some((Endpoint::Boundary(s_hi), Endpoint::Boundary(s_lo)))
                 });
                 if rulings.len() < 2 {
-                    return None;
+                    return Err(Unchanged::TooFewRulings);
                 }
                 let n = rulings.len();
                 let id = layer.add_region(rulings);
@@ -376,7 +373,7 @@ impl Attempt<'_, '_> {
             }
             [Some(s), None] | [None, Some(s)] => {
                 // fig. 24(b): conical rulings from s to the free border
-                let s_on_plus = terminals[0].is_some();
+                let s_on_plus = terminals[0].0.is_some();
                 let rulings = band_rulings(ctx, layer, current, band, |t| {
                     let (o, d) = band.line(t);
                     let [(s_lo, _), (s_hi, _)] = ctx.pattern.clip_line(&o, &d)?;
@@ -387,7 +384,7 @@ impl Attempt<'_, '_> {
                     })
                 });
                 if rulings.len() < 2 {
-                    return None;
+                    return Err(Unchanged::TooFewRulings);
                 }
                 let n = rulings.len();
                 let id = layer.add_region(rulings);
@@ -398,7 +395,7 @@ impl Attempt<'_, '_> {
                 });
             }
         }
-        Some(())
+        Ok(())
     }
 }
 
@@ -712,7 +709,8 @@ mod tests {
             position: &position,
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        let events = crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng);
+        let events = crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng)
+            .expect("S_G changes");
         let new: Vec<&CrumpleEvent> = events
             .iter()
             .filter(|e| matches!(e, CrumpleEvent::NewSingular { .. }))
@@ -754,7 +752,9 @@ mod tests {
             position: &position,
         };
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
-        crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng);
+        let outcome = crumple_flat_region(&ctx, &mut layer, &gmesh, &labels, &strain, &mut rng);
         assert!(layer.singular.is_empty());
+        // the strip meets the curved band, whose rulings are flatter than theta_0
+        assert_eq!(outcome, Err(Unchanged::FlatCurvedRegion));
     }
 }

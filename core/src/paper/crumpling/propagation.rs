@@ -4,6 +4,7 @@
 
 use nalgebra::Vector2;
 
+use super::outcome::Unchanged;
 use crate::paper::geometric::{edge_key, EdgeKind, Endpoint, FaceKind, GVertexKind, GeometricMesh};
 
 /// Where a propagated strip of imaginary rulings ends (fig. 6, fig. 23).
@@ -46,16 +47,17 @@ fn edge_angle(gmesh: &GeometricMesh, a: u32, b: u32, dir: &Vector2<f64>) -> f64 
 }
 
 /// Appendix A: propagate the imaginary rulings of `t_comp` (a flat triangle of the
-/// region `labels[t_comp]`) along `v_perp` in both directions.
+/// region `labels[t_comp]`) along `v_perp` in both directions; the reason when it
+/// does not reach a border on each side.
 pub fn propagate(
     gmesh: &GeometricMesh,
     labels: &[usize],
     t_comp: usize,
     v_perp: &Vector2<f64>,
-) -> Option<Strip> {
+) -> Result<Strip, Unchanged> {
     let face = &gmesh.faces[t_comp];
     if face.vertices.len() != 3 || face.kind != FaceKind::Flat {
-        return None;
+        return Err(Unchanged::NoTriangle);
     }
     // the two edges most crossed by the rulings (largest angle with v_perp), one
     // facing +v_perp and one facing -v_perp
@@ -65,12 +67,17 @@ pub fn propagate(
             (k, edge_angle(gmesh, a, b, v_perp), n.dot(v_perp))
         })
         .collect();
-    let first = edges.iter().copied().max_by(|x, y| x.1.total_cmp(&y.1))?;
+    let first = edges
+        .iter()
+        .copied()
+        .max_by(|x, y| x.1.total_cmp(&y.1))
+        .ok_or(Unchanged::NoTriangle)?;
     let second = edges
         .iter()
         .copied()
         .filter(|e| e.0 != first.0 && e.2 * first.2 < 0.0)
-        .max_by(|x, y| x.1.total_cmp(&y.1))?;
+        .max_by(|x, y| x.1.total_cmp(&y.1))
+        .ok_or(Unchanged::NoTriangle)?;
     let mut strip = Strip {
         faces: vec![t_comp],
         borders: [Border::Boundary, Border::Boundary],
@@ -94,7 +101,7 @@ pub fn propagate(
                     &mut strip.faces,
                     &mut strip.last_faces[side],
                 )?;
-                return Some(strip);
+                return Ok(strip);
             }
         }
         strip.borders[side] = walk(
@@ -107,7 +114,7 @@ pub fn propagate(
             &mut strip.last_faces[side],
         )?;
     }
-    Some(strip)
+    Ok(strip)
 }
 
 /// Walk from face `f` through its edge `k` in direction `dir` (appendix A).
@@ -119,35 +126,38 @@ fn walk(
     dir: &Vector2<f64>,
     faces: &mut Vec<usize>,
     last: &mut usize,
-) -> Option<Border> {
+) -> Result<Border, Unchanged> {
     let (mut cur, mut a, mut b) = {
         let (a, b, _) = edge_outward(gmesh, f, k);
         (f, a, b)
     };
     for _ in 0..10_000 {
         *last = cur;
-        let e = gmesh.edges.get(&edge_key(a, b))?;
+        let e = gmesh
+            .edges
+            .get(&edge_key(a, b))
+            .ok_or(Unchanged::StripLost)?;
         let other = e.faces.iter().flatten().copied().find(|&g| g != cur);
         let Some(g) = other else {
-            return Some(Border::Boundary); // fig. 6(b)
+            return Ok(Border::Boundary); // fig. 6(b)
         };
         match (gmesh.faces[g].kind, e.kind) {
             (FaceKind::Curved { .. }, EdgeKind::Ruling { region, index })
             | (FaceKind::Flat, EdgeKind::Ruling { region, index }) => {
-                return Some(Border::CurvedRuling {
+                return Ok(Border::CurvedRuling {
                     region: region as u64, // region index, mapped to an id by the caller
                     ruling: index,
                 }); // fig. 6(d)
             }
-            (FaceKind::Curved { .. }, _) => return None,
+            (FaceKind::Curved { .. }, _) => return Err(Unchanged::StripIntoCurved),
             (FaceKind::Flat, EdgeKind::Crease { .. }) => {
-                return Some(Border::FlatFold {
+                return Ok(Border::FlatFold {
                     a: gmesh.endpoint_of(a),
                     b: gmesh.endpoint_of(b),
                 });
             }
             (FaceKind::Flat, _) if labels[g] != labels[cur] => {
-                return Some(Border::FlatFold {
+                return Ok(Border::FlatFold {
                     a: gmesh.endpoint_of(a),
                     b: gmesh.endpoint_of(b),
                 }); // fig. 6(c)
@@ -157,7 +167,7 @@ fn walk(
         // fig. 6(a): same flat region, continue through the edge of g (other than e)
         // forming the greatest angle with dir, ahead of us
         if faces.contains(&g) {
-            return None;
+            return Err(Unchanged::StripLost);
         }
         faces.push(g);
         let n = gmesh.faces[g].vertices.len();
@@ -177,10 +187,10 @@ fn walk(
                 best = Some((ahead, angle, p, q));
             }
         }
-        let (_, _, p, q) = best?;
+        let (_, _, p, q) = best.ok_or(Unchanged::StripLost)?;
         cur = g;
         a = p;
         b = q;
     }
-    None
+    Err(Unchanged::StripLost)
 }

@@ -6,6 +6,7 @@ use nalgebra::Vector2;
 use rand::Rng;
 
 use super::context::{normal, Band, CrumpleContext};
+use super::outcome::{Unchanged, Via};
 use crate::geometry::Point2;
 use crate::paper::geometric::{
     Crease, CreaseKind, Endpoint, GeometricLayer, GeometricMesh, Ruling,
@@ -30,7 +31,8 @@ fn nearby_singular(layer: &GeometricLayer, params: &PaperParams, s: &Point2) -> 
 
 /// Fig. 6(c), sec. 5.2: a singular vertex on the fold (a, b) between two flat regions,
 /// at a uniformly random position where the band meets it. The fold becomes a
-/// degenerate curved region of one ruling: two plastic creases.
+/// degenerate curved region of one ruling: two plastic creases. Returns the point and,
+/// when it is a singular end of the fold, how it was found (None: new).
 pub(super) fn split_fold(
     ctx: &CrumpleContext,
     layer: &mut GeometricLayer,
@@ -39,13 +41,13 @@ pub(super) fn split_fold(
     a: Endpoint,
     b: Endpoint,
     rng: &mut impl Rng,
-) -> Option<(u64, bool)> {
+) -> Result<(u64, Option<Via>), Unchanged> {
     let p = layer.endpoint_material(ctx.pattern, &a);
     let q = layer.endpoint_material(ctx.pattern, &b);
     let len = (q - p).norm();
     let gap = ctx.params.min_gap();
     if len < 3.0 * gap {
-        return None;
+        return Err(Unchanged::FoldTooShort);
     }
     let (u0, u1) = band.clip_segment(&p, &q).unwrap_or((0.0, 1.0));
     let (u0, u1) = (u0.max(gap / len), u1.min(1.0 - gap / len));
@@ -61,12 +63,13 @@ pub(super) fn split_fold(
         // off the fold cannot be one
         return [a, b]
             .contains(&Endpoint::Singular(old))
-            .then_some((old, false));
+            .then_some((old, Some(Via::FoldEnd)))
+            .ok_or(Unchanged::FoldNearSingular);
     }
     if ctx.pattern.signed_inside_distance(&s) < gap
         || gmesh.vertices.iter().any(|v| (v.material - s).norm() < gap)
     {
-        return None;
+        return Err(Unchanged::FoldPointCrowded);
     }
     let id = layer.add_singular(s);
     let kind = match layer
@@ -87,7 +90,7 @@ pub(super) fn split_fold(
         b,
         kind,
     });
-    Some((id, true))
+    Ok((id, None))
 }
 
 /// Fig. 6(d), sec. 5.2 and fig. 11: the imaginary rulings meet ruling `ruling` of
@@ -96,8 +99,8 @@ pub(super) fn split_fold(
 /// chi(s) = exp(-d^2 / sigma^2); remove the rulings between e_lim and e_sup (the next
 /// ruling sharper than theta_0) and replace them by cones of apex s, leaving the flat
 /// transition triangle (s, e_sup). When `attract` and C is already a cone of interior
-/// apex a, a is the border instead (appendix B, fig. 24b, c). Returns s and whether it
-/// is new.
+/// apex a, a is the border instead (appendix B, fig. 24b, c). Returns s and, when it
+/// existed already, how it was found (None: new).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn insert_in_curved(
     ctx: &CrumpleContext,
@@ -110,17 +113,21 @@ pub(super) fn insert_in_curved(
     dprop: &Vector2<f64>,
     attract: bool,
     rng: &mut impl Rng,
-) -> Option<(u64, bool)> {
-    let ri = layer.regions.iter().position(|r| r.id == region_id)?;
+) -> Result<(u64, Option<Via>), Unchanged> {
+    let ri = layer
+        .regions
+        .iter()
+        .position(|r| r.id == region_id)
+        .ok_or(Unchanged::NoRegion)?;
     let apex = layer.regions[ri].singular_apex();
     if let Some(a) = apex.filter(|_| attract) {
-        return Some((a, false));
+        return Ok((a, Some(Via::ConeApex)));
     }
     insert_new_singular(ctx, layer, gmesh, band, ri, ruling, f_ref, dprop, rng)
 }
 
 /// [`insert_in_curved`]'s new singular point inside region `ri` near the ruling in
-/// conflict; `None` (structure untouched) when none fits.
+/// conflict; the reason (structure untouched) when none fits.
 #[allow(clippy::too_many_arguments)]
 fn insert_new_singular(
     ctx: &CrumpleContext,
@@ -132,15 +139,15 @@ fn insert_new_singular(
     f_ref: &Point2,
     dprop: &Vector2<f64>,
     rng: &mut impl Rng,
-) -> Option<(u64, bool)> {
+) -> Result<(u64, Option<Via>), Unchanged> {
     let params = ctx.params;
     let c = ConflictRegion {
         gmesh,
-        rv: gmesh.ruling_vertices.get(ri)?,
+        rv: gmesh.ruling_vertices.get(ri).ok_or(Unchanged::NoRegion)?,
     };
     let m = c.rv.len();
     if ruling >= m || m < 2 {
-        return None;
+        return Err(Unchanged::NoRegion);
     }
     let (step, order) = c.walk_away_from_flat(ruling, dprop);
     // the imaginary rulings must really cross C's rulings: nearly parallel ones are
@@ -148,24 +155,27 @@ fn insert_new_singular(
     let e_dir = (c.mat(c.rv[ruling][1]) - c.mat(c.rv[ruling][0])).normalize();
     let cross = (e_dir.x * dprop.y - e_dir.y * dprop.x).abs();
     if cross < params.conflict_angle.sin() {
-        return None;
+        return Err(Unchanged::CompatibleRulings);
     }
     // sec. 5.2: singular points appear where the rulings meet a region of higher
     // curvature; a curved region flatter than theta_0 all along does not resist
     let e_sing = order
         .iter()
         .copied()
-        .find(|&k| c.dihedral(k) > params.flat_angle)?;
-    let s = c.sample_singular(ctx, band, e_sing, rng)?;
+        .find(|&k| c.dihedral(k) > params.flat_angle)
+        .ok_or(Unchanged::FlatCurvedRegion)?;
+    let s = c
+        .sample_singular(ctx, band, e_sing, rng)
+        .ok_or(Unchanged::NoSingularSample)?;
     if let Some(old) = nearby_singular(layer, params, &s) {
-        return Some((old, false));
+        return Ok((old, Some(Via::Nearby)));
     }
     let (removed, e_sup) = c.rulings_to_replace(params, &order, e_sing, &s, f_ref);
     if removed.is_empty() {
-        return None;
+        return Err(Unchanged::NoRulingsToReplace);
     }
     let id = replace_by_cones(layer, ri, s, step, &removed, e_sup);
-    Some((id, true))
+    Ok((id, None))
 }
 
 /// The rulings of a curved region C in S_G, as a conflict of fig. 6(d) walks them.
