@@ -134,6 +134,18 @@ pub fn barrier(s: f64, s_hat: f64) -> (f64, f64, f64) {
     (value, first, second)
 }
 
+/// An orthonormal basis of the plane orthogonal to the unit vector `n` (a contact's
+/// tangent plane, where friction acts).
+pub fn tangent_basis(n: &Vector3) -> [Vector3; 2] {
+    let helper = if n.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let t1 = n.cross(&helper).normalize();
+    [t1, n.cross(&t1)]
+}
+
 /// IPC's friction mollifier of the slip y = |u| >= 0 over ε_u (m): f0 with
 /// f0' = f1, f1(y) = 2 y/ε - y^2/ε^2 below ε and 1 above. Returns (f0, f1(y)/y, f1'(y)),
 /// the last two being what the gradient (f1/y u) and the Hessian need (both finite at

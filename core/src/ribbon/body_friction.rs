@@ -13,9 +13,10 @@
 //! force-weighted normal, the other body's slip the force-weighted displacement of its
 //! points of the pairs since the start of the world's step.
 
-use super::contact::tangent_basis;
 use super::objective::{ContactTerms, FrictionLag};
-use crate::contact::barrier::{barrier, mollified_edge_edge, point_triangle, PairSource};
+use crate::contact::barrier::{
+    barrier, mollified_edge_edge, point_triangle, tangent_basis, PairSource,
+};
 use crate::contact::obstacles::{bounds, boxes_near, ObstacleBody};
 use crate::geometry::Vector3;
 

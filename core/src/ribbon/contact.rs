@@ -16,7 +16,7 @@ use super::objective::{ContactTerms, FrictionLag, GradientMode, Objective, RimHi
 use super::params::SolverSettings;
 use super::reconstruct::{reconstruct, Coordinates, Frames, Strip};
 use super::step::{SolveOutcome, StepSolver};
-use crate::contact::barrier::{barrier, point_triangle, BarrierOutcome, PairSource};
+use crate::contact::barrier::{barrier, point_triangle, tangent_basis, BarrierOutcome, PairSource};
 use crate::contact::obstacles::{interpolate_pose, CellMesh, ContactEnv};
 use crate::geometry::{Pose, Vector3};
 
@@ -347,17 +347,6 @@ fn mesh_at(
         mesh.push(b.coords);
         mesh.push(t.coords);
     }
-}
-
-/// An orthonormal basis of the plane orthogonal to the unit vector `n`.
-pub(super) fn tangent_basis(n: &Vector3) -> [Vector3; 2] {
-    let helper = if n.x.abs() < 0.9 {
-        Vector3::x()
-    } else {
-        Vector3::y()
-    };
-    let t1 = n.cross(&helper).normalize();
-    [t1, n.cross(&t1)]
 }
 
 /// The largest share τ (from `tau0`) of the moving colliders' motion that keeps a
