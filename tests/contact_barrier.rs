@@ -670,6 +670,12 @@ fn the_pushed_ribbon_sticks_and_slips_as_coulomb_says() {
 
 /// Two ribbons crossing at right angles, 30 mm apart: the upper one falls, a handle
 /// lifts the middle of the lower one at 0.5 m/s. They meet within a few steps.
+/// The scene of a test's YAML text.
+fn from_yaml(yaml: &str) -> Scene {
+    developable_sim::scene::load_str(yaml, std::path::Path::new("test.yaml"), &[])
+        .expect("a valid test scene")
+}
+
 const MEETING: &str = r#"
 name: side_by_side_meeting
 duration: 0.15
@@ -702,10 +708,7 @@ handles:
 /// `guess_scale` and the check after each class on or off: the frames' checks, the
 /// bodies stepped side by side and those stepped again.
 fn meeting(guess_scale: f64, check: bool) -> (Checked, usize, usize) {
-    let dir = common::scratch(&format!("meeting_{guess_scale}_{check}"));
-    let path = dir.join("meeting.yaml");
-    std::fs::write(&path, MEETING).expect("a scratch file");
-    let mut scene = developable_sim::scene::load(&path, &[]).expect("the meeting scene");
+    let mut scene = from_yaml(MEETING);
     scene.world.set_side_by_side_hooks(guess_scale, check);
     let mut c = fresh();
     let (mut side_by_side, mut again) = (0, 0);
@@ -787,10 +790,7 @@ fn meeting_over_another() -> String {
 #[test]
 fn a_body_that_waited_for_one_stepped_again_steps_again_too() {
     let run = |repeat_dependents: bool| {
-        let dir = common::scratch(&format!("meeting_over_another_{repeat_dependents}"));
-        let path = dir.join("meeting.yaml");
-        std::fs::write(&path, meeting_over_another()).expect("a scratch file");
-        let mut scene = developable_sim::scene::load(&path, &[]).expect("the scene");
+        let mut scene = from_yaml(&meeting_over_another());
         scene.world.set_side_by_side_hooks(0.0, true);
         scene.world.set_repeat_dependents_hook(repeat_dependents);
         let (mut c, mut again, mut rejected) = (fresh(), 0, 0);
@@ -838,10 +838,7 @@ fn lifted_pair() -> String {
 #[test]
 fn a_body_held_back_by_where_a_later_one_started_steps_again() {
     let run = |held_back: bool| {
-        let dir = common::scratch(&format!("lifted_pair_{held_back}"));
-        let path = dir.join("pair.yaml");
-        std::fs::write(&path, lifted_pair()).expect("a scratch file");
-        let mut scene = developable_sim::scene::load(&path, &[]).expect("the scene");
+        let mut scene = from_yaml(&lifted_pair());
         scene.world.set_repeat_held_back_hook(held_back);
         let (mut c, mut violation, mut unconverged, mut again) = (fresh(), 0.0_f64, 0, 0);
         for _ in 0..(scene.duration / scene.world.dt()).round() as usize {

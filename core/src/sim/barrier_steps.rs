@@ -45,8 +45,9 @@ struct Stepped {
 
 /// What every body's step of one world step shares.
 struct Shared<'a> {
-    /// Every object's mesh at the start of the step.
+    /// Every object's mesh at the start of the step, and its outline.
     before: &'a [Vec<Point3>],
+    outlines: &'a [Vec<Aabb>],
     poses0: &'a [Pose],
     poses1: &'a [Pose],
     targets1: &'a [Pose],
@@ -76,8 +77,10 @@ impl BarrierState {
         };
         let (poses0, poses1) = (pose_at(targets0), pose_at(targets1));
         let before: Vec<Vec<Point3>> = objects.iter().map(|o| o.mesh().vertices.clone()).collect();
+        let outlines: Vec<Vec<Aabb>> = before.iter().map(|v| outline(v)).collect();
         let shared = Shared {
             before: &before,
+            outlines: &outlines,
             poses0: &poses0,
             poses1: &poses1,
             // (the carriers' poses: the handles' targets, then the kinematic bodies)
@@ -93,10 +96,6 @@ impl BarrierState {
         } else {
             (0..count).rev().collect()
         };
-        let outlines: Vec<Vec<Aabb>> = objects
-            .iter()
-            .map(|o| outline(&o.mesh().vertices))
-            .collect();
         let motion: Vec<f64> = objects.iter().map(|o| last_motion(o.as_ref())).collect();
         let classes = self.classes(&order, &outlines, &motion);
         let side_by_side = classes.iter().filter(|c| c.len() > 1).map(Vec::len).sum();
@@ -266,7 +265,7 @@ impl BarrierState {
         let held_back = self.step_held_back_again(
             objects,
             (sequence, deps, &again),
-            (before, &mut backups),
+            &mut backups,
             shared,
             reports,
         );
@@ -285,7 +284,7 @@ impl BarrierState {
         &self,
         objects: &mut [Box<dyn ObjectSim>],
         (sequence, deps, again): (&[usize], &[Vec<usize>], &[bool]),
-        (before, backups): (&[Vec<Point3>], &mut [Backup]),
+        backups: &mut [Backup],
         shared: &Shared,
         reports: &mut [ObjectStepReport],
     ) -> usize {
@@ -304,9 +303,9 @@ impl BarrierState {
                 .filter(|&b| deps[b].contains(&a))
                 .any(|b| {
                     let j = sequence[b];
-                    let (then, now) = (outline(&before[j]), outline(&objects[j].mesh().vertices));
+                    let (then, now) = (&shared.outlines[j], outline(&objects[j].mesh().vertices));
                     mine.iter()
-                        .any(|x| near(&[*x], &then, reach) && !near(&[*x], &now, reach))
+                        .any(|x| near(&[*x], then, reach) && !near(&[*x], &now, reach))
                 });
             let Some(start) = backups[a].take().filter(|_| held) else {
                 continue;
